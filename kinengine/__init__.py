@@ -1,0 +1,37 @@
+"""kinengine: URDF-driven robot kinematics on Pinocchio.
+
+>>> import kinengine
+>>> robot = kinengine.load("abb_irb120")
+>>> T = robot.frame_pose(robot.neutral(), "tool0")            # (4, 4) in the root link frame
+>>> J = robot.jacobian(robot.neutral(), "tool0")              # (6, 6), rows [linear; angular]
+"""
+
+from .catalog import available_robots
+from .errors import (
+    ConfigurationError,
+    FrameNotFoundError,
+    KinematicSingularityError,
+    KinematicsError,
+    ParameterizationError,
+    RepresentationSingularityError,
+    URDFError,
+)
+from .loading import load, load_urdf_string
+from .robot import Robot
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ConfigurationError",
+    "FrameNotFoundError",
+    "KinematicSingularityError",
+    "KinematicsError",
+    "ParameterizationError",
+    "RepresentationSingularityError",
+    "Robot",
+    "URDFError",
+    "__version__",
+    "available_robots",
+    "load",
+    "load_urdf_string",
+]

@@ -1,0 +1,100 @@
+"""Robot names that :func:`kinengine.load` accepts, and where their URDF files live.
+
+Two sources: the descriptions shipped with kinengine (``robots/<name>/<name>.urdf``,
+installed inside the wheel as ``kinengine/robots``) and the fixed-base arms of the
+``example-robot-data`` distribution, located through its installed files (the PyPI
+package ships URDFs but no Python loader). Meshes are never needed: only kinematics
+is read.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+import importlib.metadata
+from pathlib import Path
+
+from .errors import URDFError
+
+_ERD_PREFIX = "cmeel.prefix/share/example-robot-data/robots"
+
+
+@dataclass(frozen=True)
+class CatalogEntry:
+    """A loadable robot: its short name, URDF path, default end-effector frame and origin."""
+
+    name: str
+    path: Path
+    end_effector: str | None
+    origin: str  # "kinengine" or "example-robot-data"
+
+
+# Short name -> (path below the example-robot-data robots folder, default end-effector frame).
+# Only fixed-base systems: legged, humanoid and flying robots need a floating base.
+_ERD_ROBOTS: dict[str, tuple[str, str | None]] = {
+    "ur3": ("ur_description/urdf/ur3_robot.urdf", "tool0"),
+    "ur3_limited": ("ur_description/urdf/ur3_joint_limited_robot.urdf", "tool0"),
+    "ur3_gripper": ("ur_description/urdf/ur3_gripper.urdf", "tool0"),
+    "ur5": ("ur_description/urdf/ur5_robot.urdf", "tool0"),
+    "ur5_limited": ("ur_description/urdf/ur5_joint_limited_robot.urdf", "tool0"),
+    "ur5_gripper": ("ur_description/urdf/ur5_gripper.urdf", "tool0"),
+    "ur10": ("ur_description/urdf/ur10_robot.urdf", "tool0"),
+    "ur10_limited": ("ur_description/urdf/ur10_joint_limited_robot.urdf", "tool0"),
+    "panda": ("panda_description/urdf/panda.urdf", "panda_hand"),
+    "kinova": ("kinova_description/robots/kinova.urdf", None),
+    "xarm7": ("xarm_description/urdf/xarm7.urdf", None),
+    "z1": ("z1_description/urdf/z1.urdf", None),
+    "so100": ("so_arm_description/urdf/so100.urdf", None),
+    "so101": ("so_arm_description/urdf/so101.urdf", None),
+    "baxter": ("baxter_description/urdf/baxter.urdf", None),
+    "talos_left_arm": ("talos_data/robots/talos_left_arm.urdf", None),
+    "double_pendulum": ("double_pendulum_description/urdf/double_pendulum.urdf", None),
+    "double_pendulum_continuous": ("double_pendulum_description/urdf/double_pendulum_continuous.urdf", None),
+    "double_pendulum_simple": ("double_pendulum_description/urdf/double_pendulum_simple.urdf", None),
+    "asr_twodof": ("asr_twodof_description/urdf/TwoDofs.urdf", None),
+    "finger_edu": ("finger_edu_description/robots/finger_edu.urdf", None),
+    "allegro_left_hand": ("allegro_hand_description/urdf/allegro_left_hand.urdf", None),
+    "allegro_right_hand": ("allegro_hand_description/urdf/allegro_right_hand.urdf", None),
+}
+
+_SHIPPED_END_EFFECTORS = {"abb_irb120": "tool0"}
+
+
+def shipped_robots_dir() -> Path:
+    """The folder of shipped descriptions: inside the installed package, else the source tree's robots/."""
+    here = Path(__file__).resolve().parent
+    installed = here / "robots"
+    return installed if installed.is_dir() else here.parent / "robots"
+
+
+@lru_cache(maxsize=1)
+def _entries() -> dict[str, CatalogEntry]:
+    entries: dict[str, CatalogEntry] = {}
+    for urdf in sorted(shipped_robots_dir().glob("*/*.urdf")):
+        if urdf.stem == urdf.parent.name:
+            entries[urdf.stem] = CatalogEntry(urdf.stem, urdf, _SHIPPED_END_EFFECTORS.get(urdf.stem),
+                                              "kinengine")
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        return entries
+    root = Path(dist.locate_file(_ERD_PREFIX))
+    for name, (rel, ee) in _ERD_ROBOTS.items():
+        path = root / rel
+        if path.is_file():
+            entries[name] = CatalogEntry(name, path, ee, "example-robot-data")
+    return entries
+
+
+def available_robots() -> list[str]:
+    """Sorted short names that :func:`kinengine.load` accepts (shipped and example-robot-data)."""
+    return sorted(_entries())
+
+
+def catalog_entry(name: str) -> CatalogEntry:
+    """The catalog entry of a short robot name; URDFError listing the known names otherwise."""
+    try:
+        return _entries()[name]
+    except KeyError:
+        raise URDFError(f"unknown robot {name!r}: pass a path to a .urdf file or one of "
+                        f"{', '.join(available_robots())}") from None

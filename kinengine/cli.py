@@ -1,0 +1,88 @@
+"""The ``kinengine`` command line: ``list``, ``info``, ``pose`` and the feature commands.
+
+Every sub-command handler takes the parsed arguments and returns an exit code;
+kinengine errors are printed as one line and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+import sys
+
+import numpy as np
+
+from . import __version__
+from .catalog import available_robots
+from .errors import KinematicsError
+from .loading import load
+
+
+def parse_vector(text: str) -> list[float]:
+    """'0.1,-0.3,0.2' -> [0.1, -0.3, 0.2] (argparse type for --q)."""
+    try:
+        return [float(v) for v in text.replace(" ", "").split(",") if v]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+
+
+def _cmd_list(args: argparse.Namespace) -> int:
+    for name in available_robots():
+        print(name)
+    return 0
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    robot = load(args.robot)
+    print(f"{robot.name}: {robot.dof} dof, source {robot.source}")
+    print(f"end effector: {robot.end_effector}")
+    print(f"{'joint':<28} {'lower':>10} {'upper':>10}")
+    for name, lo, hi in zip(robot.joint_names, robot.lower_limits, robot.upper_limits):
+        print(f"{name:<28} {lo:>10.5g} {hi:>10.5g}")
+    print("frames: " + ", ".join(robot.frame_names))
+    return 0
+
+
+def _cmd_pose(args: argparse.Namespace) -> int:
+    robot = load(args.robot)
+    q = robot.neutral() if args.q is None else robot.check_configuration(args.q, check_limits=False)
+    frame = args.frame or robot.end_effector
+    np.set_printoptions(precision=5, suppress=True, linewidth=120)
+    print(f"robot {robot.name} ({robot.dof} dof), frame {frame!r}")
+    print("q [rad | m] = " + np.array2string(np.asarray(q)))
+    print(f"\nT (pose of {frame} in the root link frame {robot.description.root!r}):")
+    print(robot.frame_pose(q, frame))
+    print(f"\nJ ({args.reference}, rows [vx vy vz wx wy wz]):")
+    print(robot.jacobian(q, frame, args.reference))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="kinengine", description=__doc__.splitlines()[0] if __doc__ else "")
+    parser.add_argument("--version", action="version", version=f"kinengine {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("list", help="names that kinengine.load() accepts")
+    p.set_defaults(handler=_cmd_list)
+
+    p = sub.add_parser("info", help="joints, limits and frames of a robot")
+    p.add_argument("robot", help="robot name or path to a .urdf file")
+    p.set_defaults(handler=_cmd_info)
+
+    p = sub.add_parser("pose", help="frame pose and geometric Jacobian at a configuration")
+    p.add_argument("robot", help="robot name or path to a .urdf file")
+    p.add_argument("--q", type=parse_vector, default=None, help="comma-separated joint values (default: zero)")
+    p.add_argument("--frame", default=None, help="frame name (default: the end effector)")
+    p.add_argument("--reference", default="local_world_aligned",
+                   choices=["local_world_aligned", "world", "local"])
+    p.set_defaults(handler=_cmd_pose)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(args.handler(args))
+    except KinematicsError as exc:
+        print(f"kinengine: error: {exc}", file=sys.stderr)
+        return 2

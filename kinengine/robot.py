@@ -1,0 +1,213 @@
+"""The :class:`Robot`: a fixed-base kinematic model built from a validated URDF.
+
+Frames and conventions
+----------------------
+* "world" in Pinocchio is the URDF's root link frame; it is the seed's inertial frame I.
+* ``frame_pose(q, f)`` is T_IF: the pose of frame f in the root link frame, (4, 4).
+* ``jacobian(q, f, reference)``: rows [linear; angular], columns in ``joint_names`` order.
+  - "local_world_aligned": I J_e0 of the seed (eq. 2.155) — velocity of f's origin and
+    angular velocity, both in I.
+  - "local": the same twist expressed in f: blockdiag(C_IF^T, C_IF^T) · J_lwa.
+  - "world": the spatial velocity in I: linear rows are the velocity of the body point
+    that currently coincides with I's origin: v_O = v_f − ω × p_f  (p_f = origin of f in I).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+import threading
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import FrameNotFoundError, KinematicsError
+from .joint_space import JointSpace
+from .urdf import RobotDescription
+
+REFERENCES: dict[object, pin.ReferenceFrame] = {
+    "world": pin.WORLD,
+    "local": pin.LOCAL,
+    "local_world_aligned": pin.LOCAL_WORLD_ALIGNED,
+    pin.WORLD: pin.WORLD,
+    pin.LOCAL: pin.LOCAL,
+    pin.LOCAL_WORLD_ALIGNED: pin.LOCAL_WORLD_ALIGNED,
+}
+
+
+def resolve_reference(reference: object) -> pin.ReferenceFrame:
+    """Pinocchio's ReferenceFrame for "world", "local", "local_world_aligned" (or the enum itself)."""
+    try:
+        return REFERENCES[reference]
+    except (KeyError, TypeError):
+        raise KinematicsError(f"unknown reference {reference!r}; use 'world', 'local' or "
+                              "'local_world_aligned' (or a pinocchio.ReferenceFrame)") from None
+
+
+class Robot:
+    """A fixed-base robot: one coordinate per independent movable joint.
+
+    Build it with :func:`kinengine.load` or :func:`kinengine.load_urdf_string`. The
+    Pinocchio Model is private and immutable; each thread gets its own Data, so one
+    Robot may be used from several threads at once. Every returned array is a fresh copy.
+    """
+
+    def __init__(self, description: RobotDescription, urdf_text: str, *, name: str | None = None,
+                 end_effector: str | None = None) -> None:
+        try:
+            model = pin.buildModelFromXML(description.to_xml(), mimic=True)
+        except Exception as exc:  # should not happen: the description was validated
+            raise KinematicsError(f"Pinocchio could not build {description.source}: {exc}") from None
+        self._model = model
+        self._description = description
+        self._urdf_text = urdf_text
+        self._name = name or description.name
+        self._joints = JointSpace(model, description)
+        self._identity_q = self._joints.identity
+        self._frame_ids = _frame_ids(model)
+        self._frame_names = tuple(self._frame_ids)
+        self._end_effector = end_effector if end_effector in self._frame_ids else _default_end_effector(
+            description)
+        self._tls = threading.local()
+
+    # -- description ------------------------------------------------------------------------
+    name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
+    dof = property(lambda self: self._joints.dof, doc="Number of coordinates in q.")
+    joint_names = property(lambda self: self._joints.names, doc="Names of q's coordinates, in order.")
+    lower_limits = property(lambda self: self._joints.lower, doc="(dof,) lower limits [rad or m]; -inf if none.")
+    upper_limits = property(lambda self: self._joints.upper, doc="(dof,) upper limits [rad or m]; +inf if none.")
+    frame_names = property(lambda self: self._frame_names, doc="Every link and joint frame, in model order.")
+    end_effector = property(lambda self: self._end_effector, doc="Default end-effector frame name.")
+    description = property(lambda self: self._description, doc="The validated RobotDescription.")
+    urdf_text = property(lambda self: self._urdf_text, doc="The URDF text the robot was loaded from.")
+    source = property(lambda self: self._description.source, doc="File the robot came from, or '<string>'.")
+
+    def __repr__(self) -> str:
+        return f"<Robot {self._name!r}: {self.dof} dof, {len(self._frame_names)} frames>"
+
+    def pinocchio_model(self) -> pin.Model:
+        """A copy of the Pinocchio Model (continuous joints have nq = 2; mimic joints nq = 0)."""
+        return pin.Model(self._model)
+
+    def pinocchio_configuration(self, q: object) -> np.ndarray:
+        """Pinocchio's configuration vector (nq,) for q (continuous joints as cos, sin)."""
+        q = self._joints.check(q, allow_batch=False)
+        return np.array(self._joints.to_pinocchio(q), dtype=float)
+
+    # -- configurations ---------------------------------------------------------------------
+    def neutral(self) -> np.ndarray:
+        """The zero configuration, (dof,)."""
+        return np.zeros(self.dof)
+
+    def random_configuration(self, rng: np.random.Generator | int | None = None,
+                             size: int | None = None) -> np.ndarray:
+        """Uniform within limits, (dof,) or (size, dof); continuous joints in [-π, π)."""
+        return self._joints.sample(np.random.default_rng(rng), size)
+
+    def configuration(self, values: Mapping[str, float], *, base: object = None,
+                      strict: bool = True) -> np.ndarray:
+        """q from joint name -> value (e.g. a ROS JointState); unnamed joints at ``base`` (default neutral).
+
+        Unknown names raise FrameNotFoundError (``strict=False`` ignores them).
+        """
+        start = self.neutral() if base is None else np.array(self._joints.check(base, name="base",
+                                                                              allow_batch=False))
+        return self._joints.from_mapping(values, start, strict=strict)
+
+    def check_configuration(self, q: object, *, check_limits: bool = True) -> np.ndarray:
+        """q as float64 (dof,) or (N, dof); ConfigurationError on bad shape, values or (optionally) limits."""
+        return self._joints.check(q, check_limits=check_limits)
+
+    # -- kinematics -------------------------------------------------------------------------
+    def frame_id(self, frame: str) -> int:
+        """Pinocchio's frame index of a frame name (FrameNotFoundError with suggestions otherwise)."""
+        try:
+            return self._frame_ids[frame]
+        except (KeyError, TypeError):
+            raise FrameNotFoundError(frame, self._frame_names) from None
+
+    def _data(self) -> pin.Data:
+        try:
+            return self._tls.data
+        except AttributeError:
+            data = self._tls.data = self._model.createData()
+            return data
+
+    def frame_pose(self, q: object, frame: str | None = None, *, check_limits: bool = False) -> np.ndarray:
+        """T_IF: pose of ``frame`` (default: end_effector) in the root link frame.
+
+        q (dof,) -> (4, 4); q (N, dof) -> (N, 4, 4). Translation in [m].
+        """
+        try:
+            fid = self._frame_ids[frame if frame is not None else self._end_effector]
+        except (KeyError, TypeError):
+            raise FrameNotFoundError(frame, self._frame_names) from None
+        q = self._joints.check(q, check_limits=check_limits)
+        if q.ndim == 2:
+            return self._batch(q, fid, None)
+        data = self._data()
+        pin.forwardKinematics(self._model, data, q if self._identity_q else self._joints.to_pinocchio(q))
+        return pin.updateFramePlacement(self._model, data, fid).homogeneous
+
+    def jacobian(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
+                 check_limits: bool = False) -> np.ndarray:
+        """Geometric Jacobian of ``frame`` in ``reference``, rows [linear; angular].
+
+        q (dof,) -> (6, dof); q (N, dof) -> (N, 6, dof). See the module doc for the references.
+        """
+        try:
+            fid = self._frame_ids[frame if frame is not None else self._end_effector]
+        except (KeyError, TypeError):
+            raise FrameNotFoundError(frame, self._frame_names) from None
+        try:
+            ref = REFERENCES[reference]
+        except (KeyError, TypeError):
+            ref = resolve_reference(reference)  # raises with the valid names
+        q = self._joints.check(q, check_limits=check_limits)
+        if q.ndim == 2:
+            return self._batch(q, fid, ref)
+        return pin.computeFrameJacobian(self._model, self._data(),
+                                        q if self._identity_q else self._joints.to_pinocchio(q), fid, ref)
+
+    def _batch(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame | None) -> np.ndarray:
+        """Loop over a batch (N, dof) in Pinocchio: poses (ref None) or Jacobians."""
+        model, data = self._model, self._data()
+        qp = self._joints.to_pinocchio(q)
+        if ref is None:
+            out = np.empty((len(q), 4, 4))
+            for i, qi in enumerate(qp):
+                pin.forwardKinematics(model, data, qi)
+                out[i] = pin.updateFramePlacement(model, data, fid).homogeneous
+        else:
+            out = np.empty((len(q), 6, self.dof))
+            for i, qi in enumerate(qp):
+                out[i] = pin.computeFrameJacobian(model, data, qi, fid, ref)
+        return out
+
+
+def _frame_ids(model: pin.Model) -> dict[str, int]:
+    """Frame name -> index for every frame but 'universe'; a link wins over a joint of the same name."""
+    ids: dict[str, int] = {}
+    for kind_first in (True, False):
+        for fid in range(model.nframes):
+            frame = model.frames[fid]
+            if frame.name == "universe" or frame.name in ids:
+                continue
+            if (frame.type == pin.FrameType.BODY) == kind_first:
+                ids[frame.name] = fid
+    return dict(sorted(ids.items(), key=lambda kv: kv[1]))
+
+
+def _default_end_effector(description: RobotDescription) -> str:
+    """'tool0' if present, else the leaf link with the most movable joints above it (first in file order)."""
+    if any(link.name == "tool0" for link in description.links):
+        return "tool0"
+    depth = {description.root: 0}
+    parents = set()
+    for j in description.joints:  # depth-first order: a parent is seen before its children
+        depth[j.child] = depth[j.parent] + (1 if j.movable else 0)
+        parents.add(j.parent)
+    leaves = [link.name for link in description.links if link.name not in parents]
+    return max(leaves, key=lambda n: depth.get(n, 0)) if leaves else description.root
+
+
+__all__ = ["Robot", "REFERENCES", "resolve_reference"]

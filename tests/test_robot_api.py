@@ -1,0 +1,207 @@
+"""The foundation API: loading, names, configurations, batching, copies and errors."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import kinengine
+from custom_robots import mixed_chain_urdf
+
+
+@pytest.fixture(scope="module")
+def abb():
+    return kinengine.load("abb_irb120")
+
+
+@pytest.fixture(scope="module")
+def mixed():
+    return kinengine.load_urdf_string(mixed_chain_urdf())
+
+
+def test_available_robots_lists_shipped_and_example_robot_data_arms():
+    names = kinengine.available_robots()
+    for expected in ("abb_irb120", "planar_3dof", "scara", "ur3", "ur5", "ur10", "panda", "kinova", "xarm7",
+                     "z1", "so100", "so101", "baxter", "double_pendulum"):
+        assert expected in names
+
+
+def test_load_by_name_path_and_string_agree(abb, tmp_path):
+    by_path = kinengine.load(abb.source)
+    by_string = kinengine.load_urdf_string(abb.urdf_text)
+    q = abb.random_configuration(0)
+    for other in (by_path, by_string):
+        assert other.joint_names == abb.joint_names
+        np.testing.assert_array_equal(other.frame_pose(q, "tool0"), abb.frame_pose(q, "tool0"))
+
+
+def test_abb_description(abb):
+    assert abb.name == "abb_irb120"
+    assert abb.dof == 6
+    assert abb.joint_names == tuple(f"joint_{i}" for i in range(1, 7))
+    np.testing.assert_allclose(abb.upper_limits, [2.87979, 1.91986, 1.22173, 2.79253, 2.094395, 6.98132])
+    np.testing.assert_allclose(abb.lower_limits, [-2.87979, -1.91986, -1.91986, -2.79253, -2.094395, -6.98132])
+    assert {"base_link", "base", "flange", "tool0", "link_6", "joint_3"} <= set(abb.frame_names)
+    assert abb.end_effector == "tool0"
+    assert "universe" not in abb.frame_names
+
+
+def test_continuous_joint_is_one_angle_and_mimic_takes_no_coordinate(mixed):
+    # depth-first from the root; siblings in joint-name order (as urdfdom and Pinocchio build the tree)
+    assert mixed.joint_names == ("shoulder", "side_joint", "spin", "slide", "wrist", "finger_a_joint")
+    assert mixed.dof == 6
+    i = mixed.joint_names.index("spin")
+    assert mixed.lower_limits[i] == -np.inf and mixed.upper_limits[i] == np.inf
+    q = mixed.random_configuration(1)
+    q2 = q.copy()
+    q2[i] += 2 * np.pi  # one full turn of a continuous joint changes nothing
+    np.testing.assert_allclose(mixed.frame_pose(q2, "tip"), mixed.frame_pose(q, "tip"), rtol=0, atol=1e-12)
+    assert mixed.pinocchio_configuration(q).shape == (7,)
+
+
+def test_random_configuration_within_limits_and_seeded(abb):
+    qs = abb.random_configuration(np.random.default_rng(3), size=500)
+    assert qs.shape == (500, 6)
+    assert np.all(qs >= abb.lower_limits) and np.all(qs <= abb.upper_limits)
+    np.testing.assert_array_equal(abb.random_configuration(11), abb.random_configuration(11))
+    np.testing.assert_array_equal(abb.neutral(), np.zeros(6))
+
+
+def test_configuration_by_joint_name(abb, mixed):
+    q = abb.configuration({"joint_1": 0.1, "joint_2": -0.3})
+    np.testing.assert_array_equal(q, [0.1, -0.3, 0, 0, 0, 0])
+    with pytest.raises(kinengine.FrameNotFoundError, match="joint_3"):
+        abb.configuration({"joint3": 0.1})
+    np.testing.assert_array_equal(abb.configuration({"joint3": 0.1, "joint_6": 1.0}, strict=False),
+                                  [0, 0, 0, 0, 0, 1.0])
+    with pytest.raises(kinengine.ConfigurationError, match="mimic joint that follows 'finger_a_joint'"):
+        mixed.configuration({"finger_b_joint": 0.3})
+    with pytest.raises(kinengine.ConfigurationError, match="finite"):
+        abb.configuration({"joint_1": float("nan")})
+
+
+def test_batched_results_equal_single_calls(mixed):
+    qs = mixed.random_configuration(2, size=7)
+    T = mixed.frame_pose(qs, "tip")
+    assert T.shape == (7, 4, 4)
+    for reference in ("world", "local", "local_world_aligned"):
+        J = mixed.jacobian(qs, "tip", reference)
+        assert J.shape == (7, 6, 6)
+        for i in range(7):
+            np.testing.assert_array_equal(J[i], mixed.jacobian(qs[i], "tip", reference))
+            np.testing.assert_array_equal(T[i], mixed.frame_pose(qs[i], "tip"))
+
+
+def test_results_are_copies_that_later_calls_do_not_overwrite(abb):
+    q1, q2 = abb.random_configuration(0), abb.random_configuration(1)
+    T1, J1 = abb.frame_pose(q1, "tool0"), abb.jacobian(q1, "tool0")
+    T1_copy, J1_copy = T1.copy(), J1.copy()
+    abb.frame_pose(q2, "tool0"), abb.jacobian(q2, "tool0")
+    np.testing.assert_array_equal(T1, T1_copy)
+    np.testing.assert_array_equal(J1, J1_copy)
+
+
+def test_pinocchio_reference_enum_is_accepted(abb):
+    q = abb.random_configuration(4)
+    for name, enum in (("world", pin.WORLD), ("local", pin.LOCAL), ("local_world_aligned", pin.LOCAL_WORLD_ALIGNED)):
+        np.testing.assert_array_equal(abb.jacobian(q, "tool0", enum), abb.jacobian(q, "tool0", name))
+    with pytest.raises(kinengine.KinematicsError, match="local_world_aligned"):
+        abb.jacobian(q, "tool0", "global")
+
+
+def test_default_frame_is_the_end_effector(abb):
+    q = abb.random_configuration(5)
+    np.testing.assert_array_equal(abb.frame_pose(q), abb.frame_pose(q, "tool0"))
+
+
+def test_unknown_frame_suggests_close_names(abb):
+    with pytest.raises(kinengine.FrameNotFoundError, match="Did you mean 'tool0'") as info:
+        abb.frame_pose(abb.neutral(), "tool_0")
+    assert isinstance(info.value, KeyError)
+    assert "tool0" in str(info.value)
+    with pytest.raises(kinengine.FrameNotFoundError):
+        abb.jacobian(abb.neutral(), "nope")
+    with pytest.raises(kinengine.FrameNotFoundError):
+        abb.jacobian(abb.neutral(), ["tool0"])
+
+
+@pytest.mark.parametrize("bad,message", [
+    (np.zeros(5), r"shape \(6,\) or \(N, 6\), got \(5,\)"),
+    (np.zeros((2, 7)), r"got \(2, 7\)"),
+    (np.zeros((2, 3, 6)), r"got \(2, 3, 6\)"),
+    (np.array([0, 0, np.nan, 0, 0, 0]), r"q`\[2\] \(joint 'joint_3'\) is nan"),
+    (np.array([0, 0, 0, np.inf, 0, 0]), "finite"),
+    ("0,0,0,0,0,0", "string"),
+    (None, "None"),
+    (np.array(["a"] * 6, dtype=object), "non-numeric"),
+    (np.ones(6, dtype=bool), "dtype bool"),
+    (np.ones(6, dtype=complex), "dtype complex128"),
+    (3.0, r"got \(\)"),
+    ([[0.0] * 6, [0.0] * 5], "numeric"),
+])
+def test_bad_configurations_raise_configuration_error(abb, bad, message):
+    with pytest.raises(kinengine.ConfigurationError, match=message) as info:
+        abb.frame_pose(bad, "tool0")
+    assert isinstance(info.value, ValueError)
+
+
+def test_accepted_configuration_types_are_converted(abb):
+    q = np.array([0.1, -0.2, 0.3, 0.4, -0.5, 0.6])
+    expected = abb.frame_pose(q, "tool0")
+    readonly = q.copy()
+    readonly.flags.writeable = False
+    strided = np.zeros(12)
+    strided[::2] = q
+    for variant in (q.tolist(), tuple(q), readonly, strided[::2],
+                    q.astype(object)):
+        np.testing.assert_allclose(abb.frame_pose(variant, "tool0"), expected, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(abb.frame_pose(q.astype(np.float32), "tool0"), expected, rtol=0, atol=1e-6)
+    np.testing.assert_array_equal(abb.frame_pose(np.arange(6), "tool0"),
+                                  abb.frame_pose(np.arange(6.0), "tool0"))
+
+
+def test_check_limits_names_joint_value_and_limits(abb):
+    q = abb.neutral()
+    q[2] = 1.5
+    abb.frame_pose(q, "tool0")  # off by default
+    with pytest.raises(kinengine.ConfigurationError, match=r"joint 'joint_3' at 1.5, outside its limits"):
+        abb.frame_pose(q, "tool0", check_limits=True)
+    with pytest.raises(kinengine.ConfigurationError, match="joint_3"):
+        abb.check_configuration(q)
+
+
+def test_load_errors_are_urdf_errors(tmp_path):
+    with pytest.raises(kinengine.URDFError, match="unknown robot 'ur55'.*ur5"):
+        kinengine.load("ur55")
+    with pytest.raises(kinengine.URDFError, match="missing.urdf"):
+        kinengine.load(tmp_path / "missing.urdf")
+    with pytest.raises(kinengine.URDFError, match="robot name or a path"):
+        kinengine.load(42)
+    with pytest.raises(kinengine.URDFError):
+        kinengine.load_urdf_string("<robot name='x'><link name='a'/>")
+    with pytest.raises(kinengine.URDFError, match="str or bytes"):
+        kinengine.load_urdf_string(None)
+
+
+def test_one_robot_from_eight_threads_gives_the_sequential_answers(abb):
+    qs = abb.random_configuration(9, size=200)
+    expected_T = [abb.frame_pose(q, "tool0") for q in qs]
+    expected_J = [abb.jacobian(q, "tool0", "local") for q in qs]
+    failures = []
+
+    def work(offset):
+        for k in range(len(qs)):
+            i = (k + offset) % len(qs)
+            if not (np.array_equal(abb.frame_pose(qs[i], "tool0"), expected_T[i])
+                    and np.array_equal(abb.jacobian(qs[i], "tool0", "local"), expected_J[i])):
+                failures.append(i)
+
+    threads = [threading.Thread(target=work, args=(25 * t,)) for t in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert failures == []
