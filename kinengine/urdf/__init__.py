@@ -1,5 +1,14 @@
-"""Safe URDF parsing and structural validation (no C++ parser involved)."""
+"""Safe URDF parsing and structural validation (no C++ parser involved).
+
+``parse_urdf`` / ``read_urdf_file`` turn URDF text or a file into a validated
+:class:`RobotDescription`, refusing anything malformed, unsafe, oversized
+(see :data:`LIMITS`) or unsupported with a :class:`~kinengine.errors.URDFError`.
+"""
 
 from .description import Inertial, Joint, Link, Mimic, RobotDescription
+from .limits import LIMITS, Limits
+from .parser import parse_urdf, read_urdf_file
+from .pinocchio_check import build_pinocchio_model, check_pinocchio_model
 
-__all__ = ["Inertial", "Joint", "Link", "Mimic", "RobotDescription"]
+__all__ = ["Inertial", "Joint", "LIMITS", "Limits", "Link", "Mimic", "RobotDescription",
+           "build_pinocchio_model", "check_pinocchio_model", "parse_urdf", "read_urdf_file"]

@@ -75,8 +75,8 @@ class Joint:
 class RobotDescription:
     """A validated tree: exactly one root, every link reached once, no cycles.
 
-    ``joints`` is in depth-first order from the root, children in file order:
-    the order Pinocchio builds its joints in.
+    ``joints`` is in depth-first order from the root, sibling joints sorted by name:
+    the order urdfdom, and so Pinocchio, builds its joints in.
     """
 
     name: str

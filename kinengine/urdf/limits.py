@@ -1,0 +1,37 @@
+"""The size limits every URDF must respect before kinengine does any real work.
+
+They bound what a hostile or broken file can cost: the XML limits are checked
+on the raw document, the model limits on the element counts, both before any
+number is read or any tree is walked. Pass your own :class:`Limits` to
+:func:`kinengine.urdf.parse_urdf` (``limits=``) to load a bigger model.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Parser and model-size limits (defaults in :data:`LIMITS`).
+
+    - ``max_bytes``: size of the document [bytes] (a ``str`` counts in UTF-8).
+    - ``max_tags``: number of ``<`` in the document, an upper bound of its elements.
+    - ``max_depth``: element nesting depth, ``<robot>`` being depth 1.
+    - ``max_attribute_length``: characters in any attribute value.
+    - ``max_name_length``: characters in a robot, link, joint or mimic-target name.
+    - ``max_links``, ``max_joints``: ``<link>`` and ``<joint>`` elements of ``<robot>``.
+    - ``max_movable_joints``: joints whose type is not ``fixed`` (mimic joints included).
+    """
+
+    max_bytes: int = 32 * 1024 * 1024
+    max_tags: int = 1_000_000
+    max_depth: int = 64
+    max_attribute_length: int = 4096
+    max_name_length: int = 256
+    max_links: int = 4096
+    max_joints: int = 4096
+    max_movable_joints: int = 256
+
+
+LIMITS = Limits()

@@ -1,0 +1,110 @@
+"""Strict, safe XML parsing of a URDF document with lxml.
+
+No DTD is ever loaded, no entity is ever declared, resolved or expanded, nothing
+is fetched from the network, and a malformed document is an error (never
+"recovered" into a smaller one). Size, markup count, nesting depth and
+attribute length are bounded by :class:`~kinengine.urdf.limits.Limits`.
+"""
+
+from __future__ import annotations
+
+import codecs
+import re
+
+from lxml import etree
+
+from ..errors import URDFError
+from .limits import LIMITS, Limits
+
+_PARSER_OPTIONS = dict(resolve_entities=False, no_network=True, recover=False, load_dtd=False,
+                       dtd_validation=False, attribute_defaults=False, huge_tree=False,
+                       remove_comments=True, remove_pis=True)
+
+# Encodings whose bytes hide ASCII markup (XML 1.0, appendix F); anything else is scanned as latin-1.
+_WIDE_ENCODINGS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"),
+                   (b"\x00\x00\x00<", "utf-32-be"), (b"<\x00\x00\x00", "utf-32-le"),
+                   (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"),
+                   (b"\x00<", "utf-16-be"), (b"<\x00", "utf-16-le"))
+_DECLARED_ENCODING = re.compile(r"\A(\ufeff?<\?xml\s[^>]*?\bencoding\s*=\s*)(['\"])[^'\"]*\2")
+_FIRST_START_TAG = re.compile(r"<[^!?]")
+_DTD_MARKUP = re.compile(r"<!(DOCTYPE|ENTITY)\b")
+_NO_DTD = ("is not allowed: kinengine reads no DTD and no entity declaration (they can read local "
+           "files or expand without bound); remove it and write the values out")
+
+
+def parse_xml(document: str | bytes, *, source: str = "<string>", limits: Limits = LIMITS) -> etree._Element:
+    """The root element of ``document``, parsed strictly and safely; URDFError otherwise.
+
+    ``str`` input is encoded as UTF-8 (an XML encoding declaration in it is
+    rewritten to match); ``bytes`` follow their BOM or declaration.
+    """
+    data = _to_bytes(document, source, limits)
+    _refuse_dtd(data, source)
+    tags = data.count(b"<")
+    if tags > limits.max_tags:
+        raise URDFError(f"the document has {tags} markup tags, more than Limits.max_tags = {limits.max_tags}",
+                        source=source)
+    parser = etree.XMLParser(**_PARSER_OPTIONS)  # one parser per call: lxml parsers are not thread-safe
+    try:
+        root = etree.fromstring(data, parser)
+    except etree.XMLSyntaxError as exc:
+        raise URDFError(f"not well-formed XML: {exc.msg}", source=source, line=exc.lineno or None) from None
+    docinfo = root.getroottree().docinfo
+    if docinfo.doctype or docinfo.internalDTD is not None or docinfo.externalDTD is not None:
+        raise URDFError(f"a <!DOCTYPE> {_NO_DTD}", source=source)
+    _check_shape(root, source, limits)
+    return root
+
+
+def _to_bytes(document: object, source: str, limits: Limits) -> bytes:
+    if isinstance(document, str):
+        if len(document) > limits.max_bytes:  # every character takes at least one byte
+            _too_big(len(document), source, limits)
+        document = _DECLARED_ENCODING.sub(r"\1\2UTF-8\2", document, count=1)
+        try:
+            data = document.encode("utf-8")
+        except UnicodeEncodeError as exc:
+            raise URDFError(f"the text is not valid Unicode: {exc.reason} at character {exc.start}",
+                            source=source) from None
+    elif isinstance(document, (bytes, bytearray, memoryview)):
+        data = bytes(document)
+    else:
+        raise URDFError(f"expected URDF text as str or bytes, got {type(document).__name__}", source=source)
+    if len(data) > limits.max_bytes:
+        _too_big(len(data), source, limits)
+    return data
+
+
+def _too_big(size: int, source: str, limits: Limits) -> None:
+    raise URDFError(f"the document is {size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
+                    source=source)
+
+
+def _refuse_dtd(data: bytes, source: str) -> None:
+    """URDFError if the prolog (the text before the root element) holds a DOCTYPE or ENTITY.
+
+    Checked on the raw text, so that libxml2 never sees an entity declaration.
+    """
+    codec = next((c for prefix, c in _WIDE_ENCODINGS if data.startswith(prefix)), "latin-1")
+    text = data.decode(codec, errors="replace")
+    start = _FIRST_START_TAG.search(text)
+    prolog = text[:start.start()] if start else text
+    found = _DTD_MARKUP.search(prolog)
+    if found:
+        line = prolog.count("\n", 0, found.start()) + 1
+        raise URDFError(f"<!{found.group(1)}> {_NO_DTD}", source=source, line=line)
+
+
+def _check_shape(root: etree._Element, source: str, limits: Limits) -> None:
+    """Nesting depth and attribute lengths, found by XPath in C (no Python recursion, any thread)."""
+    too_deep = root.xpath("/*" * (limits.max_depth + 1))
+    if too_deep:
+        element = too_deep[0]
+        raise URDFError(f"elements are nested deeper than Limits.max_depth = {limits.max_depth}",
+                        source=source, element=f"<{element.tag}>", line=element.sourceline)
+    too_long = root.xpath(f"//@*[string-length(.) > {int(limits.max_attribute_length)}]")
+    if too_long:
+        element = too_long[0].getparent()
+        raise URDFError(f"attribute {too_long[0].attrname!r} has {len(too_long[0])} characters, more than "
+                        f"Limits.max_attribute_length = {limits.max_attribute_length}",
+                        source=source, element=f"<{element.tag}>", line=element.sourceline)
