@@ -1,0 +1,77 @@
+"""SO(3) building blocks shared by the rotation parameterizations, written over ``xp`` (math or numpy).
+
+Quaternions here are Hamilton, scalar first: q = (w, x, y, z), C = C_IE = I + 2w[v]x + 2[v]x².
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+
+from .base import SMALL_ANGLE_SQ
+
+
+def quaternion_from_matrix(xp, c00, c01, c02, c10, c11, c12, c20, c21, c22):
+    """Unit quaternion (w, x, y, z) of C_IE, canonical like scipy's ``as_quat(canonical=True)``.
+
+    Canonical: w > 0, or w = 0 and the first nonzero of (x, y, z) > 0. The case split on the largest
+    of (C00, C11, C22, trace) is scipy's (Shepperd's method), so results match scipy to rounding.
+    """
+    trace = c00 + c11 + c22
+    if xp is math:
+        best = max(c00, c11, c22, trace)  # the first maximum, like numpy's argmax
+        if best == c00:
+            x, y, z, w = 1.0 - trace + 2.0 * c00, c10 + c01, c20 + c02, c21 - c12
+        elif best == c11:
+            x, y, z, w = c10 + c01, 1.0 - trace + 2.0 * c11, c21 + c12, c02 - c20
+        elif best == c22:
+            x, y, z, w = c20 + c02, c21 + c12, 1.0 - trace + 2.0 * c22, c10 - c01
+        else:
+            x, y, z, w = c21 - c12, c02 - c20, c10 - c01, 1.0 + trace
+        norm = math.sqrt(x * x + y * y + z * z + w * w)
+        if w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0))))):
+            norm = -norm
+        return w / norm, x / norm, y / norm, z / norm
+    cases = (
+        (1.0 - trace + 2.0 * c00, c10 + c01, c20 + c02, c21 - c12),
+        (c10 + c01, 1.0 - trace + 2.0 * c11, c21 + c12, c02 - c20),
+        (c20 + c02, c21 + c12, 1.0 - trace + 2.0 * c22, c10 - c01),
+        (c21 - c12, c02 - c20, c10 - c01, 1.0 + trace),
+    )
+    choice = np.argmax(np.stack([c00, c11, c22, trace], axis=-1), axis=-1)
+    x, y, z, w = (np.choose(choice, [case[k] for case in cases]) for k in range(4))
+    norm = np.sqrt(x * x + y * y + z * z + w * w)
+    negative = (w < 0) | ((w == 0) & ((x < 0) | ((x == 0) & ((y < 0) | ((y == 0) & (z < 0))))))
+    norm = np.where(negative, -norm, norm)
+    return w / norm, x / norm, y / norm, z / norm
+
+
+def rotation_entries(alpha, beta, x, y, z):
+    """Row-major entries of I + α[u]x + β[u]x² for u = (x, y, z) ([u]x² = u u^T − |u|² I)."""
+    u2 = x * x + y * y + z * z
+    bxy, bxz, byz = beta * x * y, beta * x * z, beta * y * z
+    ax, ay, az = alpha * x, alpha * y, alpha * z
+    return (1.0 + beta * (x * x - u2), bxy - az, bxz + ay,
+            bxy + az, 1.0 + beta * (y * y - u2), byz - ax,
+            bxz - ay, byz + ax, 1.0 + beta * (z * z - u2))
+
+
+def matrix_from_quaternion(w, x, y, z):
+    """Row-major entries of C_IE(q) for q = (w, x, y, z), normalized first (any nonzero q)."""
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    return rotation_entries(s * w, s, x, y, z)
+
+
+def series_or_closed(xp, t, series: Callable, closed: Callable):
+    """series(θ²) where θ² = t < SMALL_ANGLE_SQ, else closed(xp, θ²) (jaxlie's small-angle branch, on θ²)."""
+    if xp is math:
+        return series(t) if t < SMALL_ANGLE_SQ else closed(math, t)
+    small = t < SMALL_ANGLE_SQ
+    return np.where(small, series(t), closed(np, np.where(small, 1.0, t)))
+
+
+def cross_matrix(x, y, z):
+    """Row-major entries of [u]x for u = (x, y, z), the matrix with [u]x w = u × w."""
+    return (0.0, -z, y, z, 0.0, -x, -y, x, 0.0)

@@ -1,0 +1,62 @@
+"""Unit quaternion χ_R = q = (w, x, y, z), Hamilton convention, scalar FIRST, canonical w >= 0.
+
+C_IE = I + 2w[v]x + 2[v]x² with v = (x, y, z). (scipy's ``as_quat()`` is scalar LAST: (x, y, z, w).)
+For ω in the inertial frame, Ċ = [ω]x C gives q̇ = ½ (0, ω) ⊗ q, i.e.
+
+    E(q) = ½ H(q),  H(q) = [−v^T; w I − [v]x]   (4x3, H^T H = I_3 for |q| = 1).
+
+(With ω in the body frame it would be q ⊗ (0, ω)/2, i.e. w I + [v]x.) E_inverse = 2 H(q)^T is the
+Moore–Penrose pseudo-inverse of E: E_inverse·E = I_3 and E_inverse·q = 0 (it discards the radial part
+of q̇ that a unit quaternion cannot have). Ė = ½ H(q̇) with q̇ = E(q)·ω. Never singular; the sign choice
+w >= 0 is a branch cut at w = 0 (θ = π), where q jumps to −q.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ._so3 import matrix_from_quaternion, quaternion_from_matrix
+from .base import RotationParameterization
+
+
+def _half_H(w, x, y, z):
+    """Row-major entries of ½ [−v^T; w I − [v]x] for q = (w, v)."""
+    w, x, y, z = 0.5 * w, 0.5 * x, 0.5 * y, 0.5 * z
+    return (-x, -y, -z,
+            w, z, -y,
+            -z, w, x,
+            y, -x, w)
+
+
+class Quaternion(RotationParameterization):
+    """χ_R = (w, x, y, z), unit, scalar first, w >= 0; q̇ = ½ [−v^T; w I − [v]x]·ω (ω in I)."""
+
+    name = "quaternion"
+    labels = ("qw", "qx", "qy", "qz")
+    singular_set = "none (E is defined everywhere; branch cut of the sign choice at w = 0)"
+    alternatives = ()
+
+    def _from_rotation(self, xp, warn, *C):
+        return quaternion_from_matrix(xp, *C)
+
+    def _to_rotation(self, xp, w, x, y, z):
+        return matrix_from_quaternion(w, x, y, z)
+
+    def _E(self, xp, w, x, y, z):
+        return _half_H(w, x, y, z)
+
+    def _E_inverse(self, xp, w, x, y, z):
+        w, x, y, z = 2.0 * w, 2.0 * x, 2.0 * y, 2.0 * z
+        return (-x, w, -z, y,
+                -y, z, w, -x,
+                -z, -y, x, w)
+
+    def _E_dot(self, xp, chi, u):
+        a, b, c = u
+        w, x, y, z = chi
+        q_dot = (0.5 * (-x * a - y * b - z * c), 0.5 * (w * a + z * b - y * c),
+                 0.5 * (-z * a + w * b + x * c), 0.5 * (y * a - x * b + w * c))
+        return _half_H(*q_dot)
+
+    def _distance(self, xp, w, x, y, z):
+        return math.inf

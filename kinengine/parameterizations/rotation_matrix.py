@@ -1,0 +1,55 @@
+"""Rotation matrix entries χ_R = (C11, C12, ..., C33) = C_IE.flatten() (row-major, 9 coordinates).
+
+Ċ = [ω]x C with ω in I; column j of C, u = C[:, j], moves as u̇ = ω × u = −[u]x ω, so row 3i + j of
+the 9x3 map E(χ) is row i of −[C[:, j]]x. E^T E = 2 I_3 for orthonormal C, hence E_inverse = ½ E^T,
+the Moore–Penrose pseudo-inverse (ω = vee(skew(Ċ C^T)) for a consistent Ċ). E is linear in C, so
+Ė = E(Ċ) with Ċ = [ω]x C. Never singular.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .base import RotationParameterization
+
+
+def _rate_map(c00, c01, c02, c10, c11, c12, c20, c21, c22):
+    """Row-major entries of the 9x3 E with vec(Ċ) = E·ω (row 3i + j is row i of −[C[:, j]]x)."""
+    return (0.0, c20, -c10, 0.0, c21, -c11, 0.0, c22, -c12,
+            -c20, 0.0, c00, -c21, 0.0, c01, -c22, 0.0, c02,
+            c10, -c00, 0.0, c11, -c01, 0.0, c12, -c02, 0.0)
+
+
+class RotationMatrix(RotationParameterization):
+    """χ_R = C_IE.flatten() (row-major); Ċ = [ω]x C, E: 9x3, E_inverse = ½ E^T. Never singular."""
+
+    name = "rotation_matrix"
+    labels = ("C11", "C12", "C13", "C21", "C22", "C23", "C31", "C32", "C33")
+    singular_set = "none (E is defined everywhere)"
+    alternatives = ()
+
+    def _from_rotation(self, xp, warn, *C):
+        return C
+
+    def _to_rotation(self, xp, *chi):
+        return chi
+
+    def _E(self, xp, *chi):
+        return _rate_map(*chi)
+
+    def _E_inverse(self, xp, *chi):
+        c00, c01, c02, c10, c11, c12, c20, c21, c22 = (0.5 * c for c in chi)
+        return (0.0, 0.0, 0.0, -c20, -c21, -c22, c10, c11, c12,
+                c20, c21, c22, 0.0, 0.0, 0.0, -c00, -c01, -c02,
+                -c10, -c11, -c12, c00, c01, c02, 0.0, 0.0, 0.0)
+
+    def _E_dot(self, xp, chi, u):
+        a, b, c = u
+        C_dot = []
+        for j in range(3):  # column j of Ċ is ω × C[:, j]
+            x, y, z = chi[j], chi[3 + j], chi[6 + j]
+            C_dot.append((b * z - c * y, c * x - a * z, a * y - b * x))
+        return _rate_map(*(C_dot[j][i] for i in range(3) for j in range(3)))
+
+    def _distance(self, xp, *chi):
+        return math.inf
