@@ -14,12 +14,13 @@ Frames and conventions
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 import threading
 
 import numpy as np
 import pinocchio as pin
 
+from .analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
 from .errors import FrameNotFoundError, KinematicsError
 from .joint_space import JointSpace
 from .urdf import RobotDescription
@@ -165,8 +166,59 @@ class Robot:
         q = self._joints.check(q, check_limits=check_limits)
         if q.ndim == 2:
             return self._batch(q, fid, ref)
-        return pin.computeFrameJacobian(self._model, self._data(),
-                                        q if self._identity_q else self._joints.to_pinocchio(q), fid, ref)
+        J = pin.computeFrameJacobian(self._model, self._data(),
+                                     q if self._identity_q else self._joints.to_pinocchio(q), fid, ref)
+        return J if J.ndim == 2 else J.reshape(6, 1)  # eigenpy returns a (6, 1) matrix as (6,)
+
+    # -- analytic Jacobians --------------------------------------------------------------------
+    def pose_parameters(self, q: object, frame: str | None = None, position: str | None = "cartesian",
+                        rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
+                        check_limits: bool = False) -> np.ndarray:
+        """χ_e(q) = (χ_P, χ_R) of ``frame`` in the root frame, (m,) or (N, m) for q (N, dof).
+
+        ``position``/``rotation`` name a parameterization (None leaves its rows out);
+        ``rows`` keeps only the named rows (labels or indices), e.g. ("x", "z", "ry").
+        Near a representation singularity the angles stay valid (a warning is issued).
+        """
+        return pose_map(position, rotation, as_rows(rows)).parameters(
+            self.frame_pose(q, frame, check_limits=check_limits))
+
+    def analytic_jacobian(self, q: object, frame: str | None = None, position: str | None = "cartesian",
+                          rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
+                          singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
+                          check_limits: bool = False) -> np.ndarray:
+        """J_eA = ∂χ_e/∂q = E_e(χ_e) · J_e0(q), (m, dof) or (N, m, dof) for q (N, dof).
+
+        Raises RepresentationSingularityError when χ_e is closer than ``singularity_threshold``
+        to its parameterization's singular set (the message names regular alternatives).
+        """
+        pmap = pose_map(position, rotation, rows if rows is None else as_rows(rows))
+        try:
+            fid = self._frame_ids[frame if frame is not None else self._end_effector]
+        except (KeyError, TypeError):
+            raise FrameNotFoundError(frame, self._frame_names) from None
+        q = self._joints.check(q, check_limits=check_limits)
+        if q.ndim == 2:
+            T, J = self._batch(q, fid, None), self._batch(q, fid, pin.LOCAL_WORLD_ALIGNED)
+            return pmap.jacobian(T, J, singularity_threshold)
+        model, data = self._model, self._data()
+        J = pin.computeFrameJacobian(model, data, q if self._identity_q else self._joints.to_pinocchio(q),
+                                     fid, pin.LOCAL_WORLD_ALIGNED)
+        if J.ndim == 1:
+            J = J.reshape(6, 1)
+        M = pin.updateFramePlacement(model, data, fid)
+        return pmap.jacobian_single(M.rotation.tolist(), M.translation.tolist(), J, singularity_threshold)
+
+    def task(self, frames: str | Sequence[str] | None = None, position: str | None = "cartesian",
+             rotation: str | None = "euler_zyx", **options: object) -> "Task":
+        """A :class:`~kinengine.task.Task` for a control loop: ``task.update(q, qdot)`` fills pose, χ,
+        J_e0, J_A (and with q̇ the twist, J̇_e0, J̇_A) into preallocated read-only arrays.
+
+        ``frames``: one name (default: end_effector) or several (blocks stacked). Options:
+        rows, check_inputs, continuous, singularity_threshold.
+        """
+        from .task import Task
+        return Task(self, self._end_effector if frames is None else frames, position, rotation, **options)
 
     def _batch(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame | None) -> np.ndarray:
         """Loop over a batch (N, dof) in Pinocchio: poses (ref None) or Jacobians."""
@@ -180,7 +232,7 @@ class Robot:
         else:
             out = np.empty((len(q), 6, self.dof))
             for i, qi in enumerate(qp):
-                out[i] = pin.computeFrameJacobian(model, data, qi, fid, ref)
+                out[i] = pin.computeFrameJacobian(model, data, qi, fid, ref).reshape(6, -1)
         return out
 
 
