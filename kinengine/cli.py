@@ -12,7 +12,7 @@ import sys
 
 import numpy as np
 
-from . import __version__
+from . import __version__, verify
 from .catalog import available_robots
 from .errors import KinematicsError
 from .loading import load
@@ -76,6 +76,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--reference", default="local_world_aligned",
                    choices=["local_world_aligned", "world", "local"])
     p.set_defaults(handler=_cmd_pose)
+
+    verify.add_parser(sub)
     return parser
 
 
