@@ -1,0 +1,80 @@
+"""Continuous pose parameters along a trajectory.
+
+χ from a rotation matrix is canonical (angles in [−π, π), quaternion w >= 0, rotation
+vector |φ| <= π), so it jumps by 2π, flips sign or crosses the branch cut θ = π while
+the pose moves smoothly. :func:`continuity_rule` returns, per parameterization, the
+function that picks among the coordinates *equivalent* to a canonical χ (same pose)
+the one closest to the previous χ. E(χ) is evaluated at that representative, so
+J_A and χ̇ stay exact. Rules work on lists of Python floats (no numpy allocation).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import math
+
+TWO_PI = 2.0 * math.pi
+
+Rule = Callable[[list[float], list[float]], list[float]]
+
+
+def _unwrap(angle: float, previous: float) -> float:
+    """angle + 2πk closest to previous."""
+    return angle + TWO_PI * round((previous - angle) / TWO_PI)
+
+
+def _angles(indices: tuple[int, ...]) -> Rule:
+    def rule(chi: list[float], previous: list[float]) -> list[float]:
+        for i in indices:
+            chi[i] = _unwrap(chi[i], previous[i])
+        return chi
+    return rule
+
+
+def _quaternion(chi: list[float], previous: list[float]) -> list[float]:
+    """q and −q are the same rotation: keep the sign of the previous quaternion."""
+    if sum(a * b for a, b in zip(chi, previous)) < 0.0:
+        return [-c for c in chi]
+    return chi
+
+
+def _rotation_vector(chi: list[float], previous: list[float]) -> list[float]:
+    """φ = θn equals (θ + 2πk)n for every integer k: pick the k closest to the previous φ."""
+    theta = math.sqrt(sum(c * c for c in chi))
+    if theta < 1e-9:  # at the identity the axis is undefined: candidates are 2πk·n for any n
+        p = math.sqrt(sum(c * c for c in previous))
+        k = round(p / TWO_PI)
+        return [c * (k * TWO_PI / p) for c in previous] if k and p > 0 else chi
+    n = [c / theta for c in chi]
+    along = sum(a * b for a, b in zip(n, previous))
+    best = min((round((along - theta) / TWO_PI) + d for d in (-1, 0, 1)),
+               key=lambda k: sum((x * (theta + TWO_PI * k) - p) ** 2 for x, p in zip(n, previous)))
+    return [x * (theta + TWO_PI * best) for x in n]
+
+
+def _angle_axis(chi: list[float], previous: list[float]) -> list[float]:
+    """(θ, n) equals (θ + 2πk, n) and (−θ + 2πk, −n): pick the candidate closest to the previous one."""
+    theta, n = chi[0], chi[1:]
+    candidates = []
+    for sign in (1.0, -1.0):
+        axis = [sign * x for x in n]
+        angle = _unwrap(sign * theta, previous[0])
+        candidates.append([angle, *axis])
+    return min(candidates, key=lambda c: sum((a - b) ** 2 for a, b in zip(c, previous)))
+
+
+def _identity(chi: list[float], previous: list[float]) -> list[float]:
+    return chi
+
+
+def continuity_rule(name: str) -> Rule:
+    """The rule for a parameterization name (identity where χ is unique: cartesian, rotation_matrix)."""
+    if name.startswith("euler_"):
+        return _angles((0, 1, 2))
+    return {
+        "cylindrical": _angles((1,)),
+        "spherical": _angles((1,)),
+        "quaternion": _quaternion,
+        "rotation_vector": _rotation_vector,
+        "angle_axis": _angle_axis,
+    }.get(name, _identity)

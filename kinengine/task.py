@@ -1,0 +1,276 @@
+"""The controller's hot path: one ``update(q, qdot)`` computes everything, into preallocated arrays.
+
+>>> task = robot.task("tool0", position="cartesian", rotation="euler_zyz")
+>>> task.update(q, qdot)                       # one pass over the chain, no numpy allocation
+>>> task.chi, task.analytic_jacobian, task.jacobian_dot, task.analytic_jacobian_dot
+
+Frames: ``pose`` is T_IF in the root frame I; ``jacobian`` is J_e0 in "local_world_aligned"
+(origin velocity and angular velocity in I, rows [linear; angular]); ``twist`` = J_e0·q̇;
+``jacobian_dot`` = dJ_e0/dt; ``analytic_jacobian`` = E(χ)·J_e0 and
+``analytic_jacobian_dot`` = Ė·J_e0 + E·J̇_e0 with Ė = dE/dt along (v, ω); ``chi_dot`` = J_A·q̇.
+With several frames the per-frame blocks are stacked: ``chi`` (k·m,), ``jacobian`` (6k, dof),
+``analytic_jacobian`` (k·m, dof), ``pose`` (k, 4, 4).
+
+How: one ``computeForwardKinematicsDerivatives`` fills Pinocchio's world-frame joint Jacobians
+J_w and J̇_w (no array is returned, so nothing is allocated; robots with mimic joints use
+``computeJointJacobians(TimeVariation)`` instead, which Pinocchio makes return a copy); per frame,
+J_e0 = X(p)·J_w with X = [[I, −[p]x], [0, I]] (the spatial velocity moved from I's origin to the
+frame origin p) and J̇_e0 = X·J̇_w + Ẋ·J_w with Ẋ = [[0, −[ṗ]x], [0, 0]], ṗ = v.
+
+A Task owns its own Pinocchio Data: use one Task per thread. The attributes are read-only
+views that the next update overwrites; copy what you keep.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+import math
+import struct
+
+import numpy as np
+import pinocchio as pin
+
+from .analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
+from .continuity import continuity_rule
+from .errors import RepresentationSingularityError
+
+
+class _Part:
+    """One parameterization (position or rotation) of one frame: its rows in χ, E, J_A, J̇_A."""
+
+    def __init__(self, param, rows: slice, J_rows: np.ndarray, Jdot_rows: np.ndarray, chi: np.ndarray,
+                 JA: np.ndarray, JAdot: np.ndarray) -> None:
+        m = param.size
+        self.param = param
+        self.identity = param.name == "cartesian"   # E_P = I: J_A rows are J_e0 rows
+        self.rule = continuity_rule(param.name)
+        self.rows = rows
+        self.J, self.Jdot = J_rows, Jdot_rows          # (3, n) views of J_e0 and J̇_e0
+        self.chi, self.JA, self.JAdot = chi, JA, JAdot  # views of this part's rows
+        self.E, self.Edot = np.zeros((m, 3)), np.zeros((m, 3))
+        self.tmp = np.zeros(JA.shape)
+        self.write_E = struct.Struct(f"{3 * m}d").pack_into
+        self.write_chi = struct.Struct(f"{m}d").pack_into
+
+
+class _Frame:
+    """Pinocchio views and buffers of one frame of a task."""
+
+    def __init__(self, model: pin.Model, data: pin.Data, fid: int, dof: int) -> None:
+        self.fid = fid
+        placement = data.oMf[fid]  # a reference into data: these views follow every update
+        self.R, self.p = placement.rotation, placement.translation
+        # With mimic joints J_w has extra columns (model.nvExtended): ask Pinocchio for the frame Jacobian.
+        self.uses_mimic = model.nvExtended != model.nv
+        mask = np.zeros(dof)
+        for j in model.supports[model.frames[fid].parentJoint][1:]:
+            joint = model.joints[j]
+            mask[joint.idx_v:joint.idx_v + joint.nv] = 1.0
+        self.mask = None if mask.all() else mask
+        self.X = np.eye(6)
+        self.Xdot_lin = np.zeros((3, 3))   # −[ṗ]x
+        self.masked, self.masked_dot = np.empty((6, dof)), np.empty((6, dof))
+        self.tmp = np.empty((3, dof))
+        self.previous: list[float] | None = None
+
+
+class Task:
+    """Kinematics of one or several frames for a control loop. Build it with :meth:`Robot.task`.
+
+    ``check_inputs=False`` skips the shape and finiteness checks of q and q̇ (for callers that
+    validate upstream: then pass float64 arrays of shape (dof,)). ``continuous=True`` keeps χ
+    continuous between updates (no 2π jumps, no quaternion sign flips, rotation vectors across
+    θ = π); :meth:`reset` returns to the canonical ranges. ``singularity_threshold``: as in
+    :meth:`Robot.analytic_jacobian` (RepresentationSingularityError below it).
+    """
+
+    def __init__(self, robot, frames: str | Sequence[str], position: str | None = "cartesian",
+                 rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
+                 check_inputs: bool = True, continuous: bool = True,
+                 singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD) -> None:
+        names = (frames,) if isinstance(frames, str) else tuple(frames)
+        if not names:
+            raise ValueError("a task needs at least one frame")
+        fids = [robot.frame_id(f) for f in names]
+        pmap = pose_map(position, rotation, as_rows(rows))
+        self.frames, self.labels = names, pmap.labels
+        self.check_inputs, self.continuous = check_inputs, continuous
+        self.singularity_threshold = singularity_threshold
+        self._joints = joints = robot._joints
+        self._model = model = robot._model
+        self._data = data = model.createData()
+        self.dof = n = robot.dof
+        k = len(fids)
+        params = [p for p in (pmap.position, pmap.rotation) if p is not None]
+        m = sum(p.size for p in params)
+        self._m = m
+        self._Jw, self._dJw = data.J, data.dJ  # views of Pinocchio's world-frame joint Jacobians
+        self._has_mimic = any(model.joints[j].nv == 0 for j in range(1, model.njoints))
+        self._zero = np.zeros(n)
+        self._qp = np.empty(model.nq)
+        self._linear = list(zip(joints._lin_user.tolist(), joints._lin_pin.tolist()))
+        self._circular = list(zip(joints._cont_user.tolist(), joints._cos_pin.tolist()))
+        self._pose = np.zeros((k, 4, 4))
+        self._pose[:, 3, 3] = 1.0
+        self._J, self._Jdot = np.zeros((k, 6, n)), np.zeros((k, 6, n))
+        self._twist = np.zeros((k, 6))
+        self._chi, self._chi_dot = np.zeros((k, m)), np.zeros((k, m))
+        self._JA, self._JAdot = np.zeros((k, m, n)), np.zeros((k, m, n))
+        self._frames = []
+        for f, fid in enumerate(fids):
+            frame = _Frame(model, data, fid, n)
+            frame.pose_R, frame.pose_p = self._pose[f, :3, :3], self._pose[f, :3, 3]
+            frame.J, frame.Jdot, frame.twist = self._J[f], self._Jdot[f], self._twist[f]
+            frame.chi, frame.JA, frame.JAdot, frame.chi_dot = self._chi[f], self._JA[f], self._JAdot[f], self._chi_dot[f]
+            frame.parts, start = [], 0
+            for param in params:
+                rows_ = slice(start, start + param.size)
+                block = slice(0, 3) if param.kind == "position" else slice(3, 6)
+                frame.parts.append(_Part(param, rows_, frame.J[block], frame.Jdot[block], frame.chi[rows_],
+                                         frame.JA[rows_], frame.JAdot[rows_]))
+                start += param.size
+            frame.write_chi = struct.Struct(f"{m}d").pack_into
+            self._frames.append(frame)
+        # Public read-only views: selected rows, stacked over frames.
+        self._rows = None if pmap.rows is None else np.asarray(pmap.rows, dtype=np.intp)
+        if self._rows is None:
+            sel = (self._chi, self._JA, self._JAdot, self._chi_dot)
+        else:
+            ms = len(self._rows)
+            sel = (np.zeros((k, ms)), np.zeros((k, ms, n)), np.zeros((k, ms, n)), np.zeros((k, ms)))
+        self._sel = sel
+        ms = sel[0].shape[1]
+        self.pose = _readonly(self._pose[0] if isinstance(frames, str) else self._pose)
+        self.jacobian = _readonly(self._J.reshape(6 * k, n))
+        self.jacobian_dot = _readonly(self._Jdot.reshape(6 * k, n))
+        self.twist = _readonly(self._twist.reshape(6 * k))
+        self.chi = _readonly(sel[0].reshape(k * ms))
+        self.analytic_jacobian = _readonly(sel[1].reshape(k * ms, n))
+        self.analytic_jacobian_dot = _readonly(sel[2].reshape(k * ms, n))
+        self.chi_dot = _readonly(sel[3].reshape(k * ms))
+
+    def __repr__(self) -> str:
+        return f"<Task {self.frames} {self.labels}>"
+
+    def reset(self) -> None:
+        """Forget the previous χ: the next update returns χ in the canonical ranges."""
+        for frame in self._frames:
+            frame.previous = None
+
+    def update(self, q: np.ndarray, qdot: np.ndarray | None = None) -> None:
+        """Evaluate at q [rad | m] (and q̇ [rad/s | m/s]); overwrites every attribute in place.
+
+        Without q̇, ``twist``, ``chi_dot`` and the time derivatives keep their last values.
+        """
+        joints = self._joints
+        if self.check_inputs:
+            q = joints.check(q, allow_batch=False)
+            if qdot is not None:
+                qdot = joints.check(qdot, name="qdot", allow_batch=False)
+        if joints.identity:
+            qp = q
+        else:  # continuous joints: (cos, sin) into a preallocated Pinocchio q
+            qp, values = self._qp, q.tolist()
+            for user, index in self._linear:
+                qp[index] = values[user]
+            for user, index in self._circular:
+                qp[index], qp[index + 1] = math.cos(values[user]), math.sin(values[user])
+        model, data = self._model, self._data
+        if not self._has_mimic:  # returns nothing: no allocation
+            pin.computeForwardKinematicsDerivatives(model, data, qp, self._zero if qdot is None else qdot,
+                                                    self._zero)
+        elif qdot is None:  # Pinocchio's derivatives do not support mimic joints; these return a copy
+            pin.computeJointJacobians(model, data, qp)
+        else:
+            pin.computeJointJacobiansTimeVariation(model, data, qp, qdot)
+        for frame in self._frames:
+            self._update_frame(frame, qdot)
+        if self._rows is not None:
+            chi, JA, JAdot, chi_dot = self._sel
+            np.take(self._chi, self._rows, axis=1, out=chi)
+            np.take(self._JA, self._rows, axis=1, out=JA)
+            if qdot is not None:
+                np.take(self._JAdot, self._rows, axis=1, out=JAdot)
+                np.take(self._chi_dot, self._rows, axis=1, out=chi_dot)
+
+    def _update_frame(self, frame: _Frame, qdot: np.ndarray | None) -> None:
+        model, data = self._model, self._data
+        pin.updateFramePlacement(model, data, frame.fid)
+        np.copyto(frame.pose_R, frame.R)
+        np.copyto(frame.pose_p, frame.p)
+        p = frame.p.tolist()
+        px, py, pz = p
+        X = frame.X
+        X[0, 4], X[0, 5], X[1, 3], X[1, 5], X[2, 3], X[2, 4] = pz, -py, -pz, px, py, -px
+        J = frame.J
+        if frame.uses_mimic:  # the frame's own WORLD Jacobian (mimic columns summed into leaders)
+            Jw = pin.getFrameJacobian(model, data, frame.fid, pin.WORLD)
+        elif frame.mask is not None:
+            Jw = frame.masked
+            np.multiply(self._Jw, frame.mask, out=Jw)
+        else:
+            Jw = self._Jw
+        np.dot(X, Jw, out=J)
+        values: list[float] = []
+        previous = frame.previous
+        for part in frame.parts:
+            param = part.param
+            if param.kind == "position":
+                chi = list(param._from_position(math, px, py, pz))
+            else:
+                (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = frame.R.tolist()
+                chi = list(param._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22))
+            if previous is not None:
+                chi = part.rule(chi, previous[part.rows])
+            distance = param._distance(math, *chi)
+            if distance < self.singularity_threshold:
+                raise RepresentationSingularityError(param.name, float(distance), self.singularity_threshold,
+                                                     param.alternatives, param.singular_set)
+            values += chi
+            if part.identity:
+                np.copyto(part.JA, part.J)
+            else:
+                part.write_E(part.E, 0, *param._E(math, *chi))
+                np.dot(part.E, part.J, out=part.JA)
+        frame.write_chi(frame.chi, 0, *values)
+        if self.continuous:
+            frame.previous = values
+        if qdot is not None:
+            self._update_rates(frame, qdot, values, Jw)
+
+    def _update_rates(self, frame: _Frame, qdot: np.ndarray, values: list[float], Jw: np.ndarray) -> None:
+        """twist, J̇_e0 = X·J̇w + Ẋ·Jw, J̇_A = Ė·J_e0 + E·J̇_e0, χ̇ = J_A·q̇."""
+        twist, J, Jdot = frame.twist, frame.J, frame.Jdot
+        np.dot(J, qdot, out=twist)
+        if frame.uses_mimic:
+            # WORLD only: Pinocchio 4.1's LOCAL and LOCAL_WORLD_ALIGNED time variations are wrong
+            # below revolute mimic joints (tests/test_task.py checks ours against finite differences)
+            dJw = pin.getFrameJacobianTimeVariation(self._model, self._data, frame.fid, pin.WORLD)
+        elif frame.mask is not None:
+            dJw = frame.masked_dot
+            np.multiply(self._dJw, frame.mask, out=dJw)
+        else:
+            dJw = self._dJw
+        np.dot(frame.X, dJw, out=Jdot)
+        vx, vy, vz = twist[:3].tolist()
+        S = frame.Xdot_lin
+        S[0, 1], S[0, 2], S[1, 0], S[1, 2], S[2, 0], S[2, 1] = vz, -vy, -vz, vx, vy, -vx
+        np.dot(S, Jw[3:], out=frame.tmp)
+        np.add(Jdot[:3], frame.tmp, out=Jdot[:3])
+        velocity = twist.tolist()
+        for part in frame.parts:
+            if part.identity:
+                np.copyto(part.JAdot, part.Jdot)
+                continue
+            u = velocity[:3] if part.param.kind == "position" else velocity[3:]
+            part.write_E(part.Edot, 0, *part.param._E_dot(math, values[part.rows], u))
+            np.dot(part.Edot, part.J, out=part.tmp)
+            np.dot(part.E, part.Jdot, out=part.JAdot)
+            np.add(part.JAdot, part.tmp, out=part.JAdot)
+        np.dot(frame.JA, qdot, out=frame.chi_dot)
+
+
+def _readonly(array: np.ndarray) -> np.ndarray:
+    view = array.view()
+    view.flags.writeable = False
+    return view
