@@ -54,6 +54,14 @@ def _cmd_pose(args: argparse.Namespace) -> int:
     print(robot.frame_pose(q, frame))
     print(f"\nJ ({args.reference}, rows [vx vy vz wx wy wz]):")
     print(robot.jacobian(q, frame, args.reference))
+    if args.rotation or args.position != "cartesian":
+        rotation = args.rotation or None
+        labels = robot.task(frame, args.position, rotation, check_inputs=False).labels
+        print(f"\nchi ({args.position} + {rotation}) = " + ", ".join(
+            f"{label} {value:.5f}" for label, value in zip(labels, robot.pose_parameters(q, frame, args.position,
+                                                                                         rotation))))
+        print(f"\nJ_A (rows {' '.join(labels)}):")
+        print(robot.analytic_jacobian(q, frame, args.position, rotation))
     return 0
 
 
@@ -75,6 +83,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--frame", default=None, help="frame name (default: the end effector)")
     p.add_argument("--reference", default="local_world_aligned",
                    choices=["local_world_aligned", "world", "local"])
+    p.add_argument("--position", default="cartesian", help="position parameterization for chi and J_A")
+    p.add_argument("--rotation", default=None, help="rotation parameterization for chi and J_A, e.g. euler_zyz")
     p.set_defaults(handler=_cmd_pose)
 
     verify.add_parser(sub)
