@@ -55,32 +55,32 @@ class PoseMap:
         return chi if self.rows is None else chi[..., self.rows]
 
     def jacobian_single(self, C: list[list[float]], p: list[float], J: np.ndarray, threshold: float) -> np.ndarray:
-        """The single-sample fast path of :meth:`jacobian`: C_IF and p as Python floats (scalar math)."""
-        parts = []
-        if self.position is not None:
-            parts.append((self.position, J[:3], self.position._from_position(math, *p)))
-        if self.rotation is not None:
-            (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
-            parts.append((self.rotation, J[3:],
-                          self.rotation._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)))
-        out = np.empty((self._full_size, J.shape[1]))
-        row = 0
-        for param, J_part, chi in parts:
-            distance = param._distance(math, *chi)
-            if distance < threshold:
-                raise _singularity_error(param, float(distance), threshold, _pose(C, p))
-            m = param.size
-            if param.name == "cartesian":
-                out[row:row + m] = J_part
-            else:
-                np.dot(_matrix(param._E(math, *chi), m), J_part, out=out[row:row + m])
-            row += m
-        return out if self.rows is None else out[self.rows, :]
+        """The single-sample fast path of :meth:`jacobian`: C_IF and p as Python floats.
 
-    @property
-    def _full_size(self) -> int:
-        return (self.position.size if self.position is not None else 0) + (
-            self.rotation.size if self.rotation is not None else 0)
+        Scalar math builds E = blockdiag(E_P, E_R) as one (m, 6) array; J_A = E·J_e0 is one product.
+        """
+        entries: tuple[float, ...] = ()
+        if self.position is not None:
+            P = self.position
+            if P.name == "cartesian":
+                entries = _IDENTITY_ROWS
+            else:
+                chi = P._from_position(math, *p)
+                distance = P._distance(math, *chi)
+                if distance < threshold:
+                    raise _singularity_error(P, float(distance), threshold, _pose(C, p))
+                entries = _rows_with_zeros(P._E(math, *chi), left=True)
+        if self.rotation is not None:
+            R = self.rotation
+            (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
+            chi = R._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)
+            distance = R._distance(math, *chi)
+            if distance < threshold:
+                raise _singularity_error(R, float(distance), threshold, _pose(C, p))
+            entries += _rows_with_zeros(R._E(math, *chi), left=False)
+        E = np.ndarray((len(entries) // 6, 6), _F64, _packer(len(entries)).pack(*entries))
+        JA = E.dot(J)
+        return JA if self.rows is None else JA[self.rows, :]
 
     def jacobian(self, T: np.ndarray, J: np.ndarray, threshold: float) -> np.ndarray:
         """J_A = E(χ) · J_e0 for J_e0 in "local_world_aligned", (6, dof) -> (m, dof), batched too.
@@ -135,14 +135,24 @@ def _singularity_error(param: object, distance: float, threshold: float,
 
 _PACKERS: dict[int, struct.Struct] = {}
 _F64 = np.dtype(np.float64)
+_IDENTITY_ROWS = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+_ZEROS = (0.0, 0.0, 0.0)
 
 
-def _matrix(entries: Sequence[float], m: int) -> np.ndarray:
-    """A read-only (m, 3) float64 array from row-major Python floats (packed bytes: no list round trip)."""
-    packer = _PACKERS.get(m)
+def _packer(n: int) -> struct.Struct:
+    """struct for n doubles: packs Python floats into bytes numpy can wrap without a copy."""
+    packer = _PACKERS.get(n)
     if packer is None:
-        packer = _PACKERS[m] = struct.Struct(f"{3 * m}d")
-    return np.ndarray((m, 3), _F64, packer.pack(*entries))
+        packer = _PACKERS[n] = struct.Struct(f"{n}d")
+    return packer
+
+
+def _rows_with_zeros(E: Sequence[float], *, left: bool) -> tuple[float, ...]:
+    """Row-major (m, 3) entries widened to (m, 6): [E, 0] (position) or [0, E] (rotation)."""
+    out: tuple[float, ...] = ()
+    for i in range(0, len(E), 3):
+        out += (E[i], E[i + 1], E[i + 2]) + _ZEROS if left else _ZEROS + (E[i], E[i + 1], E[i + 2])
+    return out
 
 
 def _quiet_rotation(param: object, T: np.ndarray) -> np.ndarray:

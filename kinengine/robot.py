@@ -206,8 +206,10 @@ class Robot:
                                      fid, pin.LOCAL_WORLD_ALIGNED)
         if J.ndim == 1:
             J = J.reshape(6, 1)
-        M = pin.updateFramePlacement(model, data, fid)
-        return pmap.jacobian_single(M.rotation.tolist(), M.translation.tolist(), J, singularity_threshold)
+        (c0, c1, c2, px), (c3, c4, c5, py), (c6, c7, c8, pz), _ = pin.updateFramePlacement(
+            model, data, fid).homogeneous.tolist()
+        return pmap.jacobian_single(((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J,
+                                    singularity_threshold)
 
     def task(self, frames: str | Sequence[str] | None = None, position: str | None = "cartesian",
              rotation: str | None = "euler_zyx", **options: object) -> "Task":
