@@ -23,7 +23,7 @@ import pinocchio as pin
 from .analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
 from .errors import FrameNotFoundError, KinematicsError
 from .joint_space import JointSpace
-from .urdf import RobotDescription
+from .urdf import RobotDescription, build_pinocchio_model
 
 REFERENCES: dict[object, pin.ReferenceFrame] = {
     "world": pin.WORLD,
@@ -54,10 +54,7 @@ class Robot:
 
     def __init__(self, description: RobotDescription, urdf_text: str, *, name: str | None = None,
                  end_effector: str | None = None) -> None:
-        try:
-            model = pin.buildModelFromXML(description.to_xml(), mimic=True)
-        except Exception as exc:  # should not happen: the description was validated
-            raise KinematicsError(f"Pinocchio could not build {description.source}: {exc}") from None
+        model = build_pinocchio_model(description)  # from the canonical XML, checked joint for joint
         self._model = model
         self._description = description
         self._urdf_text = urdf_text

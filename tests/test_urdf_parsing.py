@@ -200,9 +200,17 @@ def test_ten_thousand_joint_chain_is_refused_in_the_main_thread_and_in_a_worker(
     assert type(outcome) is URDFError and "Limits.max_links" in str(outcome)
 
 
+def test_tree_depth_is_bounded_even_for_fixed_joints():
+    # Pinocchio's recursive C++ parser crashes the process on deep chains (see Limits.max_tree_depth)
+    text = chain_urdf(LIMITS.max_tree_depth + 1, kind="fixed", body="")
+    refused(text, "link 'l129' is more than Limits.max_tree_depth = 128 joints below the root 'l0'",
+            line=2 + 130 + 128)
+    assert len(parse_urdf(chain_urdf(LIMITS.max_tree_depth, kind="fixed", body="")).joints) == 128
+
+
 def test_ten_thousand_joint_chain_with_raised_limits_needs_no_recursion():
     text = chain_urdf(10_000)
-    big = Limits(max_links=10_001, max_joints=10_000, max_movable_joints=10_000)
+    big = Limits(max_links=10_001, max_joints=10_000, max_movable_joints=10_000, max_tree_depth=10_000)
     previous = threading.stack_size(256 * 1024)  # a recursive tree walk would overflow this
     try:
         outcome = in_thread(lambda: parse_urdf(text, limits=big))
@@ -216,7 +224,9 @@ def test_ten_thousand_joint_chain_with_raised_limits_needs_no_recursion():
 def test_movable_joints_are_counted_separately_from_fixed_ones():
     refused(chain_urdf(LIMITS.max_movable_joints + 1),
             "257 movable joints, more than Limits.max_movable_joints = 256")
-    fixed = parse_urdf(chain_urdf(300, kind="fixed", body=""))
+    star = robot_xml(["base"] + [f"l{i}" for i in range(300)],
+                     [joint_xml(f"j{i}", "base", f"l{i}", "fixed", "") for i in range(300)])
+    fixed = parse_urdf(star)
     assert len(fixed.joints) == 300 and fixed.movable_joints == ()
     refused(chain_urdf(5), "6 links, more than Limits.max_links = 5", limits=Limits(max_links=5))
     refused(chain_urdf(5), "5 joints, more than Limits.max_joints = 4", limits=Limits(max_joints=4))
@@ -303,7 +313,8 @@ def test_singular_elements_may_not_repeat():
     ("0 0 Infinity", "is not finite"),
     ("a b c", "'a' is not a number"), ("1 2", "expected three numbers separated by spaces, got 2"),
     ("1 2 3 4", "got 4"), ("1,2,3", "got 1"), ("", "got 0"), ("1_0 0 0", "'1_0' is not a number"),
-    ("1e400 0 0", "'1e400' overflows a double"), ("0x1 0 0", "is not a number")])
+    ("1e400 0 0", "'1e400' overflows a double"), ("0x1 0 0", "is not a number"),
+    ("\u0663 0 0", "is not a number")])
 @pytest.mark.parametrize("element, attribute", [("origin", "xyz"), ("origin", "rpy"), ("axis", "xyz")])
 def test_vectors_need_three_finite_numbers(element, attribute, value, reason):
     body = f'<{element} {attribute}="{value}"/>' + LIMIT
@@ -586,5 +597,7 @@ def test_read_urdf_file_refuses_what_is_not_a_readable_regular_file(tmp_path):
     big.write_text(chain_urdf(3), encoding="utf-8")
     with pytest.raises(URDFError, match=rf"{big}: the file is \d+ bytes, more than Limits.max_bytes = 100"):
         read_urdf_file(big, limits=Limits(max_bytes=100))
+    with pytest.raises(URDFError, match="cannot open the file: embedded null byte"):
+        read_urdf_file(str(tmp_path / "a\0.urdf"))
     with pytest.raises(URDFError, match="path to a .urdf file, got int"):
         read_urdf_file(42)  # type: ignore[arg-type]

@@ -17,7 +17,7 @@ from ..errors import URDFError
 from .description import MOVABLE_TYPES, SUPPORTED_TYPES, Inertial, Joint, Link, Mimic, Vector3
 from .limits import Limits
 
-_DECIMAL = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # ASCII, as urdfdom reads
 _UNIT_TOLERANCE = 1e-9  # |‖axis‖ - 1| above this: normalize and warn; ‖axis‖ below it: refuse
 _INERTIA = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 _FLOATING = ("a fixed-base model cannot have a {type} joint: kinengine models arms and trees bolted to "

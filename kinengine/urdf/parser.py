@@ -50,7 +50,7 @@ def parse_urdf(document: str | bytes, source: str = "<string>", *,
     found: list[str] = []
     links = [read_link(e, source, limits) for e in link_elements]
     joints = [read_joint(e, source, limits, found) for e in joint_elements]
-    description = assemble(name, links, joints, source=source, warnings=found)
+    description = assemble(name, links, joints, source=source, warnings=found, limits=limits)
     for message in found:
         warnings.warn(f"{source}: {message}", UserWarning, stacklevel=2)
     return description
@@ -68,8 +68,9 @@ def read_urdf_file(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> 
         fd = os.open(source, os.O_RDONLY | _NONBLOCKING)
     except FileNotFoundError:
         raise URDFError("no such file", source=source) from None
-    except OSError as exc:
-        raise URDFError(f"cannot open the file: {exc.strerror}", source=source) from None
+    except (OSError, ValueError) as exc:  # ValueError: a NUL character in the path
+        reason = getattr(exc, "strerror", None) or exc
+        raise URDFError(f"cannot open the file: {reason}", source=source) from None
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):

@@ -18,10 +18,11 @@ import difflib
 
 from ..errors import URDFError
 from .description import Joint, Link, RobotDescription
+from .limits import LIMITS, Limits
 
 
 def assemble(name: str, links: Sequence[Link], joints: Sequence[Joint], *, source: str,
-             warnings: Sequence[str] = ()) -> RobotDescription:
+             warnings: Sequence[str] = (), limits: Limits = LIMITS) -> RobotDescription:
     """The validated :class:`RobotDescription` of these links and joints (file order in, tree order out)."""
     if not links:
         raise URDFError("the robot has no <link>", source=source, element=f"robot {name!r}")
@@ -47,10 +48,10 @@ def assemble(name: str, links: Sequence[Link], joints: Sequence[Joint], *, sourc
     if not roots:
         raise URDFError(f"there is no root link: {_cycle(links[0].name, parent_joint)}", source=source)
     if len(roots) > 1:
-        raise URDFError(f"the links form {len(roots)} separate trees, with roots "
-                        f"{', '.join(repr(r) for r in roots)}; a robot is one tree: connect them with joints "
-                        "or remove the extra links", source=source)
-    ordered = _depth_first(roots[0], children)
+        named = ", ".join(repr(r) for r in roots[:10]) + (", ..." if len(roots) > 10 else "")
+        raise URDFError(f"the links form {len(roots)} separate trees, with roots {named}; a robot is one "
+                        "tree: connect them with joints or remove the extra links", source=source)
+    ordered = _depth_first(roots[0], children, limits.max_tree_depth, source)
     if len(ordered) < len(joints):
         reached = {roots[0]} | {j.child for j in ordered}
         unreached = next(link.name for link in links if link.name not in reached)
@@ -73,14 +74,18 @@ def _unique(items: Sequence[Link] | Sequence[Joint], kind: str, source: str) -> 
     return by_name
 
 
-def _depth_first(root: str, children: dict[str, list[Joint]]) -> list[Joint]:
-    """Joints reachable from ``root``, depth-first, siblings by name (byte order)."""
+def _depth_first(root: str, children: dict[str, list[Joint]], max_depth: int, source: str) -> list[Joint]:
+    """Joints reachable from ``root``, depth-first, siblings by name (byte order); URDFError if too deep."""
     order: list[Joint] = []
-    stack = sorted(children[root], key=_byte_name, reverse=True)
+    stack = [(joint, 1) for joint in sorted(children[root], key=_byte_name, reverse=True)]
     while stack:
-        joint = stack.pop()
+        joint, depth = stack.pop()
+        if depth > max_depth:
+            raise URDFError(f"link {joint.child!r} is more than Limits.max_tree_depth = {max_depth} joints "
+                            f"below the root {root!r}", source=source, element=f"joint {joint.name!r}",
+                            line=joint.line)
         order.append(joint)
-        stack.extend(sorted(children[joint.child], key=_byte_name, reverse=True))
+        stack.extend((j, depth + 1) for j in sorted(children[joint.child], key=_byte_name, reverse=True))
     return order
 
 
