@@ -1,0 +1,203 @@
+"""Kinematic singularity measures of the geometric Jacobian J_e0 (rows [linear; angular], in I).
+
+A *kinematic* singularity is a property of the robot: J_e0(q) loses rank and some twist of the
+frame cannot be produced by any q̇. It has nothing to do with the *representation* singularities
+of a parameterization χ (E(χ) singular, :class:`~kinengine.RepresentationSingularityError`),
+which another choice of χ removes; no choice of coordinates removes a kinematic one.
+
+For J = J_e0[rows] (m, dof) with singular values σ_1 >= ... (SVD J = U Σ Vᵀ):
+* Yoshikawa manipulability w = sqrt(det(J Jᵀ)) = Π σ_i (0 whenever m > dof);
+* condition number κ = σ_max / σ_min (inf at a singularity);
+* lost directions: an orthonormal basis of the twists J cannot produce (U's columns beyond the
+  rank, rank = number of σ_i > ``tolerance``), rows of I (unit twists, [linear; angular] in I);
+* velocity ellipsoid {J_v q̇ : |q̇| <= 1}: axes U_v, semi-axes σ_v [m/s per unit |q̇|].
+Mixing linear [m/rad] and angular [1] rows makes κ and w depend on the unit of length.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import KinematicSingularityError
+
+ROW_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
+ROW_SETS = {"all": (0, 1, 2, 3, 4, 5), "linear": (0, 1, 2), "angular": (3, 4, 5)}
+DEFAULT_TOLERANCE = 1e-6
+"""σ at or below which a direction counts as lost [m/rad for linear rows, 1 for angular rows]."""
+Rows = str | Sequence[str | int]
+"""'all', 'linear', 'angular', or row labels (vx vy vz wx wy wz) / indices 0-5."""
+
+
+@dataclass(frozen=True)
+class LostDirection:
+    """A unit twist u (6,) in I that J cannot produce, with gain |Jᵀu| (0 at an exact singularity)."""
+
+    twist: np.ndarray
+    gain: float
+    description: str
+
+
+@dataclass(frozen=True)
+class SingularityReport:
+    """Singular values and measures of J_e0[rows] at one configuration (see the module doc)."""
+
+    frame: str | None
+    rows: tuple[str, ...]
+    singular_values: np.ndarray
+    manipulability: float
+    condition_number: float
+    rank: int
+    tolerance: float
+    lost_directions: tuple[LostDirection, ...]
+
+    @property
+    def is_singular(self) -> bool:
+        """True if J[rows] has fewer than len(rows) singular values above ``tolerance``."""
+        return self.rank < len(self.rows)
+
+    def __str__(self) -> str:
+        what = f"J_e0 rows {' '.join(self.rows)}" + (f" of frame {self.frame!r}" if self.frame else "")
+        sv = ", ".join(f"{s:.4g}" for s in self.singular_values)
+        head = (f"kinematic singularity: {what} has rank {self.rank} < {len(self.rows)}" if self.is_singular
+                else f"regular: {what} has full rank {self.rank}")
+        lines = [head, f"  singular values: {sv}",
+                 f"  manipulability sqrt(det(J Jᵀ)) = {self.manipulability:.4g}, "
+                 f"condition number = {self.condition_number:.4g}"]
+        if self.lost_directions:
+            lines.append(f"  lost twist directions in the root frame (σ <= {self.tolerance:.1e}):")
+            lines += [f"    {d.description}  (gain {d.gain:.2e})" for d in self.lost_directions]
+        return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class VelocityEllipsoid:
+    """{J_v q̇ : |q̇| <= 1} of a frame origin: ``center`` [m] in I, ``axes`` (3, 3) unit columns in I,
+    ``semi_axes`` (3,) [m/s per unit |q̇|], longest first (0 along a lost direction)."""
+
+    center: np.ndarray
+    axes: np.ndarray
+    semi_axes: np.ndarray
+
+
+def analyze_jacobian(J: object, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE,
+                     frame: str | None = None) -> SingularityReport:
+    """The :class:`SingularityReport` of a geometric Jacobian J_e0 (6, dof) in "local_world_aligned"."""
+    index = _rows(rows)
+    J = np.asarray(J, dtype=float)
+    if J.ndim != 2 or J.shape[0] != 6:
+        raise ValueError(f"Expected `J` to have shape (6, dof), got {J.shape}")
+    Js = J[list(index)]
+    m = len(index)
+    U, s, _ = np.linalg.svd(Js, full_matrices=True)
+    rank = int(np.count_nonzero(s > tolerance))
+    w = float(np.prod(s)) if m <= J.shape[1] else 0.0
+    kappa = float(s[0] / s[-1]) if s.size and s[-1] > 0 and m <= J.shape[1] else float("inf")
+    lost = []
+    for u in _readable_basis(U[:, rank:]):
+        twist = np.zeros(6)
+        twist[list(index)] = u
+        lost.append(LostDirection(twist, float(np.linalg.norm(Js.T @ u)), describe_twist(twist)))
+    labels = tuple(ROW_LABELS[i] for i in index)
+    return SingularityReport(frame, labels, s, w, kappa, rank, tolerance, tuple(lost))
+
+
+def singularity_report(robot, q: object, frame: str | None = None, rows: Rows = "all", *,
+                       tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
+    """The :class:`SingularityReport` of J_e0(q) of ``frame`` (default: end effector), q (dof,)."""
+    frame = robot.end_effector if frame is None else frame
+    q = robot.check_configuration(q, check_limits=False)
+    if q.ndim != 1:
+        raise ValueError(f"Expected `q` to have shape ({robot.dof},), got {q.shape}; "
+                         "manipulability() takes batches")
+    return analyze_jacobian(robot.jacobian(q, frame), rows, tolerance=tolerance, frame=frame)
+
+
+def manipulability(robot, q: object, frame: str | None = None, rows: Rows = "all") -> float | np.ndarray:
+    """Yoshikawa's w = sqrt(det(J Jᵀ)) of J_e0[rows]: float for q (dof,), (N,) for q (N, dof)."""
+    index = list(_rows(rows))
+    J = robot.jacobian(q, frame)[..., index, :]
+    if len(index) > robot.dof:
+        return 0.0 if J.ndim == 2 else np.zeros(len(J))
+    w = np.prod(np.linalg.svd(J, compute_uv=False), axis=-1)
+    return float(w) if J.ndim == 2 else w
+
+
+def velocity_ellipsoid(robot, q: object, frame: str | None = None) -> VelocityEllipsoid:
+    """The velocity manipulability ellipsoid of ``frame``'s origin (eigenvectors of J_v J_vᵀ), q (dof,)."""
+    frame = robot.end_effector if frame is None else frame
+    T = robot.frame_pose(q, frame)
+    if T.ndim != 2:
+        raise ValueError(f"Expected `q` to have shape ({robot.dof},), got {np.shape(q)}")
+    U, s, _ = np.linalg.svd(robot.jacobian(q, frame)[:3], full_matrices=True)
+    semi = np.zeros(3)
+    semi[:s.size] = s
+    return VelocityEllipsoid(T[:3, 3].copy(), U, semi)
+
+
+def require_regular(robot, q: object, frame: str | None = None, rows: Rows = "all", *,
+                    tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
+    """The report if J_e0[rows] has full row rank; KinematicSingularityError (with ``.report``) otherwise."""
+    report = singularity_report(robot, q, frame, rows, tolerance=tolerance)
+    if report.is_singular:
+        error = KinematicSingularityError(
+            f"{report}\nThe robot itself cannot move its frame along these directions at this q; "
+            "no choice of pose parameterization changes that (unlike a representation singularity).")
+        error.report = report
+        raise error
+    return report
+
+
+def describe_twist(twist: np.ndarray, digits: int = 2) -> str:
+    """'linear along y', 'angular about (0.00, 0.71, 0.71)' or 'a·linear along … + b·angular about …'."""
+    parts = []
+    for kind, word, vec in (("linear", "along", twist[:3]), ("angular", "about", twist[3:])):
+        norm = float(np.linalg.norm(vec))
+        if norm < 10.0 ** -(digits + 1):
+            continue
+        unit = vec / norm
+        axis = int(np.argmax(np.abs(unit)))
+        if abs(unit[axis]) > 1.0 - 10.0 ** -(digits + 2):
+            where = ("-" if unit[axis] < 0 else "") + "xyz"[axis]
+        else:
+            where = "(" + ", ".join(f"{c:.{digits}f}" for c in unit) + ")"
+        parts.append((norm, f"{kind} {word} {where}"))
+    if len(parts) <= 1:
+        return parts[0][1] if parts else "zero twist"
+    return " + ".join(f"{norm:.{digits}f}·{text}" for norm, text in parts)
+
+
+def _rows(rows: Rows) -> tuple[int, ...]:
+    """Row indices of J for "all", "linear", "angular" or a sequence of labels (vx … wz) / indices."""
+    if isinstance(rows, str):
+        if rows in ROW_SETS:
+            return ROW_SETS[rows]
+        rows = (rows,)
+    index = []
+    for row in rows:
+        if isinstance(row, (int, np.integer)) and not isinstance(row, bool) and 0 <= row < 6:
+            index.append(int(row))
+        elif row in ROW_LABELS:
+            index.append(ROW_LABELS.index(row))
+        else:
+            raise ValueError(f"Expected `rows` to be 'all', 'linear', 'angular' or labels from {ROW_LABELS} "
+                             f"(or indices 0-5), got {row!r}")
+    if not index or len(set(index)) != len(index):
+        raise ValueError(f"Expected `rows` to name each row at most once and at least one row, got {rows!r}")
+    return tuple(index)
+
+
+def _readable_basis(N: np.ndarray) -> np.ndarray:
+    """The same subspace as N's orthonormal columns (m, r), rotated so that coordinate axes lying in it
+    come out as basis vectors (pivoted QR of the projector picks the most axis-aligned first);
+    each vector's largest entry is positive. Returns (r, m)."""
+    P = N @ N.T                         # its columns: the coordinate axes projected on the subspace
+    basis = np.zeros((N.shape[1], N.shape[0]))
+    for i in range(N.shape[1]):         # Gram–Schmidt on P's columns, longest remaining first
+        column = P[:, np.argmax(np.linalg.norm(P, axis=0))]
+        b = column / np.linalg.norm(column)
+        basis[i] = b * np.sign(b[np.argmax(np.abs(b))])
+        P = P - np.outer(b, b @ P)
+    return basis
