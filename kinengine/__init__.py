@@ -17,18 +17,24 @@ from .errors import (
     URDFError,
 )
 from .loading import load, load_urdf_string
+from .ik import IKResult
+from .manipulability import SingularityReport
 from .robot import Robot
+from .task import Task
 
 __version__ = "0.1.0"
 
 __all__ = [
     "ConfigurationError",
     "FrameNotFoundError",
+    "IKResult",
     "KinematicSingularityError",
     "KinematicsError",
     "ParameterizationError",
     "RepresentationSingularityError",
     "Robot",
+    "SingularityReport",
+    "Task",
     "URDFError",
     "__version__",
     "available_robots",

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 import threading
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -24,6 +25,11 @@ from .analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
 from .errors import FrameNotFoundError, KinematicsError
 from .joint_space import JointSpace
 from .urdf import RobotDescription, build_pinocchio_model
+
+if TYPE_CHECKING:  # imported lazily at run time: these modules import this one
+    from .ik import IKResult
+    from .manipulability import SingularityReport, VelocityEllipsoid
+    from .task import Task
 
 REFERENCES: dict[object, pin.ReferenceFrame] = {
     "world": pin.WORLD,
@@ -218,6 +224,53 @@ class Robot:
         """
         from .task import Task
         return Task(self, self._end_effector if frames is None else frames, position, rotation, **options)
+
+    # -- derivatives, singularities, inverse kinematics (thin wrappers; see their modules) ----------
+    def jacobian_time_variation(self, q: object, qdot: object, frame: str | None = None,
+                                reference: object = "local_world_aligned") -> np.ndarray:
+        """J̇ = dJ/dt of the geometric Jacobian in ``reference`` along q̇, (6, dof). See kinengine.derivatives."""
+        from .derivatives import jacobian_time_variation
+        return jacobian_time_variation(self, q, qdot, frame, reference)
+
+    def kinematic_hessian(self, q: object, frame: str | None = None,
+                          reference: object = "local_world_aligned") -> np.ndarray:
+        """∂J/∂q, (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, in ``reference``. See kinengine.derivatives."""
+        from .derivatives import kinematic_hessian
+        return kinematic_hessian(self, q, frame, reference)
+
+    def analytic_hessian(self, q: object, frame: str | None = None, position: str | None = "cartesian",
+                         rotation: str | None = "euler_zyx", **options: object) -> np.ndarray:
+        """∂J_A/∂q, (m, dof, dof). Options: rows, singularity_threshold. See kinengine.derivatives."""
+        from .derivatives import analytic_hessian
+        return analytic_hessian(self, q, frame, position, rotation, **options)
+
+    def singularity_report(self, q: object, frame: str | None = None, rows: object = "all",
+                           **options: object) -> "SingularityReport":
+        """Singular values, manipulability, condition number and lost directions of J_e0 (kinematic singularities)."""
+        from .manipulability import singularity_report
+        return singularity_report(self, q, frame, rows, **options)
+
+    def manipulability(self, q: object, frame: str | None = None, rows: object = "all") -> float | np.ndarray:
+        """Yoshikawa's sqrt(det(J Jᵀ)) of the chosen rows of J_e0; (N,) for q (N, dof)."""
+        from .manipulability import manipulability
+        return manipulability(self, q, frame, rows)
+
+    def velocity_ellipsoid(self, q: object, frame: str | None = None) -> "VelocityEllipsoid":
+        """Axes and semi-axes [m/s per unit joint speed] of {J_v u : |u| <= 1} in the root frame."""
+        from .manipulability import velocity_ellipsoid
+        return velocity_ellipsoid(self, q, frame)
+
+    def require_regular(self, q: object, frame: str | None = None, rows: object = "all",
+                        **options: object) -> "SingularityReport":
+        """The singularity report, or KinematicSingularityError if J_e0 (rows) loses rank."""
+        from .manipulability import require_regular
+        return require_regular(self, q, frame, rows, **options)
+
+    def inverse_kinematics(self, target: object, frame: str | None = None, q0: object = None,
+                           **options: object) -> "IKResult":
+        """Differential IK (damped least squares) to a 4x4 pose or a parameter target χ. See kinengine.ik."""
+        from .ik import inverse_kinematics
+        return inverse_kinematics(self, target, frame, q0, **options)
 
     def _batch(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame | None) -> np.ndarray:
         """Loop over a batch (N, dof) in Pinocchio: poses (ref None) or Jacobians."""

@@ -205,3 +205,25 @@ def test_one_robot_from_eight_threads_gives_the_sequential_answers(abb):
     for t in threads:
         t.join()
     assert failures == []
+
+
+def test_robot_methods_delegate_to_their_modules(abb):
+    from kinengine import derivatives, ik, manipulability
+
+    q, qdot = abb.random_configuration(12), np.linspace(-0.5, 0.5, 6)
+    np.testing.assert_array_equal(abb.jacobian_time_variation(q, qdot, "tool0", "local"),
+                                  derivatives.jacobian_time_variation(abb, q, qdot, "tool0", "local"))
+    np.testing.assert_array_equal(abb.kinematic_hessian(q, "tool0"), derivatives.kinematic_hessian(abb, q, "tool0"))
+    np.testing.assert_array_equal(abb.analytic_hessian(q, "tool0", rotation="quaternion"),
+                                  derivatives.analytic_hessian(abb, q, "tool0", rotation="quaternion"))
+    assert abb.manipulability(q) == manipulability.manipulability(abb, q)
+    report = abb.singularity_report(q, "tool0")
+    np.testing.assert_array_equal(report.singular_values, manipulability.singularity_report(abb, q).singular_values)
+    np.testing.assert_array_equal(abb.velocity_ellipsoid(q).semi_axes, manipulability.velocity_ellipsoid(abb, q).semi_axes)
+    wrist = abb.neutral()
+    with pytest.raises(kinengine.KinematicSingularityError):
+        abb.require_regular(wrist, "tool0")
+    target = abb.frame_pose(q, "tool0")
+    result = abb.inverse_kinematics(target, "tool0", rng=0)
+    assert isinstance(result, kinengine.IKResult) and result.success
+    assert result.q.tolist() == ik.inverse_kinematics(abb, target, "tool0", rng=0).q.tolist()
