@@ -15,6 +15,7 @@ Frames and conventions
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from math import isfinite
 import threading
 from typing import TYPE_CHECKING
 
@@ -30,6 +31,9 @@ if TYPE_CHECKING:  # imported lazily at run time: these modules import this one
     from .ik import IKResult
     from .manipulability import SingularityReport, VelocityEllipsoid
     from .task import Task
+
+_NDARRAY = np.ndarray
+_F64 = np.dtype(np.float64)
 
 REFERENCES: dict[object, pin.ReferenceFrame] = {
     "world": pin.WORLD,
@@ -67,6 +71,7 @@ class Robot:
         self._name = name or description.name
         self._joints = JointSpace(model, description)
         self._identity_q = self._joints.identity
+        self._shape = (self._joints.dof,)
         self._frame_ids = _frame_ids(model)
         self._frame_names = tuple(self._frame_ids)
         self._end_effector = end_effector if end_effector in self._frame_ids else _default_end_effector(
@@ -145,12 +150,19 @@ class Robot:
             fid = self._frame_ids[frame if frame is not None else self._end_effector]
         except (KeyError, TypeError):
             raise FrameNotFoundError(frame, self._frame_names) from None
-        q = self._joints.check(q, check_limits=check_limits)
-        if q.ndim == 2:
-            return self._batch(q, fid, None)
-        data = self._data()
-        pin.forwardKinematics(self._model, data, q if self._identity_q else self._joints.to_pinocchio(q))
-        return pin.updateFramePlacement(self._model, data, fid).homogeneous
+        # hot path inlined (a float64 (dof,) array: one float sum checks finiteness); else the full check
+        if not (type(q) is _NDARRAY and q.dtype is _F64 and q.shape == self._shape and not check_limits
+                and isfinite(sum(q.tolist()))):
+            q = self._joints.check(q, check_limits=check_limits)
+            if q.ndim == 2:
+                return self._batch(q, fid, None)
+        try:
+            data = self._tls.data
+        except AttributeError:
+            data = self._data()
+        model = self._model
+        pin.forwardKinematics(model, data, q if self._identity_q else self._joints.to_pinocchio(q))
+        return pin.updateFramePlacement(model, data, fid).homogeneous
 
     def jacobian(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
                  check_limits: bool = False) -> np.ndarray:
@@ -166,11 +178,17 @@ class Robot:
             ref = REFERENCES[reference]
         except (KeyError, TypeError):
             ref = resolve_reference(reference)  # raises with the valid names
-        q = self._joints.check(q, check_limits=check_limits)
-        if q.ndim == 2:
-            return self._batch(q, fid, ref)
-        J = pin.computeFrameJacobian(self._model, self._data(),
-                                     q if self._identity_q else self._joints.to_pinocchio(q), fid, ref)
+        if not (type(q) is _NDARRAY and q.dtype is _F64 and q.shape == self._shape and not check_limits
+                and isfinite(sum(q.tolist()))):
+            q = self._joints.check(q, check_limits=check_limits)
+            if q.ndim == 2:
+                return self._batch(q, fid, ref)
+        try:
+            data = self._tls.data
+        except AttributeError:
+            data = self._data()
+        J = pin.computeFrameJacobian(self._model, data, q if self._identity_q else self._joints.to_pinocchio(q),
+                                     fid, ref)
         return J if J.ndim == 2 else J.reshape(6, 1)  # eigenpy returns a (6, 1) matrix as (6,)
 
     # -- analytic Jacobians --------------------------------------------------------------------
