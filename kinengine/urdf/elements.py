@@ -2,8 +2,11 @@
 
 Every number is a finite decimal; vectors have exactly three of them. Defaults
 follow the URDF specification: origin xyz and rpy 0 0 0, axis 1 0 0, limit
-lower and upper 0, mimic multiplier 1 and offset 0. Cross-element rules (names
-that must exist, the tree) live in :mod:`kinengine.urdf.tree`.
+lower and upper 0, mimic multiplier 1 and offset 0. The numbers of
+``<calibration>``, ``<dynamics>`` and ``<safety_controller>`` are checked too (urdfdom
+and yourdfpy refuse a file whose numbers they cannot read) but not kept. Link and joint
+names may not be "universe", Pinocchio's name for the world frame and joint 0.
+Cross-element rules (names that must exist, the tree) live in :mod:`kinengine.urdf.tree`.
 """
 
 from __future__ import annotations
@@ -20,6 +23,9 @@ from .limits import Limits
 _DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # ASCII, as urdfdom reads
 _UNIT_TOLERANCE = 1e-9  # |‖axis‖ - 1| above this: normalize and warn; ‖axis‖ below it: refuse
 _INERTIA = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+_UNUSED_NUMBERS = {"calibration": ("rising", "falling"), "dynamics": ("damping", "friction"),
+                   "safety_controller": ("soft_lower_limit", "soft_upper_limit", "k_position", "k_velocity")}
+_RESERVED = "universe"
 _FLOATING = ("a fixed-base model cannot have a {type} joint: kinengine models arms and trees bolted to "
              "the world. Remove the joint and its parent link (its child becomes the root) or make it fixed; "
              "a floating-base robot (legged, humanoid, flying) is then modelled with its base held still")
@@ -45,6 +51,9 @@ def read_name(element: etree._Element, attribute: str, where: Where, limits: Lim
     if len(value) > limits.max_name_length:
         raise where.error(f"<{element.tag} {attribute}> has {len(value)} characters, more than "
                           f"Limits.max_name_length = {limits.max_name_length}", element)
+    if value == _RESERVED and element.tag in ("link", "joint"):
+        raise where.error(f"<{element.tag} {attribute}=\"{_RESERVED}\">: the name is reserved (Pinocchio calls "
+                          "its world frame and joint 0 so); rename it", element)
     return value
 
 
@@ -86,6 +95,10 @@ def read_joint(element: etree._Element, source: str, limits: Limits, warnings: l
                                     offset=_number(mimic, "offset", where, 0.0))
     elif mimic is not None:
         warnings.append(f"{where.label} is fixed: its <mimic> (line {mimic.sourceline}) is ignored")
+    for tag, attributes in _UNUSED_NUMBERS.items():
+        extra = _single(children, tag, where)
+        for attribute in attributes if extra is not None else ():
+            _number(extra, attribute, where, None)
     return Joint(name=name, type=kind, parent=links[0], child=links[1], xyz=xyz, rpy=rpy,
                  line=element.sourceline, **fields)
 
@@ -153,6 +166,9 @@ def _axis(children: dict[str, list[etree._Element]], where: Where, warnings: lis
     norm = math.hypot(*v)
     if norm < _UNIT_TOLERANCE:
         raise where.error(f"<axis xyz=\"{axis.get('xyz')}\"> is zero; give a unit axis, e.g. \"0 0 1\"", axis)
+    if not math.isfinite(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]):  # Pinocchio and numpy would get NaN
+        raise where.error(f"<axis xyz=\"{axis.get('xyz')}\"> is too large: its squared norm overflows a double, "
+                          "so other URDF readers cannot normalize it; give a unit axis", axis)
     if abs(norm - 1.0) <= _UNIT_TOLERANCE:
         return v
     unit = (v[0] / norm, v[1] / norm, v[2] / norm)
@@ -171,8 +187,8 @@ def _limits(children: dict[str, list[etree._Element]], element: etree._Element, 
                           "(use type=\"continuous\" for an unbounded revolute joint)", element)
     out = {"velocity": _number(limit, "velocity", where, None),
            "effort": _number(limit, "effort", where, None)}
-    if kind != "continuous":  # continuous joints ignore lower/upper, as urdfdom does
-        lower, upper = _number(limit, "lower", where, 0.0), _number(limit, "upper", where, 0.0)
+    lower, upper = _number(limit, "lower", where, 0.0), _number(limit, "upper", where, 0.0)
+    if kind != "continuous":  # continuous joints ignore lower/upper (urdfdom reads but never uses them)
         if lower > upper:
             raise where.error(f"lower limit {lower!r} is greater than upper limit {upper!r}", limit)
         out.update(lower=lower, upper=upper)
