@@ -12,7 +12,7 @@ import sys
 
 import numpy as np
 
-from . import __version__, verify
+from . import __version__, bench, verify
 from .catalog import available_robots
 from .errors import KinematicsError
 from .loading import load
@@ -88,6 +88,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(handler=_cmd_pose)
 
     verify.add_parser(sub)
+    bench.add_parser(sub)
     return parser
 
 

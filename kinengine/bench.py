@@ -1,0 +1,151 @@
+"""``kinengine bench``: single-call latency and batched throughput, next to raw Pinocchio (and peers).
+
+    kinengine bench [ROBOT ...] [--quick] [--peers] [--json PATH] [--plot PATH]
+
+Rows and floors: :mod:`kinengine.bench_cases`; timing and checks: :mod:`kinengine.bench_run`;
+peers: :mod:`kinengine.bench_peers`. Times are per call [µs], min and median over repeats; "per s"
+is configurations (or IK solves) per second at the min; ratio = kinengine / Pinocchio (min).
+Targets the project tracks (measured, never asserted): frame_pose and jacobian within 2× of raw
+Pinocchio per call, analytic_jacobian under 4 µs, batches of 100,000 at 2e6 configurations/s or more.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+import json
+from pathlib import Path
+import sys
+
+from .bench_run import DEFAULT_ROBOTS, FULL, QUICK, run
+
+PEER_WIDTH = 20
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """Register ``bench`` on the kinengine command line."""
+    p = subparsers.add_parser("bench", help="time kinengine against raw Pinocchio (and other libraries)",
+                              description=__doc__.splitlines()[0])
+    p.add_argument("robots", nargs="*", metavar="ROBOT", help=f"robot names or .urdf paths "
+                   f"(default: {' '.join(DEFAULT_ROBOTS)})")
+    p.add_argument("--quick", action="store_true", help="few repeats and small batches (tests, CI)")
+    p.add_argument("--peers", action="store_true",
+                   help="also time roboticstoolbox-python, pytorch-kinematics and ikpy where installed")
+    p.add_argument("--peer-atol", type=float, default=1e-9,
+                   help="a peer whose answer differs from kinengine's by more is reported, not timed")
+    p.add_argument("--json", type=Path, default=None, metavar="PATH", help="write the results as JSON")
+    p.add_argument("--plot", type=Path, default=None, metavar="PATH",
+                   help="write a PNG bar chart (log scale)")
+    p.set_defaults(handler=handle)
+
+
+def handle(args: argparse.Namespace) -> int:
+    report = run(list(args.robots) or list(DEFAULT_ROBOTS), QUICK if args.quick else FULL, args.peers,
+                 args.peer_atol)
+    print(format_table(report))
+    if args.json is not None:
+        args.json.write_text(json.dumps(report, indent=1, allow_nan=False) + "\n")
+        print(f"\nwrote {args.json}")
+    if args.plot is not None:
+        plot(report, args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
+def _us(value: float) -> str:
+    return f"{value:,.2f}" if value < 100 else f"{value:,.0f}"
+
+
+def format_table(report: dict) -> str:
+    """The rows as a text table, then the peers' table and any disagreement."""
+    versions = report["versions"]
+    lines = [f"kinengine {versions['kinengine']} · Pinocchio {versions['pin']} · numpy {versions['numpy']} · "
+             + f"{report['cpu']} ({report['cores']} cores) · {report['timestamp']}", ""]
+    header = (f"{'robot':<12} {'case':<34} {'N':>7} {'min µs':>10} {'median µs':>10} {'per s':>12} "
+              f"{'pin min µs':>10} {'ratio':>6}  note")
+    lines += [header, "-" * len(header)]
+    for row in report["rows"]:
+        k, p = row["kinengine"], row["pinocchio"]
+        ours = (f"{_us(k['min_us']):>10} {_us(k['median_us']):>10} {k['per_second']:>12,.0f}"
+                if k["status"] == "ok" else f"{'skipped':>10} {'':>10} {'':>12}")
+        ratio = f"{row['ratio']:>6.2f}" if "ratio" in row else f"{'':>6}"
+        note = row["note"] + ("" if p["status"] == "ok" else f" [floor {p['status']}: {p['difference']}]")
+        lines.append(f"{row['robot']:<12} {row['case']:<34} {row['n']:>7} {ours} {_us(p['min_us']):>10} "
+                     f"{ratio}  {note}".rstrip())
+    peer_rows = [row for row in report["rows"] if any(v["status"] != "unsupported"
+                                                       for v in row.get("peers", {}).values())]
+    if peer_rows:
+        names = list(peer_rows[0]["peers"])
+        lines += ["", "peers: min µs per call (× kinengine's min); 'disagrees' rows were not timed", ""]
+        head = f"{'robot':<12} {'case':<34} {'N':>7} {'kinengine':>10} " + " ".join(
+            f"{n[:PEER_WIDTH]:>{PEER_WIDTH}}" for n in names)
+        lines += [head, "-" * len(head)]
+        for row in peer_rows:
+            ours = row["kinengine"].get("min_us")
+            cells = [_peer_cell(row["peers"][n], ours) for n in names]
+            lines.append(f"{row['robot']:<12} {row['case']:<34} {row['n']:>7} "
+                         f"{_us(ours) if ours else '-':>10} " + " ".join(f"{c:>{PEER_WIDTH}}" for c in cells))
+    notes = [f"  {robot['name']} / {name}: {status['note']}" for robot in report["robots"]
+             for name, status in robot["peers"].items() if status["note"]]
+    return "\n".join(lines + (["", "peer notes:"] + notes if notes else []))
+
+
+def _peer_cell(result: dict, ours: float | None) -> str:
+    if result["status"] == "ok":
+        return _us(result["min_us"]) + (f" ({result['min_us'] / ours:.1f}×)" if ours else "")
+    if result["status"] == "disagrees":
+        return "disagrees" + (f" {result['difference']:.0e}" if result["difference"] is not None else "")
+    return result["status"]
+
+
+def plot(report: dict, path: Path) -> None:
+    """Horizontal bars on log axes: per-call latency [µs] and batch throughput [configurations/s]."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    robots = [r["name"] for r in report["robots"]]
+    rows = report["rows"]
+    height = max(len([r for r in rows if r["robot"] == name and r["group"] == g]) for name in robots
+                 for g in ("latency", "throughput"))
+    fig, axes = plt.subplots(len(robots), 2, figsize=(14, 0.32 * height * len(robots) + 1.5), squeeze=False)
+    for axes_row, name in zip(axes, robots):
+        panels = ((axes_row[0], "latency", "min_us", "µs per configuration or IK solve (min)"),
+                  (axes_row[1], "throughput", "per_second", "configurations / s"))
+        for ax, group, key, xlabel in panels:
+            selected = [r for r in rows if r["robot"] == name and r["group"] == group]
+            labels = [r["case"] + (f"  N={r['n']:,}" if group == "throughput" else "") for r in selected]
+            per = [r["n"] if group == "latency" else 1 for r in selected]  # latency: per configuration/solve
+            sides = {"kinengine": [r["kinengine"] for r in selected],
+                     "Pinocchio (floor)": [r["pinocchio"] for r in selected]}
+            for peer in (selected[0].get("peers", {}) if selected else {}):
+                sides[peer] = [r["peers"][peer] for r in selected]
+            series = [(label, [None if v.get(key) is None else v[key] / n for v, n in zip(results, per)])
+                      for label, results in sides.items()]
+            width = 0.8 / len(series)
+            for s, (label, values) in enumerate(series):
+                ys = [i + s * width for i, v in enumerate(values) if v]
+                ax.barh(ys, [v for v in values if v], height=width, label=label)
+            ax.set_yticks([i + 0.4 - width / 2 for i in range(len(labels))], labels, fontsize=7)
+            ax.invert_yaxis()
+            ax.set_xscale("log")
+            ax.set_xlabel(xlabel)
+            ax.set_title(f"{name}: {group}")
+            ax.grid(axis="x", which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+    fig.suptitle(f"kinengine bench · {report['cpu']} ({report['cores']} cores) · {report['timestamp']}",
+                 fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m kinengine.bench ...`` without the main CLI."""
+    parser = argparse.ArgumentParser(prog="kinengine")
+    add_parser(parser.add_subparsers(dest="command", required=True))
+    return handle(parser.parse_args(["bench", *(sys.argv[1:] if argv is None else argv)]))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,172 @@
+"""Other kinematics libraries timed by ``kinengine bench --peers`` on the same URDF, where installed.
+
+* ``roboticstoolbox`` (roboticstoolbox-python): ``Robot.URDF(file)``, then the compiled ETS of the
+  path to the frame: ``ets.fkine(q)``, ``ets.jacob0(q)`` (origin velocity and ω in the base frame,
+  i.e. "local_world_aligned"); ``ets.fkine(Q)`` for a batch, ``jacob0`` in a loop.
+* ``pytorch_kinematics`` (CPU torch, float64): ``build_serial_chain_from_urdf(text, frame)``;
+  ``forward_kinematics(th).get_matrix()`` and ``jacobian(th)`` (base frame), natively batched.
+* ``ikpy``: ``Chain.from_urdf_file`` along the path to the frame; ``forward_kinematics`` only
+  (no Jacobian), one configuration per call.
+
+Each adapter maps kinengine's q (``joint_names`` order) to the peer's joint order once, outside the
+timed call, and converts the peer's answer back for the agreement check. Peers read the robot's own
+file (``robot.source``) or text; one that cannot resolve its ``package://`` references gets
+kinengine's canonical XML of the same description instead (said in its status).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.metadata
+import io
+import tempfile
+
+import numpy as np
+
+PEERS = ("roboticstoolbox", "pytorch_kinematics", "ikpy")
+_DISTRIBUTIONS = {"roboticstoolbox": "roboticstoolbox-python", "pytorch_kinematics": "pytorch-kinematics",
+                  "ikpy": "ikpy"}
+_LWA = "jacobian[local_world_aligned]"
+LOOP_MAX = 10_000
+"""Batches larger than this are not timed for peers that need a Python loop over configurations."""
+
+
+class Skip(Exception):
+    """A case this peer is not timed on (the message says why)."""
+
+
+class Peer:
+    """One library loaded for one robot and frame; ``prepare(case)`` gives (timed call, to-numpy)."""
+
+    def __init__(self, name: str, robot, frame: str) -> None:
+        self.name, self.distribution = name, _DISTRIBUTIONS[name]
+        self.robot, self.frame = robot, frame
+        self.loaded, self.note = False, ""
+        try:
+            self.version = importlib.metadata.version(self.distribution)
+        except importlib.metadata.PackageNotFoundError:
+            self.version, self.note = None, f"not installed (pip install {self.distribution})"
+            return
+        try:
+            with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+                self._load()
+            self.loaded = True
+        except Exception as exc:  # the peer cannot read this robot: a result, reported
+            self.note = f"could not load: {type(exc).__name__}: {exc}"[:300]
+
+    def status(self) -> dict:
+        return {"version": self.version, "loaded": self.loaded, "note": self.note}
+
+    def _path(self) -> str:
+        """A file holding the robot's URDF kinematics for peers that only read files."""
+        source = str(self.robot.source)
+        if source.endswith(".urdf") and "package://" not in self.robot.urdf_text:
+            return source
+        self.note = "read kinengine's canonical XML (the original refers to package:// files)"
+        with tempfile.NamedTemporaryFile("w", suffix=".urdf", delete=False) as handle:
+            handle.write(self.robot.description.to_xml())
+        return handle.name
+
+    def _order(self, names: list[str]) -> np.ndarray:
+        """Index into kinengine's q for each peer joint (-1: not a kinengine coordinate, held at 0)."""
+        index = {n: i for i, n in enumerate(self.robot.joint_names)}
+        return np.array([index.get(n, -1) for n in names], dtype=np.intp)
+
+    def _native(self, q: np.ndarray, order: np.ndarray) -> np.ndarray:
+        q = np.atleast_2d(q)
+        out = np.zeros(q.shape[:-1] + (len(order),))
+        out[..., order >= 0] = q[..., order[order >= 0]]
+        return out
+
+    def prepare(self, case):
+        """(timed call, result -> numpy in kinengine's convention), None if unsupported; may raise Skip."""
+        if not self.loaded or case.q is None:
+            return None
+        return getattr(self, f"_prepare_{self.name}")(case, case.q.ndim == 1)
+
+    @staticmethod
+    def _loop(case) -> None:
+        if case.n > LOOP_MAX:
+            raise Skip(f"Python loop over configurations: not timed above N = {LOOP_MAX:,}")
+
+    # -- roboticstoolbox ------------------------------------------------------------------------------
+    def _load_roboticstoolbox(self) -> None:
+        import roboticstoolbox as rtb
+        self._rtb = rtb.Robot.URDF(self._path())
+        self._ets = self._rtb.ets(end=self.frame)
+        by_index = {link.jindex: link.name for link in self._rtb.links if link.isjoint}
+        child_to_joint = {j.child: j.name for j in self.robot.description.joints}
+        self._rtb_order = self._order([child_to_joint.get(by_index[et.jindex]) for et in self._ets.joints()])
+
+    def _prepare_roboticstoolbox(self, case, single: bool):
+        x = self._native(case.q, self._rtb_order)
+        ets = self._ets
+        if case.name == "frame_pose":
+            if single:
+                return (lambda: ets.fkine(x[0])), (lambda out: out.A)
+            return (lambda: ets.fkine(x)), (lambda out: np.array(out.A))
+        if case.name == _LWA:
+            if single:
+                return (lambda: ets.jacob0(x[0])), (lambda out: out @ self._unmap())
+            self._loop(case)
+            return (lambda: [ets.jacob0(xi) for xi in x]), (lambda out: np.array(out) @ self._unmap())
+        return None
+
+    def _unmap(self) -> np.ndarray:
+        """(peer columns, kinengine columns) selection matrix for the Jacobian's columns."""
+        order = getattr(self, f"_{'rtb' if self.name == 'roboticstoolbox' else 'pk'}_order")
+        P = np.zeros((len(order), self.robot.dof))
+        P[np.flatnonzero(order >= 0), order[order >= 0]] = 1.0
+        return P
+
+    # -- pytorch_kinematics ---------------------------------------------------------------------------
+    def _load_pytorch_kinematics(self) -> None:
+        import pytorch_kinematics as pk
+        import torch
+        self._torch = torch
+        chain = pk.build_serial_chain_from_urdf(self.robot.urdf_text.encode(), self.frame)
+        self._chain = chain.to(dtype=torch.float64)
+        self._pk_order = self._order(list(self._chain.get_joint_parameter_names()))
+
+    def _prepare_pytorch_kinematics(self, case, single: bool):
+        th = self._torch.tensor(self._native(case.q, self._pk_order))
+        chain, pick = self._chain, (lambda a: a[0]) if single else (lambda a: a)
+        if case.name == "frame_pose":
+            return (lambda: chain.forward_kinematics(th).get_matrix()), (lambda out: pick(out.numpy()))
+        if case.name == _LWA:
+            return (lambda: chain.jacobian(th)), (lambda out: pick(out.numpy()) @ self._unmap())
+        return None
+
+    # -- ikpy -----------------------------------------------------------------------------------------
+    def _load_ikpy(self) -> None:
+        from ikpy.chain import Chain
+        description = self.robot.description
+        parent_joint = {j.child: j for j in description.joints}
+        path, link = [], self.frame
+        while link in parent_joint:
+            path[:0] = [parent_joint[link].name, parent_joint[link].child]
+            link = parent_joint[link].parent
+        if not path:
+            raise ValueError(f"{self.frame!r} is not a link below the root")
+        self._ikpy = Chain.from_urdf_file(self._path(), base_elements=[description.root] + path)
+        names = [link.name for link in self._ikpy.links]
+        self._ikpy_frame = names.index(path[-2])
+        self._ikpy_order = self._order(names)
+
+    def _prepare_ikpy(self, case, single: bool):
+        if case.name != "frame_pose":
+            return None
+        x = self._native(case.q, self._ikpy_order)
+        chain, k = self._ikpy, self._ikpy_frame
+        if single:
+            return (lambda: chain.forward_kinematics(x[0], full_kinematics=True)[k]), np.asarray
+        self._loop(case)
+        return (lambda: [chain.forward_kinematics(xi, full_kinematics=True)[k] for xi in x]), np.asarray
+
+    def _load(self) -> None:
+        getattr(self, f"_load_{self.name}")()
+
+
+def load_peers(robot, frame: str) -> list[Peer]:
+    """Every peer of PEERS loaded for ``robot``; ones missing or failing say why in their status."""
+    return [Peer(name, robot, frame) for name in PEERS]

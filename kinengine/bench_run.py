@@ -1,0 +1,172 @@
+"""Measuring the rows of ``kinengine bench`` (see :mod:`kinengine.bench` for the command).
+
+Every row is timed timeit-style after a warm-up: ``repeat`` repeats of ``number`` calls each
+(``number`` grows until a repeat lasts ``min_time``); min and median are per call [µs]; the rate is
+n / min (configurations, or IK solves, per second); ratio = kinengine min / Pinocchio min (the floor,
+see :mod:`kinengine.bench_cases`). Before timing, results that should agree are compared
+(kinengine vs the floor to 1e-9 relative; each peer vs kinengine to ``--peer-atol``): a peer that
+disagrees is reported and not timed. The JSON holds the rows with library versions, CPU model,
+core count and a timestamp.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import datetime, timezone
+import importlib.metadata
+import math
+import os
+from pathlib import Path
+import platform
+import statistics
+import timeit
+
+import numpy as np
+from tqdm import tqdm
+
+from .bench_cases import Case, latency_cases, throughput_cases
+from .bench_peers import Skip, load_peers
+from .loading import load
+from .parameterizations import ROTATION_PARAMETERIZATIONS
+
+DEFAULT_ROBOTS = ("abb_irb120",)
+
+
+@dataclass(frozen=True)
+class Settings:
+    sizes: tuple[int, ...]
+    repeat: int
+    min_time: float           # [s] per repeat
+
+
+FULL = Settings((1, 100, 10_000, 100_000), repeat=7, min_time=0.05)
+QUICK = Settings((1, 100, 1_000), repeat=3, min_time=0.002)
+
+
+def measure(fn: Callable[[], object], settings: Settings) -> dict[str, float]:
+    """min and median seconds per call of ``fn`` over ``settings.repeat`` repeats, after a warm-up."""
+    timer = timeit.Timer(fn)
+    number, elapsed = 1, timer.timeit(1)  # the warm-up call
+    while elapsed < settings.min_time and number < 10**6:
+        number *= 10 if elapsed < settings.min_time / 10 else 2
+        elapsed = timer.timeit(number)
+    times = [t / number for t in timer.repeat(settings.repeat, number)]
+    return {"min_us": min(times) * 1e6, "median_us": statistics.median(times) * 1e6, "calls": number}
+
+
+def max_relative_difference(a: object, b: object) -> float:
+    """max |a − b| / max(1, max |b|) over the arrays of two results (tuples compared element-wise)."""
+    if isinstance(a, tuple):
+        return max(max_relative_difference(x, y) for x, y in zip(a, b))
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    if a.shape != b.shape:
+        return float("inf")
+    return float(np.max(np.abs(a - b), initial=0.0) / max(1.0, float(np.max(np.abs(b), initial=0.0))))
+
+
+def run_case(case: Case, settings: Settings, peers: list | None = None, peer_atol: float = 1e-9) -> dict:
+    """Time one case (kinengine, its Pinocchio floor, then each peer) into one JSON row."""
+    row: dict = {"group": case.group, "case": case.name, "n": case.n, "note": case.note}
+    result = None
+    if case.kinengine is None:
+        row["kinengine"] = {"status": "skipped"}
+    else:
+        result = case.kinengine()
+        row["kinengine"] = {"status": "ok", **_rate(measure(case.kinengine, settings), case.n)}
+    floor = {"status": "ok"}
+    if case.compare and result is not None:
+        difference = max_relative_difference(result, case.pinocchio())
+        floor["difference"] = difference if math.isfinite(difference) else None
+        if not difference <= 1e-9:
+            floor["status"] = "disagrees"
+    row["pinocchio"] = {**floor, **_rate(measure(case.pinocchio, settings), case.n)}
+    if case.kinengine is not None:
+        row["ratio"] = row["kinengine"]["min_us"] / row["pinocchio"]["min_us"]
+    if peers:
+        row["peers"] = {peer.name: _run_peer(peer, case, result, settings, peer_atol) for peer in peers}
+    return row
+
+
+def _rate(timing: dict[str, float], n: int) -> dict[str, float]:
+    return {**timing, "per_second": n / timing["min_us"] * 1e6}
+
+
+def _run_peer(peer, case: Case, expected: object, settings: Settings, atol: float) -> dict:
+    """Check the peer's answer against kinengine's, then time it (only if they agree to ``atol``)."""
+    try:
+        prepared = peer.prepare(case)
+        if prepared is None:
+            return {"status": "unsupported"}
+        if expected is None:
+            return {"status": "skipped", "note": "no kinengine result to check the answer against"}
+        fn, to_numpy = prepared
+        got, expected = np.asarray(to_numpy(fn()), dtype=float), np.asarray(expected, dtype=float)
+    except Skip as skip:
+        return {"status": "skipped", "note": str(skip)}
+    except Exception as exc:  # a peer failing on some robot is a result, not a crash
+        return {"status": "failed", "note": f"{type(exc).__name__}: {exc}"[:300]}
+    if got.shape != expected.shape:
+        return {"status": "disagrees", "difference": None,
+                "note": f"shape {got.shape}, expected {expected.shape}"}
+    difference = float(np.max(np.abs(got - expected)))
+    if not difference <= atol:
+        return {"status": "disagrees", "difference": difference if math.isfinite(difference) else None}
+    return {"status": "ok", "difference": difference, **_rate(measure(fn, settings), case.n)}
+
+
+def environment(peers: list | None = None) -> dict:
+    """Library versions, CPU model, core count and a UTC timestamp."""
+    versions = {}
+    for dist in ("kinengine", "pin", "numpy", "scipy"):
+        try:
+            versions[dist] = importlib.metadata.version(dist)
+        except importlib.metadata.PackageNotFoundError:
+            versions[dist] = None
+    from . import __version__
+    versions["kinengine"] = versions["kinengine"] or __version__
+    for peer in peers or ():
+        versions[peer.distribution] = peer.version
+    return {"timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"), "cpu": cpu_model(),
+            "cores": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform(),
+            "versions": versions}
+
+
+def cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def run(robots: list[str], settings: Settings, peers: bool = False, peer_atol: float = 1e-9,
+        progress: bool | None = None) -> dict:
+    """The whole benchmark as a JSON-ready dict: environment, settings and one row per case.
+
+    ``progress``: a tqdm bar on stderr (None: only when stderr is a terminal).
+    """
+    rotations = list(ROTATION_PARAMETERIZATIONS)
+    plans = []
+    for name in robots:
+        robot = load(name)
+        frame = robot.end_effector
+        cases = latency_cases(robot, frame, rotations) + throughput_cases(robot, frame, list(settings.sizes))
+        plans.append((robot, frame, load_peers(robot, frame) if peers else None, cases))
+    loaded = [peer for *_, robot_peers, _ in plans for peer in robot_peers or () if peer.loaded]
+    report = {"schema": 1, **environment(loaded), "robots": [], "rows": [],
+              "settings": {"sizes": list(settings.sizes), "repeat": settings.repeat,
+                           "min_time_s": settings.min_time, "peer_atol": peer_atol}}
+    with tqdm(total=sum(len(c) for *_, c in plans), desc="kinengine bench", unit="row", leave=False,
+              disable=None if progress is None else not progress) as bar:
+        for robot, frame, robot_peers, cases in plans:
+            report["robots"].append({"name": robot.name, "dof": robot.dof, "frame": frame,
+                                     "peers": {p.name: p.status() for p in robot_peers or ()}})
+            for case in cases:
+                bar.set_postfix_str(f"{robot.name} {case.name} N={case.n}", refresh=False)
+                row = run_case(case, settings, robot_peers, peer_atol)
+                report["rows"].append({"robot": robot.name, **row})
+                bar.update()
+    return report

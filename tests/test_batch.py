@@ -1,0 +1,188 @@
+"""The vectorized batch path equals Robot's single-configuration path (Pinocchio) row by row.
+
+Both evaluation strategies of kinengine.batch are exercised: the numpy chain (forced even for
+small N) and the Pinocchio loop it uses for small batches, on one thread and split over chunks
+and threads.
+"""
+
+from __future__ import annotations
+
+from hypothesis import HealthCheck, given, settings
+import numpy as np
+import pytest
+
+import kinengine
+from custom_robots import mixed_chain_urdf
+from kinengine import batch
+from kinengine.batch import batch_frame_pose, batch_jacobian, batch_pose_and_jacobian
+from urdf_strategies import random_urdfs
+
+REFERENCES = ("local_world_aligned", "local", "world")
+ROBOTS = ("abb_irb120", "ur5", "panda", "kinova", "baxter")
+
+# Unaligned, negative and unnormalized axes; a continuous joint about an unaligned axis; a mimic
+# following a prismatic leader; a frame fixed to the root.
+AXES_URDF = """<?xml version="1.0"?>
+<robot name="axes">
+  <link name="base"/><link name="a"/><link name="b"/><link name="c"/><link name="d"/><link name="e"/>
+  <link name="plate"/>
+  <joint name="plate_fixed" type="fixed"><parent link="base"/><child link="plate"/>
+    <origin xyz="0.1 0.2 0.3" rpy="0.3 0.2 0.1"/></joint>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/>
+    <origin xyz="0 0 0.2" rpy="0.2 0 0"/><axis xyz="0 1 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/>
+    <origin xyz="0.1 0 0.2"/><axis xyz="0 0 -1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j3" type="continuous"><parent link="b"/><child link="c"/>
+    <origin xyz="0 0.3 0" rpy="0 0.5 -0.4"/><axis xyz="-0.3 0.4 0.5"/></joint>
+  <joint name="j4" type="prismatic"><parent link="c"/><child link="d"/>
+    <origin xyz="0 0 0.1"/><axis xyz="-1 0 0"/>
+    <limit lower="-0.2" upper="0.4" effort="1" velocity="1"/></joint>
+  <joint name="j5" type="prismatic"><parent link="d"/><child link="e"/>
+    <origin xyz="0.05 0 0.1" rpy="1 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/>
+    <mimic joint="j4" multiplier="0.5" offset="-0.1"/></joint>
+</robot>
+"""
+
+# One coordinate: Pinocchio returns its (6, 1) Jacobian as (6,).
+ONE_JOINT_URDF = """<?xml version="1.0"?>
+<robot name="one"><link name="base"/><link name="slider"/>
+  <joint name="slide" type="prismatic"><parent link="base"/><child link="slider"/>
+    <origin xyz="0.1 0 0.2" rpy="0 0.3 0"/><axis xyz="1 0 0"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>
+"""
+
+
+def _load(name: str) -> kinengine.Robot:
+    if name == "mixed_chain":
+        return kinengine.load_urdf_string(mixed_chain_urdf())
+    if name == "axes":
+        return kinengine.load_urdf_string(AXES_URDF)
+    if name == "one_joint":
+        return kinengine.load_urdf_string(ONE_JOINT_URDF)
+    return kinengine.load(name)
+
+
+@pytest.fixture(scope="module", params=ROBOTS + ("mixed_chain", "axes", "one_joint"))
+def robot(request):
+    return _load(request.param)
+
+
+@pytest.fixture(params=["numpy", "pinocchio"])
+def strategy(request, monkeypatch):
+    """Force one evaluation strategy whatever the batch size."""
+    monkeypatch.setattr(batch, "CALLS_PER_CONFIGURATION", 10**6 if request.param == "numpy" else 0)
+    return request.param
+
+
+def _frames(robot: kinengine.Robot, rng: np.random.Generator) -> list[str]:
+    """The end effector and a seeded sample of other frames (all of them for small robots)."""
+    frames = list(robot.frame_names)
+    if len(frames) > 12:
+        frames = [robot.end_effector] + list(rng.choice(frames, 11, replace=False))
+    return frames
+
+
+def _single(robot, Q, frame, reference):
+    return (np.array([robot.frame_pose(q, frame) for q in Q]),
+            np.array([robot.jacobian(q, frame, reference) for q in Q]))
+
+
+def test_batch_equals_single_calls_for_every_reference(robot, strategy):
+    rng = np.random.default_rng(11)
+    Q = robot.random_configuration(rng, size=7)
+    for frame in _frames(robot, rng):
+        for reference in REFERENCES:
+            T_ref, J_ref = _single(robot, Q, frame, reference)
+            T, J = batch_pose_and_jacobian(robot, Q, frame, reference)
+            assert T.shape == (7, 4, 4) and J.shape == (7, 6, robot.dof)
+            np.testing.assert_allclose(T, T_ref, rtol=0, atol=1e-12, err_msg=f"{frame} pose")
+            np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12, err_msg=f"{frame} {reference}")
+            np.testing.assert_allclose(batch_jacobian(robot, Q, frame, reference), J, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(batch_frame_pose(robot, Q, frame), T, rtol=0, atol=1e-12)
+
+
+def test_chunks_split_over_threads_cover_every_row(monkeypatch):
+    robot = _load("baxter")
+    monkeypatch.setattr(batch, "CHUNK", 37)
+    monkeypatch.setattr(batch, "MIN_PER_WORKER", 50)
+    monkeypatch.setattr(batch, "WORKERS", 3)
+    monkeypatch.setattr(batch, "CALLS_PER_CONFIGURATION", 10**6)
+    Q = robot.random_configuration(4, size=301)
+    T_ref, J_ref = _single(robot, Q, robot.end_effector, "local")
+    T, J = batch_pose_and_jacobian(robot, Q, reference="local")
+    np.testing.assert_allclose(T, T_ref, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12)
+
+
+def test_default_strategy_agrees_across_batch_sizes():
+    robot = _load("abb_irb120")
+    for n in (1, 50, 200, 9000):
+        Q = robot.random_configuration(n, size=n)
+        rows = np.random.default_rng(n).choice(n, min(n, 20), replace=False)
+        T, J = batch_pose_and_jacobian(robot, Q, "tool0", "world")
+        T_ref, J_ref = _single(robot, Q[rows], "tool0", "world")
+        np.testing.assert_allclose(T[rows], T_ref, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(J[rows], J_ref, rtol=0, atol=1e-12)
+
+
+def test_continuous_joint_is_periodic_in_the_batch(strategy):
+    robot = _load("kinova")
+    Q = robot.random_configuration(2, size=5)
+    shifted = Q + np.where(robot._joints.continuous, 2 * np.pi, 0.0)
+    np.testing.assert_allclose(batch_frame_pose(robot, shifted), batch_frame_pose(robot, Q),
+                               rtol=0, atol=1e-12)
+
+
+def test_single_configuration_and_empty_batch_shapes(strategy):
+    robot = _load("panda")
+    q = robot.random_configuration(3)
+    T, J = batch_pose_and_jacobian(robot, q, "panda_hand")
+    np.testing.assert_allclose(T, robot.frame_pose(q, "panda_hand"), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(J, robot.jacobian(q, "panda_hand"), rtol=0, atol=1e-12)
+    T, J = batch_pose_and_jacobian(robot, np.empty((0, robot.dof)))
+    assert T.shape == (0, 4, 4) and J.shape == (0, 6, robot.dof)
+
+
+def test_robot_without_coordinates(strategy):
+    robot = kinengine.load_urdf_string('<robot name="fixed"><link name="a"/><link name="b"/><joint name="f" '
+                                       'type="fixed"><parent link="a"/><child link="b"/>'
+                                       '<origin xyz="0.1 0.2 0.3" rpy="0.3 0.2 0.1"/></joint></robot>')
+    assert batch_jacobian(robot, np.zeros((4, 0)), "b", "local").shape == (4, 6, 0)
+    T = batch_frame_pose(robot, np.zeros((4, 0)), "b")
+    T_ref = robot.frame_pose(np.zeros(0), "b")
+    np.testing.assert_allclose(T, np.broadcast_to(T_ref, (4, 4, 4)), rtol=0, atol=1e-12)
+
+
+def test_bad_input_raises_kinengine_errors():
+    robot = _load("abb_irb120")
+    with pytest.raises(kinengine.ConfigurationError, match=r"\(N, 6\)"):
+        batch_frame_pose(robot, np.zeros((3, 5)))
+    with pytest.raises(kinengine.ConfigurationError, match="finite"):
+        batch_jacobian(robot, np.full((2, 6), np.nan))
+    with pytest.raises(kinengine.FrameNotFoundError):
+        batch_frame_pose(robot, np.zeros((2, 6)), "tool9")
+    with pytest.raises(kinengine.KinematicsError, match="local_world_aligned"):
+        batch_jacobian(robot, np.zeros((2, 6)), "tool0", "global")
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(urdf=random_urdfs(max_links=7))
+def test_random_trees_match_pinocchio(urdf):
+    robot = kinengine.load_urdf_string(urdf)
+    Q = robot.random_configuration(0, size=3)
+    old = batch.CALLS_PER_CONFIGURATION
+    try:
+        for calls in (10**6, 0):  # numpy, then Pinocchio (hypothesis forbids function-scoped fixtures)
+            batch.CALLS_PER_CONFIGURATION = calls
+            for frame in robot.frame_names:
+                for reference in REFERENCES:
+                    T_ref, J_ref = _single(robot, Q, frame, reference)
+                    T, J = batch_pose_and_jacobian(robot, Q, frame, reference)
+                    np.testing.assert_allclose(T, T_ref, rtol=0, atol=1e-12)
+                    np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12)
+    finally:
+        batch.CALLS_PER_CONFIGURATION = old

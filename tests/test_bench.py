@@ -1,0 +1,142 @@
+"""``kinengine bench``: the quick run's JSON, table and PNG, the agreement checks, the timing helper.
+
+No timing is asserted: only structure, units that must be consistent, and the values the benchmark
+compares before it times (kinengine against its raw-Pinocchio floor, peers against kinengine).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import kinengine
+from kinengine import bench, bench_run
+from kinengine.bench_cases import Case, throughput_cases
+from kinengine.parameterizations import ROTATION_PARAMETERIZATIONS
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench")
+    json_path, png_path = out / "bench.json", out / "bench.png"
+    code = bench.main(["abb_irb120", "--quick", "--peers", "--json", str(json_path), "--plot", str(png_path)])
+    return code, json.loads(json_path.read_text()), png_path
+
+
+def test_quick_run_writes_json_with_environment(quick_run):
+    code, report, _ = quick_run
+    assert code == 0
+    assert report["schema"] == 1
+    assert report["cores"] >= 1 and report["cpu"]
+    assert report["versions"]["pin"] == "4.1.0" and report["versions"]["numpy"] == np.__version__
+    assert report["timestamp"].endswith("+00:00")
+    assert report["settings"]["sizes"] == list(bench_run.QUICK.sizes)
+    assert report["robots"][0]["name"] == "abb_irb120" and report["robots"][0]["frame"] == "tool0"
+
+
+def test_quick_run_has_every_row(quick_run):
+    _, report, _ = quick_run
+    cases = [(r["group"], r["case"], r["n"]) for r in report["rows"]]
+    latency = {c for g, c, _ in cases if g == "latency"}
+    assert {"frame_pose", "jacobian[local_world_aligned]", "jacobian[local]", "jacobian[world]",
+            "task.update(q)", "task.update(q, qdot)", "inverse_kinematics"} <= latency
+    assert {f"analytic_jacobian[{name}]" for name in ROTATION_PARAMETERIZATIONS} <= latency
+    for n in bench_run.QUICK.sizes:
+        for name in ("frame_pose", "jacobian[local_world_aligned]", "pose+jacobian",
+                     "analytic_jacobian[euler_zyx]", "analytic_jacobian[quaternion]"):
+            assert ("throughput", name, n) in cases
+    assert len(cases) == len(set(cases))
+
+
+def test_timings_are_consistent(quick_run):
+    _, report, _ = quick_run
+    for row in report["rows"]:
+        for side in [row["kinengine"], row["pinocchio"], *row["peers"].values()]:
+            if side["status"] != "ok":
+                assert "min_us" not in side
+                continue
+            assert 0 < side["min_us"] <= side["median_us"]
+            assert side["per_second"] == pytest.approx(row["n"] / side["min_us"] * 1e6, rel=1e-12)
+        if row["kinengine"]["status"] == "ok":
+            expected = row["kinengine"]["min_us"] / row["pinocchio"]["min_us"]
+            assert row["ratio"] == pytest.approx(expected, rel=1e-12)
+        else:
+            assert "ratio" not in row and row["note"]
+
+
+def test_kinengine_agrees_with_its_pinocchio_floor(quick_run):
+    _, report, _ = quick_run
+    compared = [r for r in report["rows"] if "difference" in r["pinocchio"]]
+    # poses, Jacobians, the batches and the analytic Jacobians Pinocchio can convert (zyx, quaternion, log3)
+    assert len(compared) >= 4 + 3 + 5 * len(bench_run.QUICK.sizes)
+    for row in compared:
+        assert row["pinocchio"]["status"] == "ok", row
+        assert row["pinocchio"]["difference"] <= 1e-9
+
+
+def test_missing_peers_are_reported_not_timed(quick_run):
+    _, report, _ = quick_run
+    for name, status in report["robots"][0]["peers"].items():
+        if not status["loaded"]:
+            assert status["note"]
+            assert all(row["peers"][name]["status"] == "unsupported" for row in report["rows"])
+
+
+def test_png_is_written(quick_run):
+    _, _, png = quick_run
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_table_lists_every_row(quick_run):
+    _, report, _ = quick_run
+    table = bench.format_table(report)
+    assert "pin min µs" in table and report["cpu"] in table
+    assert len([line for line in table.splitlines() if line.startswith("abb_irb120 ")]) == len(report["rows"])
+
+
+class _Peer:
+    """A stand-in peer whose answer is off by ``error``."""
+
+    name = "fake"
+
+    def __init__(self, error: float) -> None:
+        self.error = error
+
+    def prepare(self, case):
+        return (lambda: case.kinengine()), (lambda out: np.asarray(out) + self.error)
+
+
+def test_a_peer_that_disagrees_is_reported_and_not_timed():
+    robot = kinengine.load("abb_irb120")
+    case = next(c for c in throughput_cases(robot, "tool0", [3]) if c.name == "frame_pose")
+    settings = bench_run.Settings((3,), repeat=2, min_time=1e-4)
+    row = bench_run.run_case(case, settings, [_Peer(1e-6)], peer_atol=1e-9)
+    assert row["peers"]["fake"] == {"status": "disagrees", "difference": pytest.approx(1e-6, rel=1e-6)}
+    row = bench_run.run_case(case, settings, [_Peer(1e-12)], peer_atol=1e-9)
+    assert row["peers"]["fake"]["status"] == "ok" and row["peers"]["fake"]["min_us"] > 0
+
+
+def test_a_floor_that_disagrees_is_flagged():
+    one = np.eye(4)
+    case = Case("latency", "wrong", 1, lambda: one, lambda: one * 2.0, compare=True)
+    row = bench_run.run_case(case, bench_run.Settings((1,), repeat=2, min_time=1e-4))
+    assert row["pinocchio"]["status"] == "disagrees" and row["pinocchio"]["difference"] == pytest.approx(0.5)
+
+
+def test_max_relative_difference():
+    a = np.array([[1.0, 2.0], [3.0, 400.0]])
+    assert bench_run.max_relative_difference(a, a) == 0.0
+    assert bench_run.max_relative_difference(a + 4.0, a) == pytest.approx(4.0 / 400.0)
+    assert bench_run.max_relative_difference(np.full(2, 0.25), np.zeros(2)) == 0.25  # absolute below 1
+    assert bench_run.max_relative_difference((a, a), (a, a + 1.0)) == pytest.approx(1.0 / 401.0)
+    assert math.isinf(bench_run.max_relative_difference(a, a[0]))
+
+
+def test_measure_counts_calls_until_min_time():
+    calls = []
+    timing = bench_run.measure(lambda: calls.append(1), bench_run.Settings((1,), repeat=3, min_time=1e-3))
+    assert timing["calls"] >= 1 and timing["min_us"] <= timing["median_us"]
+    assert len(calls) >= 1 + 3 * timing["calls"]
