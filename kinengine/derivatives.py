@@ -70,7 +70,8 @@ def kinematic_hessian(robot, q: object, frame: str | None = None,
     bracket = np.empty((6, len(chain.columns), len(chain.columns)))  # [:, b, a] = ad(S_b)·S_a
     bracket[:3] = np.moveaxis(np.cross(w[:, None], v[None]) + np.cross(v[:, None], w[None]), -1, 0)
     bracket[3:] = np.moveaxis(np.cross(w[:, None], w[None]), -1, 0)
-    Hw = np.einsum("iba,ba,aj,bk->ijk", bracket, chain.above, chain.A, chain.A)
+    bracket *= chain.above                             # only joints b above a turn a
+    Hw = chain.A.T @ np.swapaxes(bracket, 1, 2) @ chain.A  # Σ_ab A[a,j]·bracket[:,b,a]·A[b,k]: O(6·p²·dof)
     Jw = S @ chain.A
     M = pin.updateFramePlacement(model, data, fid)
     return _change_reference(Jw, Hw, np.eye(robot.dof), M.rotation, M.translation, ref)

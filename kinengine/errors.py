@@ -57,7 +57,12 @@ class FrameNotFoundError(KinematicsError, KeyError):
 
 
 class ConfigurationError(KinematicsError, ValueError):
-    """A joint configuration (or velocity) has the wrong shape, type or values."""
+    """A joint configuration q (or velocity q̇, or a Jacobian handed in) has the wrong shape, type or values,
+    or (``check_limits=True``) a joint outside its limits."""
+
+
+class OptionError(KinematicsError, ValueError):
+    """A keyword option out of its range (e.g. a negative iteration count) or a task without frames."""
 
 
 class ParameterizationError(KinematicsError, ValueError):

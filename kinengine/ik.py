@@ -28,7 +28,7 @@ import weakref
 import numpy as np
 import pinocchio as pin
 
-from .errors import ParameterizationError
+from .errors import OptionError, ParameterizationError
 from .parameterizations import get_position, get_rotation
 
 SEEDS_PER_ATTEMPT = 8
@@ -73,7 +73,7 @@ def inverse_kinematics(robot, target: object, frame: str | None = None, q0: obje
     the task leaves freedom. ``min_damping``: λ_min [1].
     """
     if restarts < 0 or max_iterations < 0:
-        raise ValueError(f"Expected `restarts` and `max_iterations` >= 0, got {restarts}, {max_iterations}")
+        raise OptionError(f"`restarts` and `max_iterations` must be >= 0, got {restarts} and {max_iterations}")
     p_d, C_d = _target(target, position, rotation)
     frame = robot.end_effector if frame is None else frame
     fid = robot.frame_id(frame)

@@ -19,6 +19,7 @@ from .errors import ConfigurationError, FrameNotFoundError
 from .urdf import RobotDescription
 
 _F64 = np.dtype(np.float64)
+_STRIDES = (_F64.itemsize,)  # a C-contiguous float64 vector
 
 
 class JointSpace:
@@ -80,14 +81,16 @@ class JointSpace:
     # -- checking ---------------------------------------------------------------------------
     def check(self, q: object, *, name: str = "q", check_limits: bool = False,
               allow_batch: bool = True) -> np.ndarray:
-        """q as a float64 array of shape (dof,) or (N, dof); ConfigurationError otherwise.
+        """q as a C-contiguous float64 array of shape (dof,) or (N >= 1, dof); ConfigurationError otherwise.
 
-        ints and float32 are converted; NaN/inf, strings, None, booleans, complex and
-        wrongly shaped input are refused with the expected shape in the message.
+        ints, float32, lists, tuples, strided, Fortran-ordered and read-only arrays are
+        accepted and converted (a new array when conversion is needed; the input is never
+        modified). NaN/inf, strings, None, booleans, complex, masked entries, empty batches
+        and wrongly shaped input are refused with the expected shape in the message.
         """
-        # Hot path: a float64 vector of the right shape costs one float sum (~0.15 µs) to
-        # check; a non-finite sum (NaN, inf or overflow) is confirmed element-wise.
-        if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._shape:
+        # Hot path: a contiguous float64 vector of the right shape costs one float sum (~0.15 µs)
+        # to check; a non-finite sum (NaN, inf or overflow) is confirmed element-wise.
+        if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._shape and q.strides == _STRIDES:
             if not math.isfinite(sum(q.tolist())) and not np.isfinite(q).all():
                 self._raise_nonfinite(q, name)
         else:
@@ -102,27 +105,45 @@ class JointSpace:
             raise ConfigurationError(f"Expected `{name}` to be an array of shape {expected}, got None")
         if isinstance(q, (str, bytes)):
             raise ConfigurationError(f"Expected `{name}` to be numeric with shape {expected}, got a string")
+        if np.ma.is_masked(q):
+            raise ConfigurationError(f"Expected `{name}` to have a value for every joint, got a masked array "
+                                     "with masked entries; fill them (q.filled(...)) first")
         try:
             arr = np.asarray(q)
         except Exception as exc:  # ragged sequences and the like
             raise ConfigurationError(f"Expected `{name}` to be numeric with shape {expected}: {exc}") from None
-        if arr.dtype.kind not in "iuf":
-            if arr.dtype.kind == "O":
-                try:
-                    arr = arr.astype(np.float64)
-                except (TypeError, ValueError):
-                    raise ConfigurationError(
-                        f"Expected `{name}` to hold real numbers with shape {expected}, "
-                        f"got an object array with non-numeric entries") from None
-            else:
-                raise ConfigurationError(
-                    f"Expected `{name}` to hold real numbers with shape {expected}, got dtype {arr.dtype}")
+        if arr.dtype.kind == "O":
+            arr = self._from_objects(arr, q, name, expected)
+        elif arr.dtype.kind not in "iuf":
+            raise ConfigurationError(
+                f"Expected `{name}` to hold real numbers with shape {expected}, got dtype {arr.dtype}")
         if arr.ndim == 0 or arr.shape[-1] != self.dof or arr.ndim > (2 if allow_batch else 1):
-            raise ConfigurationError(f"Expected `{name}` to have shape {expected}, got {arr.shape}")
+            hint = ("; this function takes one configuration: call it once per row"
+                    if not allow_batch and arr.ndim == 2 and arr.shape[-1] == self.dof else "")
+            raise ConfigurationError(f"Expected `{name}` to have shape {expected}, got {arr.shape}{hint}")
+        if arr.ndim == 2 and arr.shape[0] == 0:
+            raise ConfigurationError(f"Expected `{name}` to hold at least one configuration, "
+                                     f"got an empty batch {arr.shape}")
         arr = np.ascontiguousarray(arr, dtype=np.float64)
         if not np.isfinite(arr).all():
             self._raise_nonfinite(arr, name)
         return arr
+
+    @staticmethod
+    def _from_objects(arr: np.ndarray, q: object, name: str, expected: str) -> np.ndarray:
+        """An object array (e.g. Python numbers) as float64; ConfigurationError if an entry is not one."""
+        what = f"a {type(q).__name__}" if arr.ndim == 0 else "an object array"
+        if any(v is None for v in arr.flat):
+            raise ConfigurationError(f"Expected `{name}` to hold real numbers with shape {expected}, "
+                                     f"got {what} with None entries")
+        try:
+            return arr.astype(np.float64)
+        except OverflowError:
+            raise ConfigurationError(f"Expected `{name}` to hold real numbers with shape {expected}, "
+                                     f"got {what} with a number too large for a float64") from None
+        except (TypeError, ValueError):
+            raise ConfigurationError(f"Expected `{name}` to hold real numbers with shape {expected}, "
+                                     f"got {what} with non-numeric entries") from None
 
     def _raise_nonfinite(self, q: np.ndarray, name: str) -> None:
         bad = np.argwhere(~np.isfinite(q))[0]
@@ -132,13 +153,14 @@ class JointSpace:
                                  "every coordinate must be a finite number")
 
     def check_limits(self, q: np.ndarray, *, name: str = "q") -> None:
-        """ConfigurationError naming the first joint outside [lower, upper]."""
+        """ConfigurationError naming the first joint outside [lower, upper] (and its row in a batch)."""
         outside = (q < self.lower) | (q > self.upper)
         if outside.any():
             bad = np.argwhere(outside)[0]
             i = bad[-1]
+            row = f"[{bad[0]}]" if q.ndim == 2 else ""
             raise ConfigurationError(
-                f"`{name}` puts joint {self.names[i]!r} at {float(q[tuple(bad)])!r}, outside its limits "
+                f"`{name}`{row} puts joint {self.names[i]!r} at {float(q[tuple(bad)])!r}, outside its limits "
                 f"[{float(self.lower[i])!r}, {float(self.upper[i])!r}]; clip q or pass check_limits=False")
 
     # -- construction -----------------------------------------------------------------------

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import KinematicSingularityError
+from .errors import ConfigurationError, KinematicSingularityError, ParameterizationError
 
 ROW_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
 ROW_SETS = {"all": (0, 1, 2, 3, 4, 5), "linear": (0, 1, 2), "angular": (3, 4, 5)}
@@ -88,7 +88,7 @@ def analyze_jacobian(J: object, rows: Rows = "all", *, tolerance: float = DEFAUL
     index = _rows(rows)
     J = np.asarray(J, dtype=float)
     if J.ndim != 2 or J.shape[0] != 6:
-        raise ValueError(f"Expected `J` to have shape (6, dof), got {J.shape}")
+        raise ConfigurationError(f"Expected `J` to have shape (6, dof), got {J.shape}")
     Js = J[list(index)]
     m = len(index)
     U, s, _ = np.linalg.svd(Js, full_matrices=True)
@@ -108,10 +108,7 @@ def singularity_report(robot, q: object, frame: str | None = None, rows: Rows = 
                        tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
     """The :class:`SingularityReport` of J_e0(q) of ``frame`` (default: end effector), q (dof,)."""
     frame = robot.end_effector if frame is None else frame
-    q = robot.check_configuration(q, check_limits=False)
-    if q.ndim != 1:
-        raise ValueError(f"Expected `q` to have shape ({robot.dof},), got {q.shape}; "
-                         "manipulability() takes batches")
+    q = robot._joints.check(q, allow_batch=False)  # manipulability() takes batches
     return analyze_jacobian(robot.jacobian(q, frame), rows, tolerance=tolerance, frame=frame)
 
 
@@ -128,9 +125,8 @@ def manipulability(robot, q: object, frame: str | None = None, rows: Rows = "all
 def velocity_ellipsoid(robot, q: object, frame: str | None = None) -> VelocityEllipsoid:
     """The velocity manipulability ellipsoid of ``frame``'s origin (eigenvectors of J_v J_vᵀ), q (dof,)."""
     frame = robot.end_effector if frame is None else frame
+    q = robot._joints.check(q, allow_batch=False)
     T = robot.frame_pose(q, frame)
-    if T.ndim != 2:
-        raise ValueError(f"Expected `q` to have shape ({robot.dof},), got {np.shape(q)}")
     U, s, _ = np.linalg.svd(robot.jacobian(q, frame)[:3], full_matrices=True)
     semi = np.zeros(3)
     semi[:s.size] = s
@@ -182,10 +178,11 @@ def _rows(rows: Rows) -> tuple[int, ...]:
         elif row in ROW_LABELS:
             index.append(ROW_LABELS.index(row))
         else:
-            raise ValueError(f"Expected `rows` to be 'all', 'linear', 'angular' or labels from {ROW_LABELS} "
-                             f"(or indices 0-5), got {row!r}")
+            raise ParameterizationError(f"Expected `rows` to be 'all', 'linear', 'angular' or labels from "
+                                        f"{ROW_LABELS} (or indices 0-5), got {row!r}")
     if not index or len(set(index)) != len(index):
-        raise ValueError(f"Expected `rows` to name each row at most once and at least one row, got {rows!r}")
+        raise ParameterizationError(f"Expected `rows` to name each row at most once and at least one row, "
+                                    f"got {rows!r}")
     return tuple(index)
 
 

@@ -3,9 +3,9 @@
 Every case runs in a child (``python -c``) whose address space is capped at 1 GiB with
 RLIMIT_AS (measured on pin 4.1: importing numpy, Pinocchio and kinengine and loading the ABB
 arm peaks at 0.20 GiB of address space, a worker thread adds 0.13 GiB of malloc arena, the
-128-joint chain with a Robot Data and a Task Data peaks at 0.42 GiB; one Data of nv = 256,
-which the default limits refuse, alone needs 1.06 GiB). The child calls the public API and exits 0 after catching
-exactly ``kinengine.KinematicsError``, printing ``RAISED <type>: <message>``; a case that
+128-joint chain (the largest the default limits admit) with a Robot Data, a Task Data, Hessians,
+IK and a batch peaks at 0.57 GiB; one Data of nv = 256, which the default limits refuse, alone
+needs 1.06 GiB). The child calls the public API and exits 0 after catching exactly ``kinengine.KinematicsError``, printing ``RAISED <type>: <message>``; a case that
 must succeed prints ``RETURNED``. Anything else (another exception, a crash by signal, a
 hang past the timeout, MemoryError) fails that case alone. For refused URDFs the child also
 replaces ``pinocchio.buildModelFromXML`` with a tripwire: the refusal must come before
@@ -24,7 +24,7 @@ import textwrap
 
 import pytest
 
-ADDRESS_SPACE = 1024**3  # [bytes] RLIMIT_AS of each child; measured peaks: 0.20 GiB, 0.42 GiB for the largest
+ADDRESS_SPACE = 1024**3  # [bytes] RLIMIT_AS of each child; measured peaks: 0.20 GiB, 0.57 GiB for the largest
 TIMEOUT = 60.0  # [s] per child
 REPO = Path(__file__).resolve().parents[1]
 
@@ -192,6 +192,16 @@ CASES = [
          fragment="129 movable joints, more than Limits.max_movable_joints = 128"),
     Case("star_of_129_revolute_joints", "kinengine.load_urdf_string(star(129))",
          fragment="129 movable joints, more than Limits.max_movable_joints = 128"),
+    Case("chain_of_128_revolute_joints_and_one_mimic", """
+        text = chain(129).replace('<origin xyz="0 0 0.01"/>' + LIMIT + '<axis xyz="0 0 1"/></joint></robot>',
+                                  LIMIT + '<mimic joint="j1"/></joint></robot>')
+        assert text.count("<mimic") == 1
+        kinengine.load_urdf_string(text)""", fragment="129 movable joints, more than Limits.max_movable_joints = 128"),
+    Case("chain_of_129_revolute_joints_from_a_file_in_a_worker_thread", """
+        path = os.path.join(tmp, "chain.urdf")
+        open(path, "w").write(chain(129))
+        in_worker(lambda: kinengine.load(path), stack_kib=512)""",
+         fragment="chain.urdf, robot 'chain': the robot has 129 movable joints"),
     # -- values Pinocchio would accept and compute nonsense from ---------------------------------------
     Case("zero_axis", "kinengine.load_urdf_string(one_joint(LIMIT + '<axis xyz=\"0 0 0\"/>'))",
          fragment='<axis xyz="0 0 0"> is zero'),
@@ -204,6 +214,22 @@ CASES = [
          fragment="mimics joint 'ghost', which is not defined"),
     Case("floating_joint", "kinengine.load_urdf_string(one_joint('', kind='floating'))",
          fragment="a fixed-base model cannot have a floating joint"),
+    Case("cycle_of_4001_links", """
+        text = chain(4000, 'fixed').replace("</robot>", '<joint name="back" type="fixed"><parent link="l4000"/>'
+                                        '<child link="l0"/></joint></robot>')
+        kinengine.load_urdf_string(text)""", fragment="there is no root link: joints"),
+    Case("link_with_two_parents", """
+        text = star(3, "fixed").replace("</robot>", '<joint name="again" type="fixed"><parent link="l0"/>'
+                                                    '<child link="l1"/></joint></robot>')
+        kinengine.load_urdf_string(text)""", fragment="link 'l1' already has parent joint 'j1'"),
+    Case("mimic_of_a_mimic_joint", """
+        text = chain(3).replace(LIMIT + '<axis xyz="0 0 1"/></joint><joint name="j3"',
+                                LIMIT + '<mimic joint="j1"/></joint><joint name="j3"')
+        text = text.replace('<axis xyz="0 0 1"/></joint></robot>', '<mimic joint="j2"/></joint></robot>')
+        kinengine.load_urdf_string(text)""", fragment="mimics joint 'j2', which is itself a mimic joint (of 'j1')"),
+    Case("a_million_tags", """
+        kinengine.load_urdf_string('<robot name="r"><link name="a"/>' + "<x/>" * 1_000_001 + "</robot>")""",
+         fragment="markup tags, more than Limits.max_tags = 1000000"),
     # -- names and configurations: resolved and checked in Python, never an unchecked index -------------
     Case("unknown_frame_to_jacobian", ROBOT + "robot.jacobian(q, 'tool_0')", raises="FrameNotFoundError",
          fragment="unknown frame 'tool_0'. Did you mean 'tool0'", pinocchio_may_build=True),
@@ -225,6 +251,14 @@ CASES = [
          fragment="`q`[3] (joint 'joint_4') is nan", pinocchio_may_build=True),
     Case("inf_in_a_batch_of_q", ROBOT + "qs = np.zeros((4, 6)); qs[2, 1] = -np.inf\nrobot.analytic_jacobian(qs)",
          raises="ConfigurationError", fragment="`q`[2, 1] (joint 'joint_2') is -inf", pinocchio_may_build=True),
+    Case("q_with_a_python_int_too_large_for_a_double", ROBOT + "robot.kinematic_hessian([10**400] + [0] * 5)",
+         raises="ConfigurationError", fragment="with a number too large for a float64", pinocchio_may_build=True),
+    Case("masked_q", ROBOT + "robot.jacobian(np.ma.masked_array(q, mask=[1, 0, 0, 0, 0, 0]))",
+         raises="ConfigurationError", fragment="masked array with masked entries", pinocchio_may_build=True),
+    Case("batch_to_an_entry_point_without_batches", ROBOT + "robot.velocity_ellipsoid(np.zeros((3, 6)))",
+         raises="ConfigurationError", fragment="takes one configuration", pinocchio_may_build=True),
+    Case("empty_batch", ROBOT + "robot.analytic_jacobian(np.zeros((0, 6)))",
+         raises="ConfigurationError", fragment="got an empty batch (0, 6)", pinocchio_may_build=True),
     Case("wrong_shape_qdot_to_a_task", ROBOT + "robot.task().update(q, np.zeros(5))",
          raises="ConfigurationError", fragment="Expected `qdot` to have shape (6,), got (5,)",
          pinocchio_may_build=True),
@@ -235,7 +269,21 @@ CASES = [
         J = in_worker(lambda: robot.jacobian(robot.neutral(), "l128"), stack_kib=1024)
         task = robot.task("l128")
         task.update(robot.neutral())
-        np.testing.assert_allclose(task.jacobian, J, rtol=0, atol=1e-12)""",
+        np.testing.assert_allclose(task.jacobian, J, rtol=0, atol=1e-12)
+        q = robot.random_configuration(0)
+        H = in_worker(lambda: robot.kinematic_hessian(q, "l128"), stack_kib=1024)
+        assert H.shape == (6, 128, 128) and np.isfinite(H).all()
+        assert robot.analytic_hessian(q, "l128", rotation="quaternion").shape == (7, 128, 128)
+        target = robot.frame_pose(robot.random_configuration(1), "l128")
+        assert robot.inverse_kinematics(target, "l128", rng=0).success
+        assert robot.frame_pose(robot.random_configuration(2, size=64), "l128").shape == (64, 4, 4)""",
+         raises=None, pinocchio_may_build=True),
+    Case("star_of_128_revolute_joints_computes", """
+        robot = kinengine.load_urdf_string(star(128))
+        q = robot.random_configuration(0)
+        J = robot.jacobian(q, "l127")
+        assert robot.dof == 128 and np.count_nonzero(np.abs(J).sum(axis=0)) == 1  # only j127 moves l127
+        assert robot.kinematic_hessian(q, "l127").shape == (6, 128, 128)""",
          raises=None, pinocchio_may_build=True),
     Case("star_of_4000_fixed_joints", """
         robot = kinengine.load_urdf_string(star(4000, "fixed"))

@@ -155,5 +155,5 @@ def test_inputs_are_checked():
         inverse_kinematics(robot, np.eye(4), nullspace_target=[np.nan] * 6)
     with pytest.raises(kinengine.FrameNotFoundError):
         inverse_kinematics(robot, np.eye(4), "tool9")
-    with pytest.raises(ValueError, match="restarts"):
+    with pytest.raises(kinengine.OptionError, match="restarts"):
         inverse_kinematics(robot, np.eye(4), restarts=-1)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 import threading
 
 import numpy as np
@@ -9,6 +10,7 @@ import pinocchio as pin
 import pytest
 
 import kinengine
+import kinengine.catalog
 from custom_robots import mixed_chain_urdf
 
 
@@ -95,13 +97,82 @@ def test_batched_results_equal_single_calls(mixed):
             np.testing.assert_array_equal(T[i], mixed.frame_pose(qs[i], "tip"))
 
 
-def test_results_are_copies_that_later_calls_do_not_overwrite(abb):
+def _array_results(robot, q, qdot, target):
+    """Every array a Robot entry point returns, by name, at q (dof,) with q̇ and an IK target."""
+    report, ellipsoid = robot.singularity_report(q), robot.velocity_ellipsoid(q)
+    batch = np.array([q, -q])
+    return {
+        "frame_pose": robot.frame_pose(q), "frame_pose_batch": robot.frame_pose(batch),
+        **{f"jacobian_{r}": robot.jacobian(q, None, r) for r in ("world", "local", "local_world_aligned")},
+        "jacobian_batch": robot.jacobian(batch, None, "local"),
+        "pose_parameters": robot.pose_parameters(q, rotation="quaternion"),
+        "pose_parameters_batch": robot.pose_parameters(batch, rotation="euler_zyz"),
+        "analytic_jacobian": robot.analytic_jacobian(q, rotation="quaternion"),
+        "analytic_jacobian_batch": robot.analytic_jacobian(batch, rotation="euler_zyz"),
+        "jacobian_time_variation": robot.jacobian_time_variation(q, qdot),
+        "kinematic_hessian": robot.kinematic_hessian(q, None, "world"),
+        "analytic_hessian": robot.analytic_hessian(q, rotation="euler_zyz"),
+        "singular_values": report.singular_values,
+        "lost_directions": np.array([d.twist for d in report.lost_directions]),
+        "manipulability_batch": robot.manipulability(batch),
+        "ellipsoid_center": ellipsoid.center, "ellipsoid_axes": ellipsoid.axes,
+        "ellipsoid_semi_axes": ellipsoid.semi_axes,
+        "inverse_kinematics_q": robot.inverse_kinematics(target, rng=0).q,
+        "configuration": robot.configuration({robot.joint_names[0]: 0.1}),
+        "check_configuration": robot.check_configuration(q.tolist()),
+        "pinocchio_configuration": robot.pinocchio_configuration(q),
+        "neutral": robot.neutral(), "random_configuration": robot.random_configuration(0),
+    }
+
+
+@pytest.mark.parametrize("name", ["abb", "mixed"])
+def test_results_are_copies_that_later_calls_do_not_overwrite(name, request):
+    robot = request.getfixturevalue(name)
+    q1, q2 = robot.random_configuration(0), robot.random_configuration(1)
+    q1[-2] = q2[-2] = 0.7   # keep the IRB 120's wrist away from its singularity
+    held = _array_results(robot, q1, np.linspace(-0.5, 0.5, robot.dof), robot.frame_pose(q2))
+    snapshot = {k: v.copy() for k, v in held.items()}
+    for k, v in held.items():  # a result owns its memory: no view into Pinocchio's Data or another result
+        assert isinstance(v, np.ndarray) and v.dtype == np.float64, k
+        assert not any(np.shares_memory(v, w) for j, w in held.items() if j != k and w.size and v.size), k
+    again = _array_results(robot, q2, np.linspace(0.5, -0.5, robot.dof), robot.frame_pose(q1))
+    for k, v in held.items():
+        np.testing.assert_array_equal(v, snapshot[k], err_msg=k)
+        if k not in ("neutral", "random_configuration", "configuration") and v.size:
+            assert not np.array_equal(v, again[k]), f"{k}: the second call should give another answer"
+    held["frame_pose"][...] = 0.0  # writing into a result changes nothing the robot computes later
+    np.testing.assert_array_equal(robot.frame_pose(q1), snapshot["frame_pose"])
+
+
+def test_task_attributes_are_documented_read_only_views_that_the_next_update_overwrites(abb):
+    # the Task's speed contract (kinengine/task.py): preallocated views, overwritten in place; copy what you keep
+    task = abb.task("tool0", rotation="euler_zyz")
+    names = ("pose", "chi", "jacobian", "analytic_jacobian", "twist", "chi_dot", "jacobian_dot",
+             "analytic_jacobian_dot")
     q1, q2 = abb.random_configuration(0), abb.random_configuration(1)
-    T1, J1 = abb.frame_pose(q1, "tool0"), abb.jacobian(q1, "tool0")
-    T1_copy, J1_copy = T1.copy(), J1.copy()
-    abb.frame_pose(q2, "tool0"), abb.jacobian(q2, "tool0")
-    np.testing.assert_array_equal(T1, T1_copy)
-    np.testing.assert_array_equal(J1, J1_copy)
+    task.update(q1, np.ones(6))
+    held = {n: getattr(task, n) for n in names}
+    kept = {n: getattr(task, n).copy() for n in names}
+    task.update(q2, -np.ones(6))
+    for n in names:
+        assert held[n] is getattr(task, n)
+        assert not held[n].flags.writeable
+        assert not np.array_equal(held[n], kept[n]), n   # the held view now shows q2's values
+    np.testing.assert_array_equal(kept["pose"], abb.frame_pose(q1, "tool0"))
+    np.testing.assert_array_equal(held["pose"], abb.frame_pose(q2, "tool0"))
+
+
+def test_the_pinocchio_model_handed_out_is_a_copy(abb):
+    # Model and Data are made together inside the Robot and never mutated apart
+    q = abb.random_configuration(3)
+    T = abb.frame_pose(q, "tool0")
+    model = abb.pinocchio_model()
+    model.jointPlacements[1] = pin.SE3.Random()
+    model.frames[model.getFrameId("tool0")].placement = pin.SE3.Random()
+    model.lowerPositionLimit[:] = 0.0
+    np.testing.assert_array_equal(abb.frame_pose(q, "tool0"), T)
+    assert not np.array_equal(abb.pinocchio_model().jointPlacements[1].homogeneous,
+                              model.jointPlacements[1].homogeneous)
 
 
 def test_pinocchio_reference_enum_is_accepted(abb):
@@ -186,25 +257,50 @@ def test_load_errors_are_urdf_errors(tmp_path):
         kinengine.load_urdf_string(None)
 
 
-def test_one_robot_from_eight_threads_gives_the_sequential_answers(abb):
-    qs = abb.random_configuration(9, size=200)
-    expected_T = [abb.frame_pose(q, "tool0") for q in qs]
-    expected_J = [abb.jacobian(q, "tool0", "local") for q in qs]
-    failures = []
+def _answers(robot, q):
+    """Everything one thread computes at q, as arrays (sequential and threaded runs compare equal)."""
+    return (robot.frame_pose(q, "tool0"), robot.jacobian(q, "tool0", "local"),
+            robot.analytic_jacobian(q, "tool0", rotation="quaternion"), robot.kinematic_hessian(q, "tool0"),
+            robot.inverse_kinematics(robot.frame_pose(q + 0.05, "tool0"), "tool0", q0=q, rng=0).q,
+            robot.frame_pose(np.array([q, -q]), "tool0"))
 
-    def work(offset):
+
+def test_one_robot_from_eight_threads_gives_the_sequential_answers(abb):
+    qs = abb.random_configuration(9, size=48)
+    expected = [_answers(abb, q) for q in qs]
+
+    def work(offset):  # each thread walks all configurations from its own start
+        wrong = []
         for k in range(len(qs)):
             i = (k + offset) % len(qs)
-            if not (np.array_equal(abb.frame_pose(qs[i], "tool0"), expected_T[i])
-                    and np.array_equal(abb.jacobian(qs[i], "tool0", "local"), expected_J[i])):
-                failures.append(i)
+            if not all(np.array_equal(a, b) for a, b in zip(_answers(abb, qs[i]), expected[i])):
+                wrong.append(i)
+        return wrong
 
-    threads = [threading.Thread(target=work, args=(25 * t,)) for t in range(8)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    assert failures == []
+    with ThreadPoolExecutor(max_workers=8) as pool:
+        results = list(pool.map(work, range(0, 48, 6)))
+    assert results == [[]] * 8
+
+
+def test_load_from_eight_threads_at_once_gives_equal_robots():
+    texts = [kinengine.catalog.catalog_entry("abb_irb120").path.read_text(), mixed_chain_urdf()]
+    barrier = threading.Barrier(8)
+
+    def work(i):
+        barrier.wait()  # all eight parse and build at the same moment
+        robot = kinengine.load("abb_irb120") if i % 4 == 0 else kinengine.load_urdf_string(texts[i % 2])
+        q = np.linspace(-0.3, 0.3, robot.dof)
+        return robot.joint_names, robot.frame_names, robot.frame_pose(q), robot.jacobian(q)
+
+    with ThreadPoolExecutor(max_workers=8) as pool:
+        results = list(pool.map(work, range(8)))
+    for i, result in enumerate(results):
+        reference = results[i % 2]
+        assert result[:2] == reference[:2]
+        np.testing.assert_array_equal(result[2], reference[2])
+        np.testing.assert_array_equal(result[3], reference[3])
+    assert results[0][0] == tuple(f"joint_{i}" for i in range(1, 7))
+    assert results[1][0] == ("shoulder", "side_joint", "spin", "slide", "wrist", "finger_a_joint")
 
 
 def test_robot_methods_delegate_to_their_modules(abb):

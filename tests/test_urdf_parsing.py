@@ -168,6 +168,31 @@ def test_billion_laughs_is_refused_before_libxml2_sees_it():
     refused('<robot name="r"><link name="&undefined;"/></robot>', "Entity 'undefined' not defined")
 
 
+def test_the_reference_reads_yourdfpy_strictly_without_meshes_or_entities(tmp_path):
+    # the issue: yourdfpy recovers malformed XML, resolves external entities with lxml < 6.1 and opens
+    # mesh paths relative to the URDF; kinengine.reference parses strictly first and never loads meshes
+    from lxml import etree
+
+    from kinengine.reference import ReferenceKinematics
+    assert etree.LXML_VERSION >= (6, 1)
+    secret = tmp_path / "secret.txt"
+    secret.write_text("SECRET-CONTENT")
+    xxe = (f'<?xml version="1.0"?>\n<!DOCTYPE robot [<!ENTITY s SYSTEM "file://{secret}">]>\n'
+           '<robot name="&s;"><link name="a"/></robot>')
+    outcome = in_thread(lambda: ReferenceKinematics.from_urdf_string(xxe))
+    assert type(outcome) is URDFError and "SECRET" not in str(outcome), outcome
+    fifo = tmp_path / "mesh.stl"
+    os.mkfifo(fifo)  # opening it for reading would block forever
+    mesh = f'<visual><geometry><mesh filename="{fifo}"/></geometry></visual>'
+    relative = '<collision><geometry><mesh filename="../../mesh.stl"/></geometry></collision>'
+    text = one_joint(LIMIT + AXIS_Z).replace('<link name="tip"/>', f'<link name="tip">{mesh}{relative}</link>')
+    reference = in_thread(lambda: ReferenceKinematics.from_urdf_string(text, joint_names=("j",)))
+    assert isinstance(reference, ReferenceKinematics), reference
+    assert isinstance(in_thread(lambda: parse_urdf(text)), RobotDescription)
+    truncated = one_joint(LIMIT + AXIS_Z)[:-40]
+    assert type(in_thread(lambda: ReferenceKinematics.from_urdf_string(truncated))) is URDFError
+
+
 def test_document_size_is_bounded_before_parsing():
     big = '<robot name="r"><link name="a"/>' + " " * LIMITS.max_bytes + "</robot>"
     refused(big, f"more than Limits.max_bytes = {LIMITS.max_bytes}")
@@ -230,6 +255,25 @@ def test_movable_joints_are_counted_separately_from_fixed_ones():
     assert len(fixed.joints) == 300 and fixed.movable_joints == ()
     refused(chain_urdf(5), "6 links, more than Limits.max_links = 5", limits=Limits(max_links=5))
     refused(chain_urdf(5), "5 joints, more than Limits.max_joints = 4", limits=Limits(max_joints=4))
+
+
+def test_load_takes_raised_limits_and_refuses_anything_but_a_limits_object(tmp_path):
+    import kinengine
+    text = chain_urdf(LIMITS.max_movable_joints + 1)
+    with pytest.raises(URDFError, match="129 movable joints, more than Limits.max_movable_joints = 128; pass "
+                                        r"parse_urdf\(..., limits=Limits\(max_movable_joints=...\)\)"):
+        kinengine.load_urdf_string(text)
+    bigger = Limits(max_movable_joints=129, max_tree_depth=129)
+    assert kinengine.load_urdf_string(text, limits=bigger).dof == 129
+    path = tmp_path / "chain.urdf"
+    path.write_text(text)
+    assert kinengine.load(path, limits=bigger).dof == 129
+    with pytest.raises(URDFError, match="chain.urdf.*129 movable joints"):
+        kinengine.load(path)
+    with pytest.raises(URDFError, match="more than Limits.max_links = 5"):
+        kinengine.load("abb_irb120", limits=Limits(max_links=5))
+    with pytest.raises(URDFError, match="limits= takes a kinengine.urdf.Limits, got dict"):
+        kinengine.load_urdf_string(chain_urdf(2), limits={"max_links": 10})
 
 
 # -- joint types and structure ------------------------------------------------------------------------

@@ -2,8 +2,9 @@
 
 They bound what a hostile or broken file can cost: the XML limits are checked
 on the raw document, the model limits on the element counts, both before any
-number is read or any tree is walked. Pass your own :class:`Limits` to
-:func:`kinengine.urdf.parse_urdf` (``limits=``) to load a bigger model.
+number is read or any tree is walked. Pass your own :class:`Limits` as ``limits=`` to
+:func:`kinengine.load`, :func:`kinengine.load_urdf_string` or :func:`kinengine.urdf.parse_urdf`
+to load a bigger model.
 """
 
 from __future__ import annotations

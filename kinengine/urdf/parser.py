@@ -32,6 +32,8 @@ def parse_urdf(document: str | bytes, source: str = "<string>", *,
     Each non-unit joint axis is normalized with a ``UserWarning`` (also kept in
     ``RobotDescription.warnings``), as is each ``<mimic>`` ignored on a fixed joint.
     """
+    if not isinstance(limits, Limits):
+        raise URDFError(f"limits= takes a kinengine.urdf.Limits, got {type(limits).__name__}", source=source)
     root = parse_xml(document, source=source, limits=limits)
     if root.tag != "robot":
         raise URDFError(f"the root element is <{root.tag}>, expected <robot>", source=source,
