@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
+import re
 import sys
 
 import numpy as np
 
-from . import __version__, bench, verify
+from . import __version__, bench, show, verify
 from .catalog import available_robots
 from .errors import KinematicsError
 from .loading import load
@@ -45,7 +46,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 def _cmd_pose(args: argparse.Namespace) -> int:
     robot = load(args.robot)
-    q = robot.neutral() if args.q is None else robot.check_configuration(args.q, check_limits=False)
+    q = robot.neutral() if args.q is None else robot.check_configuration(args.q, check_limits=False, batch=False)
     frame = args.frame or robot.end_effector
     np.set_printoptions(precision=5, suppress=True, linewidth=120)
     print(f"robot {robot.name} ({robot.dof} dof), frame {frame!r}")
@@ -89,11 +90,27 @@ def build_parser() -> argparse.ArgumentParser:
 
     verify.add_parser(sub)
     bench.add_parser(sub)
+    show.add_parser(sub)
     return parser
 
 
+_VALUE_OPTIONS = ("--q", "--view")
+_NEGATIVE_LIST = re.compile(r"-[0-9.]")
+
+
+def join_negative_values(argv: Sequence[str]) -> list[str]:
+    """['--q', '-0.5,0.2'] -> ['--q=-0.5,0.2']: argparse would read a leading minus as an option."""
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] in _VALUE_OPTIONS and _NEGATIVE_LIST.match(arg):
+            out[-1] = f"{out[-1]}={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    args = build_parser().parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
     try:
         return int(args.handler(args))
     except KinematicsError as exc:

@@ -195,7 +195,7 @@ def test_accepted_inputs_give_the_float64_answer_and_are_left_unchanged(abb, ent
     np.testing.assert_array_equal(result, expected)
     assert result.dtype == np.float64
     assert _snapshot(x) == before
-    if entry.id != "check_configuration" and isinstance(x, np.ndarray):  # see test_check_configuration_...
+    if isinstance(x, np.ndarray):
         assert not np.shares_memory(result, x)
 
 
@@ -318,11 +318,13 @@ def test_check_configuration_checks_limits_by_default(abb):
         abb.check_configuration(outside)
 
 
-def test_check_configuration_returns_a_contiguous_float64_array_equal_to_q(abb):
-    # documented contract: an input that already is a C-contiguous float64 array is returned as is
-    # (no copy on the hot path); anything else comes back as a new contiguous float64 array
+def test_check_configuration_returns_a_fresh_contiguous_float64_copy(abb):
     q = Q.copy()
-    assert abb.check_configuration(q) is q
+    out = abb.check_configuration(q)
+    np.testing.assert_array_equal(out, q)
+    assert not np.shares_memory(out, q)
+    with pytest.raises(kinengine.ConfigurationError, match="one configuration"):
+        abb.check_configuration(np.stack([Q, Q]), batch=False)
     for x in _accepted(Q).values():
         out = abb.check_configuration(x, check_limits=False)
         assert out.dtype == np.float64 and out.flags.c_contiguous and out.shape == (6,)
@@ -360,3 +362,10 @@ def test_cli_pose_integers_give_the_float_answer(capsys):
     assert cli_main(["pose", "abb_irb120", "--q", "1.0, 0.0, -1.0, 1.0, 0.0, 1.0", "--rotation", "quaternion"]) == 0
     assert capsys.readouterr().out == with_ints
     assert "q [rad | m] = [ 1.  0. -1.  1.  0.  1.]" in with_ints
+
+
+@pytest.mark.parametrize("argv", [["--q", "-0.5,0.2,0,0,0.3,0"], ["--q=-0.5,0.2,0,0,0.3,0"], ["--q", "-.5,.2,0,0,.3,0"]])
+def test_cli_q_may_start_with_a_minus_sign(capsys, argv):
+    assert cli_main(["pose", "abb_irb120", *argv]) == 0
+    out = capsys.readouterr().out
+    assert "q [rad | m] = [-0.5  0.2  0.   0.   0.3  0. ]" in out

@@ -1,0 +1,78 @@
+"""``kinengine show``: a PNG of the robot at q (skeleton, joint axes, frames, velocity ellipsoid).
+
+    kinengine show ROBOT [--q v1,v2,...] [--frames tool0,...] [--ellipsoid tool0] [-o robot.png]
+                   [--view ELEV,AZIM] [--dpi N]
+
+Drawn by :func:`kinengine.plotting.plot_robot` in the root link frame [m], headless (Agg backend).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+import re
+
+from .errors import KinematicsError
+from .loading import load
+from .plotting import plot_robot
+
+
+def _names(text: str) -> list[str]:
+    """'tool0, flange' -> ['tool0', 'flange'] (argparse type for --frames)."""
+    return [name for name in text.replace(" ", "").split(",") if name]
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register ``show`` on the kinengine command line."""
+    from .cli import parse_vector  # here: kinengine.cli imports this module
+
+    p = subparsers.add_parser("show", help="draw the robot at q into a PNG",
+                              description=__doc__.splitlines()[0])
+    p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf file")
+    p.add_argument("--q", type=parse_vector, default=None,
+                   help="comma-separated joint values [rad | m] (default: zero); "
+                   "write --q=-0.5,... when the first is negative")
+    p.add_argument("--frames", type=_names, default=None,
+                   help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)")
+    p.add_argument("--ellipsoid", default=None, metavar="FRAME",
+                   help="draw the velocity manipulability ellipsoid of FRAME")
+    p.add_argument("-o", "--output", type=Path, default=None, metavar="PATH",
+                   help="image to write, format from the extension (default: <robot>.png in the current "
+                   "directory)")
+    p.add_argument("--view", type=parse_vector, default=None, metavar="ELEV,AZIM",
+                   help="camera elevation and azimuth [deg] (default: matplotlib's 30,-60)")
+    p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG (default 100)")
+    p.set_defaults(handler=handle)
+    return p
+
+
+def handle(args: argparse.Namespace) -> int:
+    """Write the PNG and print its path."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if args.view is not None and len(args.view) != 2:
+        raise KinematicsError(f"--view takes two angles ELEV,AZIM in degrees, e.g. --view 20,-75; "
+                              f"got {args.view}")
+    if args.dpi <= 0:
+        raise KinematicsError(f"--dpi must be a positive number of dots per inch, e.g. --dpi 100; "
+                              f"got {args.dpi}")
+    robot = load(args.robot)
+    frames = [robot.end_effector] if args.frames is None else args.frames
+    output = args.output or Path(re.sub(r"[^\w.-]", "_", robot.name) + ".png")
+    ax = plot_robot(robot, args.q, frames=frames, ellipsoid=args.ellipsoid)
+    if args.view is not None:
+        ax.view_init(*args.view)
+    try:
+        ax.figure.savefig(output, dpi=args.dpi)
+    except (OSError, ValueError) as exc:
+        raise KinematicsError(f"cannot write {str(output)!r}: {exc}; "
+                              "choose another -o PATH (e.g. robot.png)") from None
+    finally:
+        plt.close(ax.figure)
+    print(output)
+    return 0
+
+
+__all__ = ["add_parser", "handle"]
