@@ -5,17 +5,24 @@ and angular velocity in I) and E_e = blockdiag(E_P(χ_P), E_R(χ_R)) maps that t
 A :class:`PoseMap` binds one position and one rotation parameterization (either may be
 absent) and, optionally, a selection of rows by label (the operational-space coordinates of
 seed 2.8.2). It is resolved once per (position, rotation, rows) and cached.
+
+The formulas are the parameterizations' own, written once over ``xp`` (see
+:mod:`kinengine.parameterizations.base`): one configuration evaluates them on Python floats
+(:func:`analytic_at`, :meth:`PoseMap.jacobian_single`), a batch on numpy arrays over a chunk of
+configurations (:meth:`PoseMap.fill_columns`, called by :func:`kinengine.batch.analytic_jacobian`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from functools import lru_cache
 import math
 import struct
+import warnings
 
 import numpy as np
+import pinocchio as pin
 
 from .errors import ParameterizationError, RepresentationSingularityError
 from .parameterizations import (
@@ -39,10 +46,19 @@ class PoseMap:
     rotation: object | None
     labels: tuple[str, ...]          # labels of the selected rows
     rows: tuple[int, ...] | None     # indices into the full (χ_P, χ_R) stack; None: all rows
+    layout: _Layout = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "layout", _Layout(self.position, self.rotation))
 
     @property
     def size(self) -> int:
         return len(self.labels)
+
+    @property
+    def parts(self) -> tuple[object, ...]:
+        """The parameterizations in χ's order (position first), without the absent one."""
+        return tuple(p for p in (self.position, self.rotation) if p is not None)
 
     def parameters(self, T: np.ndarray) -> np.ndarray:
         """χ from poses T_IF, (4, 4) -> (m,) or (N, 4, 4) -> (N, m)."""
@@ -54,115 +70,171 @@ class PoseMap:
         chi = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
         return chi if self.rows is None else chi[..., self.rows]
 
-    def jacobian_single(self, C: list[list[float]], p: list[float], J: np.ndarray, threshold: float) -> np.ndarray:
-        """The single-sample fast path of :meth:`jacobian`: C_IF and p as Python floats.
-
-        Scalar math builds E = blockdiag(E_P, E_R) as one (m, 6) array; J_A = E·J_e0 is one product.
-        """
-        entries: tuple[float, ...] = ()
-        if self.position is not None:
-            P = self.position
-            if P.name == "cartesian":
-                entries = _IDENTITY_ROWS
-            else:
-                chi = P._from_position(math, *p)
-                distance = P._distance(math, *chi)
-                if distance < threshold:
-                    raise _singularity_error(P, float(distance), threshold, _pose(C, p))
-                entries = _rows_with_zeros(P._E(math, *chi), left=True)
-        if self.rotation is not None:
-            R = self.rotation
-            (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
-            chi = R._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)
-            distance = R._distance(math, *chi)
-            if distance < threshold:
-                raise _singularity_error(R, float(distance), threshold, _pose(C, p))
-            entries += _rows_with_zeros(R._E(math, *chi), left=False)
-        E = np.ndarray((len(entries) // 6, 6), _F64, _packer(len(entries)).pack(*entries))
-        JA = E.dot(J)
-        return JA if self.rows is None else JA[self.rows, :]
-
     def jacobian(self, T: np.ndarray, J: np.ndarray, threshold: float) -> np.ndarray:
-        """J_A = E(χ) · J_e0 for J_e0 in "local_world_aligned", (6, dof) -> (m, dof), batched too.
+        """J_A = E(χ) · J_e0 for one pose T_IF (4, 4) and J_e0 (6, dof) in "local_world_aligned" -> (m, dof).
 
         Raises RepresentationSingularityError when χ is within ``threshold`` of its singular set.
+        Batches: :func:`kinengine.batch.analytic_jacobian` (with :meth:`fill_columns`).
         """
-        out = []
-        if self.position is not None:
-            chi_p = self.position.from_position(T[..., :3, 3])
-            self._check(self.position, chi_p, threshold, T)
-            out.append(self.position.E(chi_p) @ J[..., :3, :])
-        if self.rotation is not None:
-            chi_r = self.rotation.from_rotation(T[..., :3, :3], warn=False)  # we raise instead
-            self._check(self.rotation, chi_r, threshold, T)
-            out.append(self.rotation.E(chi_r) @ J[..., 3:, :])
-        JA = out[0] if len(out) == 1 else np.concatenate(out, axis=-2)
-        return JA if self.rows is None else JA[..., self.rows, :]
+        (c0, c1, c2, px), (c3, c4, c5, py), (c6, c7, c8, pz), _ = T.tolist()
+        return self.jacobian_single(((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J, threshold)
 
-    @staticmethod
-    def _check(param: object, chi: np.ndarray, threshold: float, T: np.ndarray) -> None:
-        distance = np.min(param.singularity_distance(chi))
-        if distance < threshold:
-            raise _singularity_error(param, float(distance), threshold, T)
+    def jacobian_single(self, C: Sequence[Sequence[float]], p: Sequence[float], J: np.ndarray,
+                        threshold: float, row: int | None = None) -> np.ndarray:
+        """J_A for C_IF and p [m] given as Python floats (the fast path of one configuration).
+
+        Scalar math gives E's entries, packed straight into an (m, 6) array (zeros and the identity
+        of Cartesian rows come from a template); J_A = E·J_e0 is one product. ``row`` (a batch row)
+        only goes into the error message.
+        """
+        position_formula, position, rotation, template, pack_into, offset, shape = self.layout.fast
+        entries: tuple[float, ...] = ()
+        param = position
+        try:
+            if position_formula:
+                chi = param._from_position(math, *p)
+                distance = param._distance(math, *chi)
+                if distance < threshold:
+                    raise _singularity_error(param, distance, threshold, _pose(C, p), row)
+                entries = param._E(math, *chi)
+            param = rotation
+            if param is not None:
+                (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
+                chi = param._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)
+                distance = param._distance(math, *chi)
+                if distance < threshold:
+                    raise _singularity_error(param, distance, threshold, _pose(C, p), row)
+                entries += param._E(math, *chi)
+        except ZeroDivisionError:  # exactly on the singular set with threshold 0
+            raise _singularity_error(param, 0.0, threshold, _pose(C, p), row) from None
+        buffer = bytearray(template)
+        pack_into(buffer, offset, *entries)
+        JA = np.ndarray(shape, _F64, buffer).dot(J)
+        return JA if self.rows is None else JA[self.rows, :]
+
+    def fill_columns(self, p: Sequence[np.ndarray], C: Sequence[np.ndarray], J: np.ndarray,
+                     out: np.ndarray) -> list[np.ndarray | float]:
+        """The batch kernel, on n configurations laid out sample-last (contiguous over the batch).
+
+        p: 3 arrays (n,) [m]; C: the 9 entries of C_IF row-major, arrays (n,); J: J_e0 (6, dof, n) in
+        "local_world_aligned"; out: (m, dof, n) receives J_A. The formulas are the parameterizations'
+        own, evaluated with numpy. Returns each parameterization's distance to its singular set,
+        (n,) or a float, in χ's order; the caller decides (see :meth:`raise_if_singular`).
+        """
+        E_rows, distances = [], []
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for param, block in zip(self.parts, (J[:3], J[3:]) if self.position is not None else (J[3:],)):
+                if param.kind == "position":
+                    chi = param._from_position(np, *p)
+                else:
+                    chi = param._from_rotation(np, False, *C)
+                distances.append(param._distance(np, *chi))
+                E = param._E(np, *chi)
+                E_rows += [(E[k:k + 3], block) for k in range(0, len(E), 3)]
+            scratch = np.empty(out.shape[1:])
+            for target, source in enumerate(range(len(E_rows)) if self.rows is None else self.rows):
+                _combine(*E_rows[source], out[target], scratch)
+        return distances
+
+    def raise_if_singular(self, distances: np.ndarray, threshold: float,
+                          pose: Callable[[int], np.ndarray]) -> None:
+        """RepresentationSingularityError for the first batch row closer than ``threshold`` to a singular set.
+
+        distances: (N, len(parts)) from :meth:`fill_columns`; pose(row) gives that row's T_IF (4, 4).
+        The error is the one a single call at that row raises (position checked before rotation).
+        """
+        below = ~(distances >= threshold) | (distances == 0.0)  # NaN and exact zero: E had no finite value
+        if below.any():
+            row = int(np.argmax(below.any(axis=1)))
+            part = int(np.argmax(below[row]))
+            raise _singularity_error(self.parts[part], float(distances[row, part]), threshold, pose(row), row)
 
 
-def _singularity_error(param: object, distance: float, threshold: float,
-                       T: np.ndarray) -> RepresentationSingularityError:
-    """The error, with the parameterizations that are regular at the same pose."""
-    if T.ndim == 3:
-        sample = int(np.argmin(param.singularity_distance(
-            param.from_position(T[:, :3, 3]) if param.kind == "position" else _quiet_rotation(param, T))))
-        T = T[sample]
-        detail_prefix = f"sample {sample}: "
-    else:
-        detail_prefix = ""
-    if param.kind == "position":
-        family, value = POSITION_PARAMETERIZATIONS, T[:3, 3]
-        convert = "from_position"
-    else:
-        family, value = ROTATION_PARAMETERIZATIONS, T[:3, :3]
-        convert = "from_rotation"
-    regular = []
-    for name, other in family.items():
-        chi = other.from_position(value) if convert == "from_position" else other.from_rotation(value, warn=False)
-        if float(np.min(other.singularity_distance(chi))) > 0.1:
-            regular.append(name)
-    preferred = [n for n in ("quaternion", "rotation_matrix", "euler_zyz", "euler_xyz", "cartesian") if n in regular]
+class _Layout:
+    """Where E's computed entries go in the (m, 6) matrix E = blockdiag(E_P, E_R) of one PoseMap.
+
+    A template holds the constant entries (zeros, the identity of Cartesian rows); one struct writes
+    the computed ones: E_P entries in columns 0-2 of the position rows, E_R in columns 3-5.
+    """
+
+    def __init__(self, position: object | None, rotation: object | None) -> None:
+        self.position_formula = position is not None and position.name != "cartesian"
+        rows = (position.size if position is not None else 0) + (rotation.size if rotation is not None else 0)
+        self.shape = (rows, 6)
+        template = np.zeros(self.shape)
+        if position is not None and not self.position_formula:
+            template[:3, :3] = np.eye(3)
+        self.template = template.tobytes()
+        self.offset = 0 if self.position_formula else 48 * (rows - (rotation.size if rotation else 0))
+        self.pack_into = struct.Struct("<" + "3d24x" * (position.size if self.position_formula else 0)
+                                       + "24x3d" * (rotation.size if rotation is not None else 0)).pack_into
+        self.fast = (self.position_formula, position, rotation, self.template, self.pack_into, self.offset,
+                     self.shape)  # what jacobian_single reads, in one attribute lookup
+
+
+def _combine(entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.ndarray,
+             scratch: np.ndarray) -> None:
+    """out = Σ_k entries[k] · block[k]: a row of E (entries (n,) or constants) times J's rows (3, dof, n)."""
+    terms = [(e, b) for e, b in zip(entries, block) if not (isinstance(e, float) and e == 0.0)]
+    if not terms:
+        out[...] = 0.0
+        return
+    for k, (e, b) in enumerate(terms):
+        if k == 0:
+            np.multiply(b, e, out=out)
+        else:
+            np.multiply(b, e, out=scratch)
+            np.add(out, scratch, out=out)
+
+
+def _singularity_error(param: object, distance: float, threshold: float, T: np.ndarray,
+                       row: int | None = None) -> RepresentationSingularityError:
+    """The error at pose T (4, 4), with the parameterizations that are regular at the same pose."""
+    with warnings.catch_warnings():  # "on the z axis" from the other position parameterizations
+        warnings.simplefilter("ignore", UserWarning)
+        if param.kind == "position":
+            regular = [name for name, other in POSITION_PARAMETERIZATIONS.items()
+                       if float(other.singularity_distance(other.from_position(T[:3, 3]))) > 0.1]
+        else:
+            regular = [name for name, other in ROTATION_PARAMETERIZATIONS.items()
+                       if float(other.singularity_distance(other.from_rotation(T[:3, :3], warn=False))) > 0.1]
+    preferred = [n for n in ("quaternion", "rotation_matrix", "euler_zyz", "euler_xyz", "cartesian")
+                 if n in regular]
     alternatives = preferred + [n for n in regular if n not in preferred]
-    return RepresentationSingularityError(param.name, distance, threshold, alternatives[:4],
-                                          detail_prefix + param.singular_set)
+    where = "" if row is None else f"row {row} of the batch: "
+    return RepresentationSingularityError(param.name, float(distance), threshold, alternatives[:4],
+                                          where + param.singular_set)
 
 
-_PACKERS: dict[int, struct.Struct] = {}
 _F64 = np.dtype(np.float64)
-_IDENTITY_ROWS = (1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
-_ZEROS = (0.0, 0.0, 0.0)
 
 
-def _packer(n: int) -> struct.Struct:
-    """struct for n doubles: packs Python floats into bytes numpy can wrap without a copy."""
-    packer = _PACKERS.get(n)
-    if packer is None:
-        packer = _PACKERS[n] = struct.Struct(f"{n}d")
-    return packer
-
-
-def _rows_with_zeros(E: Sequence[float], *, left: bool) -> tuple[float, ...]:
-    """Row-major (m, 3) entries widened to (m, 6): [E, 0] (position) or [0, E] (rotation)."""
-    out: tuple[float, ...] = ()
-    for i in range(0, len(E), 3):
-        out += (E[i], E[i + 1], E[i + 2]) + _ZEROS if left else _ZEROS + (E[i], E[i + 1], E[i + 2])
-    return out
-
-
-def _quiet_rotation(param: object, T: np.ndarray) -> np.ndarray:
-    return param.from_rotation(T[..., :3, :3], warn=False)
-
-
-def _pose(C: list[list[float]], p: list[float]) -> np.ndarray:
+def _pose(C: Sequence[Sequence[float]], p: Sequence[float]) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = C, p
     return T
+
+
+def frame_views(data, fid: int) -> tuple[np.ndarray, np.ndarray]:
+    """(C_IF (3, 3), p (3,)) as live views of ``data.oMf[fid]``: every placement update shows in them.
+
+    Valid as long as ``data`` lives; reading them costs a third of building ``.homogeneous``.
+    """
+    placement = data.oMf[fid]
+    return placement.rotation, placement.translation
+
+
+def analytic_at(model, data, qp: np.ndarray, fid: int, views: tuple[np.ndarray, np.ndarray], pmap: PoseMap,
+                threshold: float, row: int | None = None) -> np.ndarray:
+    """J_A (m, dof) at one Pinocchio configuration qp: J_e0 and T_IF from Pinocchio, E by scalar math.
+
+    ``views``: :func:`frame_views` of the same data and frame.
+    """
+    # in LOCAL_WORLD_ALIGNED, computeFrameJacobian also places the frame: data.oMf[fid], which the views show
+    J = pin.computeFrameJacobian(model, data, qp, fid, pin.LOCAL_WORLD_ALIGNED)
+    if J.ndim == 1:  # eigenpy returns a (6, 1) matrix as (6,)
+        J = J.reshape(6, 1)
+    return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, row)
 
 
 @lru_cache(maxsize=256)

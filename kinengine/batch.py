@@ -30,14 +30,22 @@ import weakref
 import numpy as np
 import pinocchio as pin
 
+from .analytic import analytic_at, frame_views
+
 CHUNK = 8192
 """Most configurations per numpy pass (the temporaries stay in the core's cache)."""
 MIN_PER_WORKER = 4096
 """Batches are split over several threads only when each gets at least this many rows."""
 WORKERS = max(1, min(4, os.cpu_count() or 1))
-CALLS_PER_CONFIGURATION = 2
-"""One numpy call costs about as much as this many configurations in Pinocchio's loop: a chain
-that takes c numpy calls per chunk loops over Pinocchio for batches smaller than c / this."""
+CALLS_PER_CONFIGURATION = 3
+"""One configuration in Pinocchio's loop costs about as much as this many numpy calls over a chunk
+(measured on the ABB IRB 120, UR5 and Panda: 1.75 µs against 0.55 µs): a chain that takes c numpy
+calls per chunk loops over Pinocchio for batches smaller than c / this."""
+MIN_CALLS = 12
+"""The fewest numpy calls of any chain (a pose of a frame fixed to the root)."""
+ANALYTIC_CALLS = 100
+"""numpy calls for χ, E and E·J_e0 over a chunk (about; they vary with the parameterization). A row
+of the analytic single-call loop costs about twice a row of Pinocchio's pose and Jacobian loop."""
 
 Terms = tuple[tuple[tuple[int, float], ...], ...]
 
@@ -146,8 +154,11 @@ def _cross(a, b, out: np.ndarray) -> None:
 
 
 def _evaluate(chain: _Chain, qT: np.ndarray, pose: np.ndarray | None, jac: np.ndarray | None,
-              reference: pin.ReferenceFrame | None) -> None:
-    """Fill pose (n, 4, 4) and/or jac (n, 6, dof) for the chunk qT (dof, n)."""
+              reference: pin.ReferenceFrame | None, analytic: tuple | None = None) -> None:
+    """Fill pose (n, 4, 4), jac (n, 6, dof) and/or the analytic Jacobian for the chunk qT (dof, n).
+
+    analytic: (pmap, out (n, m, dof), distances (n, parts)), with reference "local_world_aligned".
+    """
     n = qT.shape[1]
     eye = np.eye(3)
     S = [eye[:, k:k + 1] for k in range(3)]  # (3, 1) columns broadcast against (3, n)
@@ -172,7 +183,7 @@ def _evaluate(chain: _Chain, qT: np.ndarray, pose: np.ndarray | None, jac: np.nd
             pose[:, :3, k] = R_f[k].T
         pose[:, :3, 3] = p_f.T
         pose[:, 3, :] = (0.0, 0.0, 0.0, 1.0)
-    if jac is None:
+    if jac is None and analytic is None:
         return
     buf = np.zeros((6, chain.dof, n))
     col = np.empty((6, n))
@@ -198,7 +209,17 @@ def _evaluate(chain: _Chain, qT: np.ndarray, pose: np.ndarray | None, jac: np.nd
             for half in (0, 3):
                 block = world[half:half + 3]
                 buf[half + r] = R_f[r][0] * block[0] + R_f[r][1] * block[1] + R_f[r][2] * block[2]
-    jac[...] = buf.transpose(2, 0, 1)
+    if jac is not None:
+        jac[...] = buf.transpose(2, 0, 1)
+    if analytic is not None:
+        pmap, out, distances = analytic
+        JA = np.empty((pmap.size, chain.dof, n))
+        # row-major entries of C_IF and p, as (n,) views (a column the chain never turns is (3, 1))
+        C = [np.broadcast_to(R_f[j][i], (n,)) for i in range(3) for j in range(3)]
+        p = [np.broadcast_to(p_f[i], (n,)) for i in range(3)]
+        for k, distance in enumerate(pmap.fill_columns(p, C, buf, JA)):
+            distances[:, k] = distance
+        out[...] = JA.transpose(2, 0, 1)
 
 
 # -- compilation cache, thread pool, Pinocchio loop -----------------------------------------------
@@ -208,8 +229,10 @@ _POOL: ThreadPoolExecutor | None = None
 
 
 def _chain(robot, fid: int) -> _Chain:
-    with _LOCK:
-        chains = _CHAINS.setdefault(robot, {})
+    chains = _CHAINS.get(robot)
+    if chains is None:
+        with _LOCK:
+            chains = _CHAINS.setdefault(robot, {})
     chain = chains.get(fid)
     if chain is None:
         chain = chains[fid] = _compile(robot, fid)
@@ -224,7 +247,7 @@ def _pool() -> ThreadPoolExecutor:
         return _POOL
 
 
-def _run(chain: _Chain, Q: np.ndarray, pose, jac, reference) -> None:
+def _run(chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None) -> None:
     """Evaluate Q in chunks of at most CHUNK rows, split evenly over up to WORKERS threads."""
     workers = max(1, min(WORKERS, len(Q) // MIN_PER_WORKER))
     pieces = workers * -(-len(Q) // (workers * CHUNK))
@@ -233,7 +256,8 @@ def _run(chain: _Chain, Q: np.ndarray, pose, jac, reference) -> None:
     def work(part: list[tuple[int, int]]) -> None:
         for a, b in part:
             _evaluate(chain, np.ascontiguousarray(Q[a:b].T), None if pose is None else pose[a:b],
-                      None if jac is None else jac[a:b], reference)
+                      None if jac is None else jac[a:b], reference,
+                      None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]))
 
     per = pieces // workers
     futures = [_pool().submit(work, chunks[i:i + per]) for i in range(per, pieces, per)]
@@ -268,14 +292,56 @@ def evaluate(robot, Q: np.ndarray, fid: int, reference: pin.ReferenceFrame | Non
     The entry point for :class:`~kinengine.robot.Robot`, which has checked q and resolved the
     frame index and the reference (a pin.ReferenceFrame; unused when ``jacobian`` is False).
     """
-    T = np.empty((len(Q), 4, 4)) if pose else None
-    J = np.empty((len(Q), 6, robot.dof)) if jacobian else None
-    chain = _chain(robot, fid)
-    if len(Q) * CALLS_PER_CONFIGURATION < chain.pose_calls + (chain.jacobian_calls if jacobian else 0):
+    n = len(Q)
+    T = np.empty((n, 4, 4)) if pose else None
+    J = np.empty((n, 6, robot.dof)) if jacobian else None
+    chain = _numpy_chain(robot, fid, n, jacobian)
+    if chain is None:
         _pinocchio_loop(robot, Q, fid, T, J, reference)
     else:
         _run(chain, Q, T, J, reference)
     return T, J
+
+
+def _numpy_chain(robot, fid: int, n: int, jacobian: bool, extra: int = 0, row_cost: int = 1) -> _Chain | None:
+    """The compiled chain if numpy over the batch is the faster path, else None (loop row by row).
+
+    A loop row costs ``row_cost`` × CALLS_PER_CONFIGURATION numpy calls; the numpy path costs the
+    chain's calls plus ``extra``.
+    """
+    budget = row_cost * n * CALLS_PER_CONFIGURATION
+    if budget < MIN_CALLS + extra:  # the chain is not even looked up
+        return None
+    chain = _chain(robot, fid)
+    return chain if budget >= chain.pose_calls + (chain.jacobian_calls if jacobian else 0) + extra else None
+
+
+def analytic_jacobian(robot, Q: np.ndarray, fid: int, pmap, threshold: float) -> np.ndarray:
+    """J_A = E(χ)·J_e0 for every row of an already checked Q (N, dof) -> (N, m, dof).
+
+    ``pmap`` is the :class:`~kinengine.analytic.PoseMap`. Small batches take the single-call path
+    row by row; larger ones evaluate χ, E and E·J_e0 with numpy over each chunk, next to the chain.
+    RepresentationSingularityError names the first row within ``threshold`` of a singular set.
+    """
+    n = len(Q)
+    out = np.empty((n, pmap.size, robot.dof))
+    # (Pinocchio 4.1 crashes on a Jacobian with nv = 0: such robots take the numpy chain)
+    chain = _numpy_chain(robot, fid, n, True, ANALYTIC_CALLS, row_cost=2) if robot.dof else _chain(robot, fid)
+    if chain is None:
+        return _analytic_loop(robot, Q, fid, pmap, threshold, out)
+    distances = np.empty((n, len(pmap.parts)))
+    _run(chain, Q, None, None, pin.LOCAL_WORLD_ALIGNED, (pmap, out, distances))
+    pmap.raise_if_singular(distances, threshold, lambda row: evaluate(robot, Q[row:row + 1], fid, None,
+                                                                      jacobian=False)[0][0])
+    return out
+
+
+def _analytic_loop(robot, Q: np.ndarray, fid: int, pmap, threshold: float, out: np.ndarray) -> np.ndarray:
+    model, data = robot._model, robot._data()
+    views = frame_views(data, fid)
+    for i, qi in enumerate(robot._joints.to_pinocchio(Q)):
+        out[i] = analytic_at(model, data, qi, fid, views, pmap, threshold, i)
+    return out
 
 
 def _batch(robot, Q: object, frame: str | None, reference: object, pose: bool, jacobian: bool):
@@ -306,5 +372,5 @@ def batch_pose_and_jacobian(robot, Q: object, frame: str | None = None,
     return _batch(robot, Q, frame, reference, True, True)
 
 
-__all__ = ["CALLS_PER_CONFIGURATION", "CHUNK", "batch_frame_pose", "batch_jacobian",
+__all__ = ["CALLS_PER_CONFIGURATION", "CHUNK", "analytic_jacobian", "batch_frame_pose", "batch_jacobian",
            "batch_pose_and_jacobian", "evaluate"]

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .batch import batch_frame_pose, batch_jacobian, batch_pose_and_jacobian
+from .batch import batch_pose_and_jacobian
 from .errors import RepresentationSingularityError
 
 REFERENCES = ("local_world_aligned", "local", "world")
@@ -117,7 +117,8 @@ def latency_cases(robot, frame: str, rotations: list[str]) -> list[Case]:
             "latency", f"analytic_jacobian[{rot}]", 1,
             None if analytic is None else lambda rot=rot: analytic(q, frame, rotation=rot),
             lambda rot=rot: floor.analytic(qp, rot),
-            "" if exact else "floor: geometric Jacobian only (Pinocchio has no E(χ) for it)", compare=exact))
+            "" if exact else "floor: geometric Jacobian only (Pinocchio has no E(χ) for it)", compare=exact,
+            q=q))
     cases += _task_cases(robot, frame, q, qp, floor)
     return cases + [_ik_case(robot, frame, floor)]
 
@@ -136,9 +137,16 @@ def _task_cases(robot, frame: str, q: np.ndarray, qp: np.ndarray, floor: _Floor)
         return [Case("latency", name, 1, None, fn, "robot.task() not available yet")
                 for name, fn in (("task.update(q)", lambda: floor.analytic(qp, "euler_zyx")),
                                  ("task.update(q, qdot)", floor_with_velocity))]
+    def pose_and_jacobian():
+        J = floor.jacobian(qp, pin.LOCAL_WORLD_ALIGNED)
+        return pin.updateFramePlacement(model, data, fid).homogeneous, J
+
     task = robot.task(frame, position="cartesian", rotation="euler_zyx")
+    zyz = robot.task(frame, position="cartesian", rotation="euler_zyz")
     return [Case("latency", "task.update(q)", 1, lambda: task.update(q),
                  lambda: floor.analytic(qp, "euler_zyx"), "euler_zyx; floor: J, pose and rpy conversion"),
+            Case("latency", "task.update(q)[euler_zyz]", 1, lambda: zyz.update(q), pose_and_jacobian,
+                 "floor: J and pose only (Pinocchio has no ZYZ angles)"),
             Case("latency", "task.update(q, qdot)", 1, lambda: task.update(q, qdot), floor_with_velocity,
                  "euler_zyx; floor: J, J̇ (TimeVariation), rpy conversion, no Ė")]
 
@@ -187,10 +195,10 @@ def throughput_cases(robot, frame: str, sizes: list[int], seed: int = 3) -> list
                                                       (6, robot.dof), QP)
 
         cases += [
-            Case("throughput", "frame_pose", n, lambda Q=Q: batch_frame_pose(robot, Q, frame),
+            Case("throughput", "frame_pose", n, lambda Q=Q: robot.frame_pose(Q, frame),
                  lambda loop=loop: loop(floor.pose, (4, 4)), compare=True, q=Q),
             Case("throughput", "jacobian[local_world_aligned]", n,
-                 lambda Q=Q: batch_jacobian(robot, Q, frame),
+                 lambda Q=Q: robot.jacobian(Q, frame),
                  lambda loop=loop: loop(lambda qp: floor.jacobian(qp, pin.LOCAL_WORLD_ALIGNED),
                                         (6, robot.dof)),
                  compare=True, q=Q),
@@ -203,5 +211,6 @@ def throughput_cases(robot, frame: str, sizes: list[int], seed: int = 3) -> list
                     Q, frame, position="cartesian", rotation=rot, singularity_threshold=0.0),
                 lambda loop=loop, rot=rot: loop(lambda qp: floor.analytic(qp, rot),
                                                 (7 if rot == "quaternion" else 6, robot.dof)),
-                "" if analytic is not None else "robot.analytic_jacobian() not available yet", compare=True))
+                "" if analytic is not None else "robot.analytic_jacobian() not available yet", compare=True,
+                q=Q))
     return cases

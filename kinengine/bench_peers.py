@@ -2,9 +2,14 @@
 
 * ``roboticstoolbox`` (roboticstoolbox-python): ``Robot.URDF(file)``, then the compiled ETS of the
   path to the frame: ``ets.fkine(q)``, ``ets.jacob0(q)`` (origin velocity and ω in the base frame,
-  i.e. "local_world_aligned"); ``ets.fkine(Q)`` for a batch, ``jacob0`` in a loop.
+  i.e. "local_world_aligned"); ``ets.fkine(Q)`` for a batch, ``jacob0`` in a loop;
+  ``ets.jacob0_analytical(q, representation)`` for the analytic Jacobians it has: "eul" is
+  euler_zyz, "exp" rotation_vector, "rpy/zyx" and "rpy/xyz" are euler_zyx and euler_xyz with the
+  three angle rows in reverse order (roll first).
 * ``pytorch_kinematics`` (CPU torch, float64): ``build_serial_chain_from_urdf(text, frame)``;
   ``forward_kinematics(th).get_matrix()`` and ``jacobian(th)`` (base frame), natively batched.
+  (0.10.0 parses every ``<origin rpy>`` as float32, whatever the chain's dtype: on the ABB IRB 120
+  its poses differ from kinengine's by 6e-9 m, so at the default ``--peer-atol`` it is reported, not timed.)
 * ``ikpy``: ``Chain.from_urdf_file`` along the path to the frame; ``forward_kinematics`` only
   (no Jacobian), one configuration per call.
 
@@ -20,13 +25,21 @@ import contextlib
 import importlib.metadata
 import io
 import tempfile
+import warnings
 
 import numpy as np
 
 PEERS = ("roboticstoolbox", "pytorch_kinematics", "ikpy")
 _DISTRIBUTIONS = {"roboticstoolbox": "roboticstoolbox-python", "pytorch_kinematics": "pytorch-kinematics",
                   "ikpy": "ikpy"}
+RUNTIMES = {"pytorch_kinematics": ("torch",), "roboticstoolbox": ("spatialmath-python",)}
+"""Libraries a peer runs on, whose versions the JSON records too."""
 _LWA = "jacobian[local_world_aligned]"
+_ANALYTIC = "analytic_jacobian["
+_REVERSED = [0, 1, 2, 5, 4, 3]
+RTB_ANALYTIC = {"euler_zyz": ("eul", slice(None)), "rotation_vector": ("exp", slice(None)),
+                "euler_zyx": ("rpy/zyx", _REVERSED), "euler_xyz": ("rpy/xyz", _REVERSED)}
+"""kinengine rotation -> (roboticstoolbox representation, its rows in kinengine's order)."""
 LOOP_MAX = 10_000
 """Batches larger than this are not timed for peers that need a Python loop over configurations."""
 
@@ -48,7 +61,9 @@ class Peer:
             self.version, self.note = None, f"not installed (pip install {self.distribution})"
             return
         try:
-            with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+            with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()), \
+                    warnings.catch_warnings():  # e.g. ikpy on fixed links in its chain: its business
+                warnings.simplefilter("ignore")
                 self._load()
             self.loaded = True
         except Exception as exc:  # the peer cannot read this robot: a result, reported
@@ -104,12 +119,23 @@ class Peer:
         if case.name == "frame_pose":
             if single:
                 return (lambda: ets.fkine(x[0])), (lambda out: out.A)
-            return (lambda: ets.fkine(x)), (lambda out: np.array(out.A))
+            return (lambda: ets.fkine(x)), (lambda out: np.reshape(out.A, (-1, 4, 4)))  # N = 1: .A is (4, 4)
         if case.name == _LWA:
             if single:
                 return (lambda: ets.jacob0(x[0])), (lambda out: out @ self._unmap())
             self._loop(case)
             return (lambda: [ets.jacob0(xi) for xi in x]), (lambda out: np.array(out) @ self._unmap())
+        if case.name.startswith(_ANALYTIC) and case.name[len(_ANALYTIC):-1] in RTB_ANALYTIC:
+            representation, rows = RTB_ANALYTIC[case.name[len(_ANALYTIC):-1]]
+
+            def to_kinengine(out):
+                return np.asarray(out)[..., rows, :] @ self._unmap()
+
+            if single:
+                return (lambda: ets.jacob0_analytical(x[0], representation=representation)), to_kinengine
+            self._loop(case)
+            return ((lambda: [ets.jacob0_analytical(xi, representation=representation) for xi in x]),
+                    to_kinengine)
         return None
 
     def _unmap(self) -> np.ndarray:

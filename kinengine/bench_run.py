@@ -26,7 +26,7 @@ import numpy as np
 from tqdm import tqdm
 
 from .bench_cases import Case, latency_cases, throughput_cases
-from .bench_peers import Skip, load_peers
+from .bench_peers import RUNTIMES, Skip, load_peers
 from .loading import load
 from .parameterizations import ROTATION_PARAMETERIZATIONS
 
@@ -127,19 +127,28 @@ def environment(peers: list | None = None) -> dict:
     versions["kinengine"] = versions["kinengine"] or __version__
     for peer in peers or ():
         versions[peer.distribution] = peer.version
+        for dist in RUNTIMES.get(peer.name, ()):
+            versions[dist] = importlib.metadata.version(dist)
     return {"timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"), "cpu": cpu_model(),
             "cores": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform(),
             "versions": versions}
 
 
 def cpu_model() -> str:
+    """/proc/cpuinfo's model name, with family, model and clock (a VM may give only "AMD EPYC")."""
     try:
+        fields: dict[str, str] = {}
         for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
+            key, _, value = line.partition(":")
+            fields.setdefault(key.strip(), value.strip())
     except OSError:
-        pass
-    return platform.processor() or platform.machine()
+        fields = {}
+    if "model name" not in fields:
+        return platform.processor() or platform.machine()
+    details = [f"{key} {fields[key]}" for key in ("cpu family", "model") if key in fields]
+    if "cpu MHz" in fields:
+        details.append(f"{float(fields['cpu MHz']):.0f} MHz")
+    return fields["model name"] + (f" ({', '.join(details)})" if details else "")
 
 
 def run(robots: list[str], settings: Settings, peers: bool = False, peer_atol: float = 1e-9,

@@ -52,6 +52,8 @@ class JointSpace:
         idx = np.asarray(idx_q, dtype=np.intp)
         self._lin_user, self._lin_pin = lin, idx[lin]
         self._cont_user, self._cos_pin, self._sin_pin = cont, idx[cont], idx[cont] + 1
+        self._linear = tuple(zip(lin.tolist(), idx[lin].tolist()))      # (user index, Pinocchio index)
+        self._circular = tuple(zip(cont.tolist(), idx[cont].tolist()))  # (user index, index of cos)
         self._index = {n: i for i, n in enumerate(names)}
         self._shape = (self.dof,)
         self._mimics = {j.name: j.mimic.joint for j in description.joints if j.mimic is not None}
@@ -61,12 +63,23 @@ class JointSpace:
         """Pinocchio's configuration for a checked q of shape (dof,) (or (N, dof) -> (N, nq))."""
         if self.identity:
             return q
+        if q.ndim == 1:  # scalar Python is ~4x faster than numpy fancy indexing for one vector
+            out = np.empty(self.nq)
+            self.write_pinocchio(q.tolist(), out)
+            return out
         out = np.empty(q.shape[:-1] + (self.nq,))
         out[..., self._lin_pin] = q[..., self._lin_user]
         qc = q[..., self._cont_user]
         out[..., self._cos_pin] = np.cos(qc)
         out[..., self._sin_pin] = np.sin(qc)
         return out
+
+    def write_pinocchio(self, values: list[float], out: np.ndarray) -> None:
+        """Write one checked q, given as a list, into Pinocchio's configuration ``out`` (nq,) in place."""
+        for user, index in self._linear:
+            out[index] = values[user]
+        for user, index in self._circular:
+            out[index], out[index + 1] = math.cos(values[user]), math.sin(values[user])
 
     def from_pinocchio(self, q_pin: np.ndarray) -> np.ndarray:
         """The user's q from Pinocchio's configuration (continuous angles in (-π, π])."""
@@ -92,6 +105,11 @@ class JointSpace:
         # to check; a non-finite sum (NaN, inf or overflow) is confirmed element-wise.
         if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._shape and q.strides == _STRIDES:
             if not math.isfinite(sum(q.tolist())) and not np.isfinite(q).all():
+                self._raise_nonfinite(q, name)
+        elif (allow_batch and type(q) is np.ndarray and q.dtype is _F64 and q.ndim == 2 and q.shape[0]
+              and q.shape[1] == self.dof and q.flags.c_contiguous):  # a ready batch: one sum as well
+            total = sum(q.ravel().tolist()) if q.size <= 256 else float(q.sum())
+            if not math.isfinite(total) and not np.isfinite(q).all():
                 self._raise_nonfinite(q, name)
         else:
             q = self._convert(q, name, allow_batch)

@@ -22,7 +22,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from .analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
+from . import batch
+from .analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_at, as_rows, frame_views, pose_map
 from .errors import FrameNotFoundError, KinematicsError
 from .joint_space import JointSpace
 from .urdf import RobotDescription, build_pinocchio_model
@@ -122,9 +123,10 @@ class Robot:
                                                                               allow_batch=False))
         return self._joints.from_mapping(values, start, strict=strict)
 
-    def check_configuration(self, q: object, *, check_limits: bool = True) -> np.ndarray:
-        """q as float64 (dof,) or (N, dof); ConfigurationError on bad shape, values or (optionally) limits."""
-        return self._joints.check(q, check_limits=check_limits)
+    def check_configuration(self, q: object, *, check_limits: bool = True, batch: bool = True) -> np.ndarray:
+        """A fresh float64 copy of q, (dof,) or (with ``batch``) (N, dof); ConfigurationError on bad shape,
+        values or (optionally) limits."""
+        return np.array(self._joints.check(q, check_limits=check_limits, allow_batch=batch))
 
     # -- kinematics -------------------------------------------------------------------------
     def frame_id(self, frame: str) -> int:
@@ -155,7 +157,7 @@ class Robot:
                 and isfinite(sum(q.tolist()))):
             q = self._joints.check(q, check_limits=check_limits)
             if q.ndim == 2:
-                return self._batch(q, fid, None)
+                return batch.evaluate(self, q, fid, None, jacobian=False)[0]
         try:
             data = self._tls.data
         except AttributeError:
@@ -182,7 +184,7 @@ class Robot:
                 and isfinite(sum(q.tolist()))):
             q = self._joints.check(q, check_limits=check_limits)
             if q.ndim == 2:
-                return self._batch(q, fid, ref)
+                return batch.evaluate(self, q, fid, ref, pose=False)[1]
         try:
             data = self._tls.data
         except AttributeError:
@@ -218,19 +220,20 @@ class Robot:
             fid = self._frame_ids[frame if frame is not None else self._end_effector]
         except (KeyError, TypeError):
             raise FrameNotFoundError(frame, self._frame_names) from None
-        q = self._joints.check(q, check_limits=check_limits)
-        if q.ndim == 2:
-            T, J = self._batch(q, fid, None), self._batch(q, fid, pin.LOCAL_WORLD_ALIGNED)
-            return pmap.jacobian(T, J, singularity_threshold)
-        model, data = self._model, self._data()
-        J = pin.computeFrameJacobian(model, data, q if self._identity_q else self._joints.to_pinocchio(q),
-                                     fid, pin.LOCAL_WORLD_ALIGNED)
-        if J.ndim == 1:
-            J = J.reshape(6, 1)
-        (c0, c1, c2, px), (c3, c4, c5, py), (c6, c7, c8, pz), _ = pin.updateFramePlacement(
-            model, data, fid).homogeneous.tolist()
-        return pmap.jacobian_single(((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J,
-                                    singularity_threshold)
+        if not (type(q) is _NDARRAY and q.dtype is _F64 and q.shape == self._shape and not check_limits
+                and isfinite(sum(q.tolist()))):
+            q = self._joints.check(q, check_limits=check_limits)
+            if q.ndim == 2:
+                return batch.analytic_jacobian(self, q, fid, pmap, singularity_threshold)
+        tls = self._tls
+        try:
+            views = tls.placements[fid]
+        except (AttributeError, KeyError):  # this thread's first call for the frame
+            if not hasattr(tls, "placements"):
+                tls.placements = {}
+            views = tls.placements[fid] = frame_views(self._data(), fid)
+        qp = q if self._identity_q else self._joints.to_pinocchio(q)
+        return analytic_at(self._model, tls.data, qp, fid, views, pmap, singularity_threshold)
 
     def task(self, frames: str | Sequence[str] | None = None, position: str | None = "cartesian",
              rotation: str | None = "euler_zyx", **options: object) -> "Task":
@@ -278,6 +281,11 @@ class Robot:
         from .manipulability import velocity_ellipsoid
         return velocity_ellipsoid(self, q, frame)
 
+    def plot(self, q: object = None, ax: object = None, **options: object) -> object:
+        """A matplotlib 3D picture of the robot at q (None: neutral); returns the axes. See kinengine.plotting."""
+        from .plotting import plot_robot
+        return plot_robot(self, q, ax, **options)
+
     def require_regular(self, q: object, frame: str | None = None, rows: object = "all",
                         **options: object) -> "SingularityReport":
         """The singularity report, or KinematicSingularityError if J_e0 (rows) loses rank."""
@@ -289,21 +297,6 @@ class Robot:
         """Differential IK (damped least squares) to a 4x4 pose or a parameter target χ. See kinengine.ik."""
         from .ik import inverse_kinematics
         return inverse_kinematics(self, target, frame, q0, **options)
-
-    def _batch(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame | None) -> np.ndarray:
-        """Loop over a batch (N, dof) in Pinocchio: poses (ref None) or Jacobians."""
-        model, data = self._model, self._data()
-        qp = self._joints.to_pinocchio(q)
-        if ref is None:
-            out = np.empty((len(q), 4, 4))
-            for i, qi in enumerate(qp):
-                pin.forwardKinematics(model, data, qi)
-                out[i] = pin.updateFramePlacement(model, data, fid).homogeneous
-        else:
-            out = np.empty((len(q), 6, self.dof))
-            for i, qi in enumerate(qp):
-                out[i] = pin.computeFrameJacobian(model, data, qi, fid, ref).reshape(6, -1)
-        return out
 
 
 def _frame_ids(model: pin.Model) -> dict[str, int]:

@@ -143,8 +143,8 @@ def test_single_configuration_and_empty_batch_shapes(strategy):
     T, J = batch_pose_and_jacobian(robot, q, "panda_hand")
     np.testing.assert_allclose(T, robot.frame_pose(q, "panda_hand"), rtol=0, atol=1e-12)
     np.testing.assert_allclose(J, robot.jacobian(q, "panda_hand"), rtol=0, atol=1e-12)
-    T, J = batch_pose_and_jacobian(robot, np.empty((0, robot.dof)))
-    assert T.shape == (0, 4, 4) and J.shape == (0, 6, robot.dof)
+    with pytest.raises(kinengine.ConfigurationError, match="empty batch"):
+        batch_pose_and_jacobian(robot, np.empty((0, robot.dof)))
 
 
 def test_robot_without_coordinates(strategy):
@@ -186,3 +186,134 @@ def test_random_trees_match_pinocchio(urdf):
                     np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12)
     finally:
         batch.CALLS_PER_CONFIGURATION = old
+
+
+# -- Robot's batched calls (routed through kinengine.batch) --------------------------------------------
+ANALYTIC = (("cartesian", "euler_zyz", None), ("cylindrical", "quaternion", None),
+            ("spherical", "rotation_vector", None), ("cartesian", "angle_axis", ("x", "angle", "axis_z")),
+            (None, "rotation_matrix", None), ("cartesian", "euler_zyx", None), ("spherical", None, None))
+ROUTED = ("abb_irb120", "planar_3dof", "scara", "ur5", "panda", "mixed_chain")
+
+
+def _regular_rows(robot, n: int, seed: int) -> tuple[np.ndarray, list[tuple]]:
+    """n configurations at least 0.05 from the singular sets of the ANALYTIC cases that are regular for
+    most configurations of this robot (returned too: e.g. ZYZ angles always lock on the SCARA)."""
+    candidates = robot.random_configuration(seed, size=400)
+
+    def regular(q, case):
+        try:
+            robot.analytic_jacobian(q, position=case[0], rotation=case[1], singularity_threshold=0.05)
+        except kinengine.RepresentationSingularityError:
+            return False
+        return True
+
+    ok = np.array([[regular(q, case) for case in ANALYTIC] for q in candidates])
+    keep = ok.mean(axis=0) > 0.5
+    rows = candidates[ok[:, keep].all(axis=1)]
+    assert len(rows) >= n
+    return rows[:n], [case for case, k in zip(ANALYTIC, keep) if k]
+
+
+@pytest.fixture(scope="module", params=ROUTED)
+def routed(request):
+    robot = _load(request.param) if request.param == "mixed_chain" else kinengine.load(request.param)
+    return robot, *_regular_rows(robot, 9, seed=5)
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 9])
+def test_robot_batches_equal_single_calls(routed, strategy, n):
+    robot, Q, cases = routed
+    Q = Q[:n]
+    assert len(cases) >= 5
+    frame = robot.end_effector
+    np.testing.assert_allclose(robot.frame_pose(Q, frame), [robot.frame_pose(q, frame) for q in Q],
+                               rtol=0, atol=1e-12)
+    for reference in REFERENCES:
+        np.testing.assert_allclose(robot.jacobian(Q, frame, reference),
+                                   [robot.jacobian(q, frame, reference) for q in Q], rtol=0, atol=1e-12)
+    for position, rotation, rows in cases:
+        JA = robot.analytic_jacobian(Q, frame, position, rotation, rows=rows)
+        expected = [robot.analytic_jacobian(q, frame, position, rotation, rows=rows) for q in Q]
+        assert JA.shape == (n,) + expected[0].shape
+        np.testing.assert_allclose(JA, expected, rtol=0, atol=1e-12, err_msg=f"{position} {rotation} {rows}")
+
+
+@pytest.mark.parametrize("name", ["abb_irb120", "mixed_chain"])
+def test_robot_batches_split_over_chunks_and_threads(monkeypatch, name):
+    robot = _load(name)
+    monkeypatch.setattr(batch, "CHUNK", 37)
+    monkeypatch.setattr(batch, "MIN_PER_WORKER", 50)
+    monkeypatch.setattr(batch, "WORKERS", 3)
+    Q, _ = _regular_rows(robot, 151, seed=6)  # 151 rows: 3 workers x 2 chunks of 25-26 rows
+    for n in (25, 151):
+        np.testing.assert_allclose(robot.frame_pose(Q[:n]), [robot.frame_pose(q) for q in Q[:n]],
+                                   rtol=0, atol=1e-12)
+        np.testing.assert_allclose(robot.jacobian(Q[:n], reference="local"),
+                                   [robot.jacobian(q, reference="local") for q in Q[:n]], rtol=0, atol=1e-12)
+        for position, rotation, rows in ANALYTIC[:3]:
+            np.testing.assert_allclose(robot.analytic_jacobian(Q[:n], position=position, rotation=rotation),
+                                       [robot.analytic_jacobian(q, position=position, rotation=rotation)
+                                        for q in Q[:n]], rtol=0, atol=1e-12)
+
+
+def test_robot_batch_routing_takes_the_fast_path_for_each_size(monkeypatch):
+    """Small batches loop (Pinocchio, or the single analytic call per row); large ones use the numpy chain."""
+    robot = kinengine.load("abb_irb120")
+    used = []
+
+    def spy(name, label):
+        original = getattr(batch, name)
+        monkeypatch.setattr(batch, name, lambda *args: used.append(label) or original(*args))
+
+    spy("_run", "numpy")
+    spy("_pinocchio_loop", "loop")
+    spy("_analytic_loop", "analytic loop")
+    for n in (1, 2, 1000):
+        Q = robot.random_configuration(n, size=n)
+        robot.frame_pose(Q)
+        robot.jacobian(Q)
+        robot.analytic_jacobian(Q, rotation="quaternion")
+    assert used == ["loop", "loop", "analytic loop"] * 2 + ["numpy", "numpy", "numpy"]
+
+
+def test_empty_robot_batch_is_refused():
+    robot = kinengine.load("abb_irb120")
+    for call in (robot.frame_pose, robot.jacobian, robot.analytic_jacobian):
+        with pytest.raises(kinengine.ConfigurationError, match="empty batch"):
+            call(np.empty((0, 6)))
+
+
+@pytest.mark.parametrize("row", [0, 4, 10])
+def test_batched_representation_singularity_names_the_row(strategy, row):
+    """The batch raises the single call's error (parameterization, distance, alternatives) for its row."""
+    robot = kinengine.load("abb_irb120")
+    Q, _ = _regular_rows(robot, 11, seed=7)
+    other = 10 if row != 10 else 0
+    Q[row] = Q[other] = robot.neutral()  # tool0 pitched by π/2: euler_zyx locks
+    Q[other, 4] = 1.2e-8                 # near, not at, the lock; the first of the two rows is named
+    first = min(row, other)
+    with pytest.raises(kinengine.RepresentationSingularityError) as single:
+        robot.analytic_jacobian(Q[first], rotation="euler_zyx")
+    named = f"row {first} of the batch"
+    with pytest.raises(kinengine.RepresentationSingularityError, match=named) as batch_error:
+        robot.analytic_jacobian(Q, rotation="euler_zyx")
+    assert batch_error.value.parameterization == single.value.parameterization == "euler_zyx"
+    assert batch_error.value.distance == pytest.approx(single.value.distance, rel=1e-6, abs=1e-15)
+    assert batch_error.value.alternatives == single.value.alternatives
+    assert str(single.value).split(": ", 1)[1] in str(batch_error.value)
+
+
+def test_batched_position_singularity_is_checked_before_rotation(strategy):
+    """planar_3dof at q = 0 has its tip on the z axis: cylindrical ρ = 0 (the rotation about y is regular)."""
+    robot = kinengine.load("planar_3dof")
+    Q = robot.random_configuration(8, size=6)
+    Q[3] = 0.0
+    with pytest.raises(kinengine.RepresentationSingularityError, match="row 3 of the batch") as info, \
+            pytest.warns(UserWarning, match="ρ = 0"):
+        robot.analytic_jacobian(Q, position="cylindrical", rotation="euler_zyx")
+    assert info.value.parameterization == "cylindrical" and info.value.distance < 1e-12
+    for q in (Q[3], Q):  # exactly on it E has no finite value: refused even with threshold 0
+        with pytest.raises(kinengine.RepresentationSingularityError, match="cylindrical"), \
+                pytest.warns(UserWarning, match="ρ = 0"):
+            robot.analytic_jacobian(q, position="cylindrical", rotation="euler_zyx",
+                                    singularity_threshold=0.0)

@@ -42,7 +42,8 @@ def test_quick_run_has_every_row(quick_run):
     cases = [(r["group"], r["case"], r["n"]) for r in report["rows"]]
     latency = {c for g, c, _ in cases if g == "latency"}
     assert {"frame_pose", "jacobian[local_world_aligned]", "jacobian[local]", "jacobian[world]",
-            "task.update(q)", "task.update(q, qdot)", "inverse_kinematics"} <= latency
+            "task.update(q)", "task.update(q)[euler_zyz]", "task.update(q, qdot)",
+            "inverse_kinematics"} <= latency
     assert {f"analytic_jacobian[{name}]" for name in ROTATION_PARAMETERIZATIONS} <= latency
     for n in bench_run.QUICK.sizes:
         for name in ("frame_pose", "jacobian[local_world_aligned]", "pose+jacobian",
@@ -94,7 +95,50 @@ def test_table_lists_every_row(quick_run):
     _, report, _ = quick_run
     table = bench.format_table(report)
     assert "pin min µs" in table and report["cpu"] in table
-    assert len([line for line in table.splitlines() if line.startswith("abb_irb120 ")]) == len(report["rows"])
+    main, _, peers = table.partition("\npeers:")
+    assert len([line for line in main.splitlines() if line.startswith("abb_irb120 ")]) == len(report["rows"])
+    peer_rows = [r for r in report["rows"] if any(v["status"] != "unsupported" for v in r["peers"].values())]
+    assert len([line for line in peers.splitlines() if line.startswith("abb_irb120 ")]) == len(peer_rows)
+
+
+def _peer_rows(report, name):
+    status = report["robots"][0]["peers"][name]
+    if not status["loaded"]:
+        pytest.skip(f"{name} not installed here ({status['note']})")
+    return {(r["case"], r["n"]): r["peers"][name] for r in report["rows"]}
+
+
+def test_roboticstoolbox_agrees_before_it_is_timed(quick_run):
+    _, report, _ = quick_run
+    rows = _peer_rows(report, "roboticstoolbox")
+    timed = [key for key, result in rows.items() if result["status"] == "ok"]
+    # poses and Jacobians (single and batched), and jacob0_analytical for its four representations
+    assert {("frame_pose", 1), ("jacobian[local_world_aligned]", 1), ("frame_pose", 1000),
+            ("analytic_jacobian[euler_zyz]", 1), ("analytic_jacobian[euler_zyx]", 1),
+            ("analytic_jacobian[euler_xyz]", 1), ("analytic_jacobian[rotation_vector]", 1)} <= set(timed)
+    for key in timed:
+        assert rows[key]["difference"] <= 1e-9 and rows[key]["min_us"] > 0, key
+    assert rows[("analytic_jacobian[quaternion]", 1)]["status"] == "unsupported"
+    assert report["versions"]["roboticstoolbox-python"]
+
+
+def test_pytorch_kinematics_float32_origins_are_reported_not_timed(quick_run):
+    """pytorch-kinematics parses <origin rpy> as float32: poses off by ~1e-8 m, over the 1e-9 tolerance."""
+    _, report, _ = quick_run
+    rows = _peer_rows(report, "pytorch_kinematics")
+    checked = {key: result for key, result in rows.items() if result["status"] != "unsupported"}
+    assert ("frame_pose", 1) in checked and ("jacobian[local_world_aligned]", 1000) in checked
+    for key, result in checked.items():
+        assert result["status"] == "disagrees" and "min_us" not in result, key
+        assert 1e-9 < result["difference"] < 1e-6, key  # a rounding difference, not a convention mismatch
+    assert report["versions"]["torch"].endswith("+cpu")  # the CPU build, never a CUDA download
+
+
+def test_ikpy_poses_agree(quick_run):
+    _, report, _ = quick_run
+    rows = _peer_rows(report, "ikpy")
+    assert rows[("frame_pose", 1)]["status"] == "ok" and rows[("frame_pose", 1)]["difference"] <= 1e-9
+    assert rows[("jacobian[local_world_aligned]", 1)]["status"] == "unsupported"
 
 
 class _Peer:

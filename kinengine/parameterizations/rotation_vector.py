@@ -25,6 +25,7 @@ from .base import RotationParameterization, is_single
 PIN_LOG3_MAX_SQ = 4.0
 """θ² below which one sample takes φ from pin.log3 (as accurate as the quaternion route there: ~5e-16 in C(φ);
 measured to degrade to 4e-13 at θ = 3.1). Above, the canonical quaternion (scipy's sign rule at θ = π)."""
+_TWO_PI = 2.0 * math.pi
 _TINY_SIN2 = 1e-12
 """sin²(θ/2) below which θ/sin(θ/2) uses its Taylor series in from_rotation (truncation O(1e-24))."""
 
@@ -135,6 +136,6 @@ class RotationVector(RotationParameterization):
 
     def _distance(self, xp, x, y, z):
         theta = xp.sqrt(x * x + y * y + z * z)
-        turns = max(1.0, round(theta / (2.0 * math.pi))) if xp is math else np.maximum(
-            1.0, np.round(theta / (2.0 * math.pi)))
-        return abs(theta - 2.0 * math.pi * turns)
+        if xp is math:  # the nearest 2πk with k >= 1 (θ >= 0: a round to 0 means k = 1)
+            return abs(theta - _TWO_PI * (round(theta / _TWO_PI) or 1))
+        return abs(theta - _TWO_PI * np.maximum(1.0, np.round(theta / _TWO_PI)))
