@@ -20,6 +20,7 @@ from .urdf import RobotDescription
 
 _F64 = np.dtype(np.float64)
 _STRIDES = (_F64.itemsize,)  # a C-contiguous float64 vector
+_SMALL_BATCH = 8  # rows up to which to_pinocchio converts row by row in Python (measured on kinova)
 
 
 class JointSpace:
@@ -66,6 +67,11 @@ class JointSpace:
         if q.ndim == 1:  # scalar Python is ~4x faster than numpy fancy indexing for one vector
             out = np.empty(self.nq)
             self.write_pinocchio(q.tolist(), out)
+            return out
+        if len(q) <= _SMALL_BATCH:  # ... and for a few
+            out = np.empty((len(q), self.nq))
+            for row, values in zip(out, q.tolist()):
+                self.write_pinocchio(values, row)
             return out
         out = np.empty(q.shape[:-1] + (self.nq,))
         out[..., self._lin_pin] = q[..., self._lin_user]

@@ -34,7 +34,7 @@ import pinocchio as pin
 
 from .analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
 from .continuity import continuity_rule
-from .errors import RepresentationSingularityError
+from .errors import OptionError, RepresentationSingularityError
 
 
 class _Part:
@@ -91,7 +91,7 @@ class Task:
                  singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD) -> None:
         names = (frames,) if isinstance(frames, str) else tuple(frames)
         if not names:
-            raise ValueError("a task needs at least one frame")
+            raise OptionError("a task needs at least one frame: pass a frame name or a list of them")
         fids = [robot.frame_id(f) for f in names]
         pmap = pose_map(position, rotation, as_rows(rows))
         self.frames, self.labels = names, pmap.labels

@@ -25,21 +25,10 @@ import pytest
 
 import kinengine
 from kinengine.cli import main as cli_main
-from custom_robots import mixed_chain_urdf
 
 Q = np.array([0.1, -0.2, 0.3, 0.4, -0.5, 0.6])      # [rad], within the IRB 120's limits, regular
 QDOT = np.array([-0.5, -0.3, -0.1, 0.1, 0.3, 0.5])   # [rad/s]
 INTS = [1, 1, -1, 1, 1, -1]                          # [rad], regular too
-
-
-@pytest.fixture(scope="module")
-def abb():
-    return kinengine.load("abb_irb120")
-
-
-@pytest.fixture(scope="module")
-def mixed():
-    return kinengine.load_urdf_string(mixed_chain_urdf())
 
 
 def _task(robot, q, qdot):

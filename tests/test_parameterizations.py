@@ -403,3 +403,9 @@ def test_batched_calls_equal_per_sample_calls(name, batch):
         for key, value in single.items():
             got = batched[key].reshape((n,) + np.shape(value))[i]
             np.testing.assert_allclose(got, value, rtol=1e-13, atol=1e-14, err_msg=f"{name} {key}")
+
+
+def test_unknown_euler_sequence_is_a_parameterization_error():
+    from kinengine.parameterizations.euler import EulerAngles
+    with pytest.raises(ParameterizationError, match="Expected `seq` to be one of xyz"):
+        EulerAngles("xyy")

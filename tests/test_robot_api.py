@@ -14,16 +14,6 @@ import kinengine.catalog
 from custom_robots import mixed_chain_urdf
 
 
-@pytest.fixture(scope="module")
-def abb():
-    return kinengine.load("abb_irb120")
-
-
-@pytest.fixture(scope="module")
-def mixed():
-    return kinengine.load_urdf_string(mixed_chain_urdf())
-
-
 def test_available_robots_lists_shipped_and_example_robot_data_arms():
     names = kinengine.available_robots()
     for expected in ("abb_irb120", "planar_3dof", "scara", "ur3", "ur5", "ur10", "panda", "kinova", "xarm7",

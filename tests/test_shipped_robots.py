@@ -200,11 +200,6 @@ def abb_chain(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return T, J
 
 
-@pytest.fixture(scope="module")
-def abb():
-    return kinengine.load("abb_irb120")
-
-
 def test_abb_check_figure_at_zero(abb):
     T = abb.frame_pose(abb.neutral(), "tool0")
     np.testing.assert_allclose(T[:3, 3], [0.374, 0.0, 0.630], rtol=0, atol=1e-12)

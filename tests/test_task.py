@@ -172,3 +172,9 @@ def test_chi_stays_continuous_along_a_trajectory_and_reset_returns_to_canonical(
     task.reset()
     task.update(q)
     np.testing.assert_allclose(task.chi, robot.pose_parameters(q, "tool0", None, rotation), rtol=0, atol=1e-12)
+
+
+def test_a_task_without_frames_is_an_option_error():
+    robot = kinengine.load("abb_irb120")
+    with pytest.raises(kinengine.OptionError, match="at least one frame"):
+        robot.task([])

@@ -25,6 +25,7 @@ from operator import itemgetter
 import numpy as np
 import pinocchio as pin
 
+from ..errors import ParameterizationError
 from .base import RotationParameterization, is_single, warn_where
 
 EULER_SEQUENCES = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz")
@@ -56,7 +57,7 @@ class EulerAngles(RotationParameterization):
 
     def __init__(self, seq: str) -> None:
         if seq not in EULER_SEQUENCES:
-            raise ValueError(f"Expected `seq` to be one of {', '.join(EULER_SEQUENCES)}, got {seq!r}")
+            raise ParameterizationError(f"Expected `seq` to be one of {', '.join(EULER_SEQUENCES)}, got {seq!r}")
         a, b, c = ("xyz".index(axis) for axis in seq)
         t = 3 - a - b
         self.seq = seq
