@@ -18,6 +18,7 @@ import json
 from pathlib import Path
 import sys
 
+from .arguments import output_path
 from .bench_run import DEFAULT_ROBOTS, FULL, QUICK, run
 
 PEER_WIDTH = 20
@@ -34,8 +35,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="also time roboticstoolbox-python, pytorch-kinematics and ikpy where installed")
     p.add_argument("--peer-atol", type=float, default=1e-9,
                    help="a peer whose answer differs from kinengine's by more is reported, not timed")
-    p.add_argument("--json", type=Path, default=None, metavar="PATH", help="write the results as JSON")
-    p.add_argument("--plot", type=Path, default=None, metavar="PATH",
+    p.add_argument("--json", type=output_path, default=None, metavar="PATH", help="write the results as JSON")
+    p.add_argument("--plot", type=output_path, default=None, metavar="PATH",
                    help="write a PNG bar chart (log scale)")
     p.set_defaults(handler=handle)
 

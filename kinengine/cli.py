@@ -8,23 +8,18 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
+import os
 import re
 import sys
+import warnings
 
 import numpy as np
 
 from . import __version__, bench, show, verify
+from .arguments import parse_vector
 from .catalog import available_robots
 from .errors import KinematicsError
 from .loading import load
-
-
-def parse_vector(text: str) -> list[float]:
-    """'0.1,-0.3,0.2' -> [0.1, -0.3, 0.2] (argparse type for --q)."""
-    try:
-        return [float(v) for v in text.replace(" ", "").split(",") if v]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
 
 
 def _cmd_list(args: argparse.Namespace) -> int:
@@ -45,24 +40,28 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _cmd_pose(args: argparse.Namespace) -> int:
+    """Compute everything first, then print: an error leaves nothing half-printed."""
     robot = load(args.robot)
     q = robot.neutral() if args.q is None else robot.check_configuration(args.q, check_limits=False, batch=False)
     frame = args.frame or robot.end_effector
+    T, J = robot.frame_pose(q, frame), robot.jacobian(q, frame, args.reference)
+    analytic = args.rotation is not None or args.position != "cartesian"
+    if analytic:
+        labels = robot.task(frame, args.position, args.rotation, check_inputs=False).labels
+        chi = robot.pose_parameters(q, frame, args.position, args.rotation)
+        JA = robot.analytic_jacobian(q, frame, args.position, args.rotation)
     np.set_printoptions(precision=5, suppress=True, linewidth=120)
     print(f"robot {robot.name} ({robot.dof} dof), frame {frame!r}")
-    print("q [rad | m] = " + np.array2string(np.asarray(q)))
+    print("q [rad | m] = " + np.array2string(q))
     print(f"\nT (pose of {frame} in the root link frame {robot.description.root!r}):")
-    print(robot.frame_pose(q, frame))
+    print(T)
     print(f"\nJ ({args.reference}, rows [vx vy vz wx wy wz]):")
-    print(robot.jacobian(q, frame, args.reference))
-    if args.rotation or args.position != "cartesian":
-        rotation = args.rotation or None
-        labels = robot.task(frame, args.position, rotation, check_inputs=False).labels
-        print(f"\nchi ({args.position} + {rotation}) = " + ", ".join(
-            f"{label} {value:.5f}" for label, value in zip(labels, robot.pose_parameters(q, frame, args.position,
-                                                                                         rotation))))
+    print(J)
+    if analytic:
+        name = " + ".join(p for p in (args.position, args.rotation) if p)
+        print(f"\nchi ({name}) = " + ", ".join(f"{label} {value:.5f}" for label, value in zip(labels, chi)))
         print(f"\nJ_A (rows {' '.join(labels)}):")
-        print(robot.analytic_jacobian(q, frame, args.position, rotation))
+        print(JA)
     return 0
 
 
@@ -109,10 +108,19 @@ def join_negative_values(argv: Sequence[str]) -> list[str]:
     return out
 
 
+def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"kinengine: warning: {message}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
-    try:
-        return int(args.handler(args))
-    except KinematicsError as exc:
-        print(f"kinengine: error: {exc}", file=sys.stderr)
-        return 2
+    with warnings.catch_warnings():
+        warnings.showwarning = _one_line_warning
+        try:
+            return int(args.handler(args))
+        except KinematicsError as exc:
+            print(f"kinengine: error: {exc}", file=sys.stderr)
+            return 2
+        except BrokenPipeError:  # e.g. `kinengine pose ... | head`: the reader left, nothing to report
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 141

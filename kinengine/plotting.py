@@ -9,7 +9,7 @@ Everything is drawn in the root link frame I (Pinocchio's "world"), lengths in m
   origin and scaled by ``Drawing.ellipsoid_scale`` [m per m/s] to be visible (the legend says by how much).
 The title gives the robot, q, and the pose of the first chosen frame (else the end effector): position
 [m] and rotation vector φ = θ·n [rad]. The numbers behind the picture are in ``ax.kinengine_drawing``.
-matplotlib is imported lazily; it is the ``plot`` extra (``pip install 'kinengine[plot]'``).
+matplotlib is imported lazily, so that ``import kinengine`` and the other commands stay fast.
 """
 
 from __future__ import annotations
@@ -93,11 +93,8 @@ def plot_robot(robot, q: object = None, ax=None, *, frames: Sequence[str] = (), 
     the :class:`Drawing`. Never calls ``plt.show()``. Sets ``ax.computed_zorder = False`` (layers are
     drawn in a fixed order so that joint axes along a link stay visible).
     """
-    try:
-        import matplotlib.pyplot as plt
-        from mpl_toolkits.mplot3d.art3d import Line3DCollection
-    except ImportError:
-        raise KinematicsError("plotting needs matplotlib: pip install 'kinengine[plot]'") from None
+    import matplotlib.pyplot as plt
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection
     if ax is not None and getattr(ax, "name", None) != "3d":
         raise KinematicsError("`ax` must be a 3D axes, e.g. fig.add_subplot(projection='3d')")
     d = drawing(robot, q, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length)

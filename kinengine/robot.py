@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from . import batch
 from .analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_at, as_rows, frame_views, pose_map
-from .errors import FrameNotFoundError, KinematicsError
+from .errors import FrameNotFoundError, OptionError
 from .joint_space import JointSpace
 from .urdf import RobotDescription, build_pinocchio_model
 
@@ -51,7 +51,7 @@ def resolve_reference(reference: object) -> pin.ReferenceFrame:
     try:
         return REFERENCES[reference]
     except (KeyError, TypeError):
-        raise KinematicsError(f"unknown reference {reference!r}; use 'world', 'local' or "
+        raise OptionError(f"unknown reference {reference!r}; use 'world', 'local' or "
                               "'local_world_aligned' (or a pinocchio.ReferenceFrame)") from None
 
 

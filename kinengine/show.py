@@ -12,6 +12,7 @@ import argparse
 from pathlib import Path
 import re
 
+from .arguments import parse_vector
 from .errors import KinematicsError
 from .loading import load
 from .plotting import plot_robot
@@ -24,8 +25,6 @@ def _names(text: str) -> list[str]:
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``show`` on the kinengine command line."""
-    from .cli import parse_vector  # here: kinengine.cli imports this module
-
     p = subparsers.add_parser("show", help="draw the robot at q into a PNG",
                               description=__doc__.splitlines()[0])
     p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf file")

@@ -149,6 +149,9 @@ class Task:
         self.analytic_jacobian = _readonly(sel[1].reshape(k * ms, n))
         self.analytic_jacobian_dot = _readonly(sel[2].reshape(k * ms, n))
         self.chi_dot = _readonly(sel[3].reshape(k * ms))
+        self._rates = (self._twist, self._Jdot, self._JAdot, self._chi_dot) + (sel[2], sel[3])
+        self._rates_valid = True
+        self._invalidate_rates()
 
     def __repr__(self) -> str:
         return f"<Task {self.frames} {self.labels}>"
@@ -161,7 +164,8 @@ class Task:
     def update(self, q: np.ndarray, qdot: np.ndarray | None = None) -> None:
         """Evaluate at q [rad | m] (and q̇ [rad/s | m/s]); overwrites every attribute in place.
 
-        Without q̇, ``twist``, ``chi_dot`` and the time derivatives keep their last values.
+        Without q̇, ``twist``, ``chi_dot``, ``jacobian_dot`` and ``analytic_jacobian_dot`` are NaN
+        (never the rates of an earlier q).
         """
         joints = self._joints
         if self.check_inputs:
@@ -181,6 +185,11 @@ class Task:
             pin.computeJointJacobians(model, data, qp)
         else:
             pin.computeJointJacobiansTimeVariation(model, data, qp, qdot)
+        if qdot is None:
+            if self._rates_valid:
+                self._invalidate_rates()
+        else:
+            self._rates_valid = True
         for frame in self._frames:
             self._update_frame(frame, qdot)
         if self._rows is not None:
@@ -190,6 +199,13 @@ class Task:
             if qdot is not None:
                 np.take(self._JAdot, self._rows, axis=1, out=JAdot)
                 np.take(self._chi_dot, self._rows, axis=1, out=chi_dot)
+
+    def _invalidate_rates(self) -> None:
+        """NaN in every rate attribute (until an update with q̇ fills them)."""
+        if self._rates_valid:
+            for array in self._rates:
+                array.fill(np.nan)
+            self._rates_valid = False
 
     def _update_frame(self, frame: _Frame, qdot: np.ndarray | None) -> None:
         model, data = self._model, self._data

@@ -27,6 +27,7 @@ import warnings
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .arguments import output_path, positive_int
 from .loading import load
 from .reference import REFERENCES, ReferenceKinematics, read_urdf
 
@@ -256,9 +257,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     """Register ``verify TARGET [--samples N] [--seed S] [--json PATH]`` on the kinengine CLI."""
     p = subparsers.add_parser("verify", help="cross-check poses and Jacobians against independent references")
     p.add_argument("target", metavar="TARGET", help="robot name or path to a .urdf file")
-    p.add_argument("--samples", type=int, default=20, help="random configurations (default 20)")
+    p.add_argument("--samples", type=positive_int, default=20, help="random configurations (default 20)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random configurations (default 0)")
-    p.add_argument("--json", metavar="PATH", default=None, help="also write the report as JSON to PATH")
+    p.add_argument("--json", type=output_path, metavar="PATH", default=None,
+                   help="also write the report as JSON to PATH")
     p.set_defaults(handler=_cmd_verify)
     return p
 

@@ -166,6 +166,9 @@ LIMIT = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
     (joint('<limit upper="--1" effort="1" velocity="1"/>', kind="continuous"), "'--1' is not a number"),
     (joint(LIMIT + '<safety_controller k_velocity="panda_hand_tcp"/>'), "'panda_hand_tcp' is not a number"),
     (joint(LIMIT + '<calibration rising="0x1A"/>'), "'0x1A' is not a number"),
+    # found by this fuzzer: a fixed joint's <limit>, <axis> and <mimic> are unused but still read by others
+    (joint('<limit lower="0" upper="1" effort="" velocity="2"/>', kind="fixed"), "'' is not a number"),
+    (joint('<mimic joint="j" multiplier="two"/>', kind="fixed"), "'two' is not a number"),
 ])
 def test_numbers_yourdfpy_cannot_read_are_refused(text, fragment):
     with pytest.raises(kinengine.URDFError) as info:
@@ -199,3 +202,10 @@ def test_axis_whose_squared_norm_overflows_is_refused_and_a_large_one_normalized
         robot = kinengine.load_urdf_string(text)
     np.testing.assert_array_equal(robot.description.joints[0].axis, (-1.0, 0.0, 1e-150))
     assert_reference_agrees(robot, text, seed=0)
+
+
+def test_a_fixed_joint_axis_must_be_three_numbers_and_may_be_zero():
+    with pytest.raises(kinengine.URDFError, match=r'<axis xyz="0 0">'):
+        kinengine.load_urdf_string(joint('<axis xyz="0 0"/>', kind="fixed"))
+    robot = kinengine.load_urdf_string(joint('<axis xyz="0 0 0"/>', kind="fixed"))  # common in the wild
+    assert robot.dof == 0

@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import tomllib
-from pathlib import Path
 
 import matplotlib
 
@@ -26,7 +24,6 @@ from kinengine.reference import ReferenceKinematics  # noqa: E402
 
 from custom_robots import mixed_chain_urdf  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = tuple(n for n in available_robots() if catalog_entry(n).origin == "kinengine")
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 LOADERS = {
@@ -115,14 +112,6 @@ def test_importing_kinengine_and_its_cli_does_not_import_matplotlib():
     code = "import sys, kinengine, kinengine.cli; print('matplotlib' in sys.modules)"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "False"
-
-
-def test_missing_matplotlib_names_the_plot_extra(robots, monkeypatch):
-    monkeypatch.setitem(sys.modules, "matplotlib.pyplot", None)   # import matplotlib.pyplot -> ImportError
-    with pytest.raises(kinengine.KinematicsError, match=r"pip install 'kinengine\[plot\]'"):
-        plot_robot(robots["planar_3dof"])
-    extras = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]
-    assert any(req.startswith("matplotlib") for req in extras["plot"])
 
 
 # -- the data the picture is built from ------------------------------------------------------------

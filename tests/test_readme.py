@@ -18,7 +18,7 @@ def _python_blocks() -> list[str]:
 
 
 def _runnable(block: str) -> bool:
-    """Blocks that name undefined example inputs (q3, q4, C, omega, ...) are illustrations, not scripts."""
+    """Blocks that name undefined example inputs (C, omega, ...) are illustrations, not scripts."""
     return "import kinengine" in block or "kinengine.load" in block
 
 
@@ -28,8 +28,7 @@ def test_readme_python_examples_run(block, recwarn):
     """Statement by statement; a statement may raise only if its line's comment names the exception."""
     import kinengine
 
-    namespace = {"np": np, "kinengine": kinengine, "q3": np.array([0.3, -0.4, 0.5]),
-                 "q4": np.array([0.2, 0.4, -0.3, 0.05])}
+    namespace = {"np": np, "kinengine": kinengine}
     lines = block.splitlines()
     for statement in ast.parse(block).body:
         source = "\n".join(lines[statement.lineno - 1:statement.end_lineno])

@@ -178,3 +178,24 @@ def test_a_task_without_frames_is_an_option_error():
     robot = kinengine.load("abb_irb120")
     with pytest.raises(kinengine.OptionError, match="at least one frame"):
         robot.task([])
+
+
+@pytest.mark.parametrize("rows", [None, ("x", "z", "chi2_y")])
+def test_rates_are_nan_after_an_update_without_qdot_never_stale(rows):
+    robot = kinengine.load("abb_irb120")
+    rng = np.random.default_rng(5)
+    q1, q2, q3 = robot.random_configuration(rng, size=3)
+    qdot = rng.uniform(-1, 1, robot.dof)
+    task = robot.task("tool0", rotation="euler_zyx", rows=rows)
+    rates = ("twist", "chi_dot", "jacobian_dot", "analytic_jacobian_dot")
+    task.update(q1)
+    assert all(np.isnan(getattr(task, name)).all() for name in rates)  # never filled yet
+    task.update(q1, qdot)
+    assert all(np.isfinite(getattr(task, name)).all() for name in rates)
+    task.update(q2)
+    assert all(np.isnan(getattr(task, name)).all() for name in rates)
+    task.update(q3, qdot)
+    fresh = robot.task("tool0", rotation="euler_zyx", rows=rows)
+    fresh.update(q3, qdot)
+    for name in rates:
+        np.testing.assert_array_equal(getattr(task, name), getattr(fresh, name))

@@ -3,8 +3,9 @@
 Every number is a finite decimal; vectors have exactly three of them. Defaults
 follow the URDF specification: origin xyz and rpy 0 0 0, axis 1 0 0, limit
 lower and upper 0, mimic multiplier 1 and offset 0. The numbers of
-``<calibration>``, ``<dynamics>`` and ``<safety_controller>`` are checked too (urdfdom
-and yourdfpy refuse a file whose numbers they cannot read) but not kept. Link and joint
+``<calibration>``, ``<dynamics>`` and ``<safety_controller>``, and of a fixed joint's
+``<axis>``, ``<limit>`` and ``<mimic>``, are checked too (urdfdom and yourdfpy refuse a
+file whose numbers they cannot read) but not kept. Link and joint
 names may not be "universe", Pinocchio's name for the world frame and joint 0.
 Cross-element rules (names that must exist, the tree) live in :mod:`kinengine.urdf.tree`.
 """
@@ -25,6 +26,7 @@ _UNIT_TOLERANCE = 1e-9  # |‖axis‖ - 1| above this: normalize and warn; ‖ax
 _INERTIA = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 _UNUSED_NUMBERS = {"calibration": ("rising", "falling"), "dynamics": ("damping", "friction"),
                    "safety_controller": ("soft_lower_limit", "soft_upper_limit", "k_position", "k_velocity")}
+_FIXED_IGNORED = {"limit": ("lower", "upper", "effort", "velocity"), "mimic": ("multiplier", "offset")}
 _RESERVED = "universe"
 _FLOATING = ("a fixed-base model cannot have a {type} joint: kinengine models arms and trees bolted to "
              "the world. Remove the joint and its parent link (its child becomes the root) or make it fixed; "
@@ -93,8 +95,17 @@ def read_joint(element: etree._Element, source: str, limits: Limits, warnings: l
             fields["mimic"] = Mimic(joint=read_name(mimic, "joint", where, limits),
                                     multiplier=_number(mimic, "multiplier", where, 1.0),
                                     offset=_number(mimic, "offset", where, 0.0))
-    elif mimic is not None:
-        warnings.append(f"{where.label} is fixed: its <mimic> (line {mimic.sourceline}) is ignored")
+    else:  # a fixed joint: <axis>, <limit> and <mimic> are ignored, but other URDF readers parse them
+        axis = _single(children, "axis", where)
+        if axis is not None:
+            _vector(axis, "xyz", where, (1.0, 0.0, 0.0))
+        for tag, attributes in _FIXED_IGNORED.items():
+            extra = _single(children, tag, where)
+            for attribute in attributes if extra is not None else ():
+                _number(extra, attribute, where, None)
+        if mimic is not None:
+            read_name(mimic, "joint", where, limits)
+            warnings.append(f"{where.label} is fixed: its <mimic> (line {mimic.sourceline}) is ignored")
     for tag, attributes in _UNUSED_NUMBERS.items():
         extra = _single(children, tag, where)
         for attribute in attributes if extra is not None else ():

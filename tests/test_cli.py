@@ -1,0 +1,56 @@
+"""The command line keeps its promise: results on stdout, or one line on stderr and status 2."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from kinengine.cli import main
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["verify", "abb_irb120", "--samples", "-3"], "argument --samples: expected a positive integer, got -3"),
+    (["verify", "abb_irb120", "--samples", "0"], "argument --samples: expected a positive integer, got 0"),
+    (["verify", "abb_irb120", "--json", "/nonexistent/x.json"], "folder '/nonexistent' does not exist"),
+    (["bench", "abb_irb120", "--quick", "--json", "/nonexistent/b.json"], "folder '/nonexistent' does not exist"),
+    (["bench", "abb_irb120", "--quick", "--plot", "."], "'.' is a folder"),
+])
+def test_bad_option_values_stop_before_any_work(capsys, argv, message):
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    captured = capsys.readouterr()
+    assert info.value.code == 2 and captured.out == ""
+    assert message in captured.err
+
+
+def test_pose_prints_nothing_before_an_error(capsys):
+    assert main(["pose", "abb_irb120", "--rotation", "euler_zyx"]) == 2  # ZYX gimbal lock at home
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.splitlines()
+    assert lines[0].startswith("kinengine: warning: euler_zyx: gimbal lock detected")
+    assert lines[-1].startswith("kinengine: error: 'euler_zyx' is at a representation singularity")
+
+
+def test_pose_names_only_the_parameterizations_asked_for(capsys):
+    assert main(["pose", "scara", "--position", "cylindrical"]) == 0
+    out = capsys.readouterr().out
+    assert "chi (cylindrical) = rho 0.60000, theta 0.00000, z 0.35000" in out   # l1 + l2 = 0.6 m, h0 - d
+    assert "None" not in out
+
+
+def test_a_reader_that_leaves_early_is_not_an_error():
+    code = "import sys; from kinengine.cli import main; sys.exit(main(sys.argv[1:]))"
+    run = subprocess.run(f"{sys.executable} -c '{code}' pose abb_irb120 | head -1", shell=True,
+                         capture_output=True, text=True, timeout=120)
+    assert run.stdout == "robot abb_irb120 (6 dof), frame 'tool0'\n"
+    assert "Traceback" not in run.stderr and "BrokenPipe" not in run.stderr
+
+
+def test_unknown_reference_is_an_option_error_and_a_value_error(abb):
+    import kinengine
+    with pytest.raises(kinengine.OptionError, match="unknown reference 'global'") as info:
+        abb.jacobian(abb.neutral(), "tool0", reference="global")
+    assert isinstance(info.value, ValueError)
