@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 import math
+import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -44,6 +45,8 @@ class JointSpace:
         self.nq = model.nq
         lower = np.array([joints[n].lower if joints[n].lower is not None else -np.inf for n in names])
         upper = np.array([joints[n].upper if joints[n].upper is not None else np.inf for n in names])
+        self._narrowed_by: dict[int, list[str]] = {}
+        self._narrow_by_mimics(description, names, lower, upper)
         lower.flags.writeable = upper.flags.writeable = False
         self.lower, self.upper = lower, upper
         self.continuous = np.array(continuous, dtype=bool)
@@ -58,6 +61,29 @@ class JointSpace:
         self._index = {n: i for i, n in enumerate(names)}
         self._shape = (self.dof,)
         self._mimics = {j.name: j.mimic.joint for j in description.joints if j.mimic is not None}
+
+    def _narrow_by_mimics(self, description: RobotDescription, names: list[str], lower: np.ndarray,
+                          upper: np.ndarray) -> None:
+        """A coordinate's limits also keep each mimic joint that follows it within that joint's own limits:
+        lower ≤ m·q + o ≤ upper of the follower, i.e. q within [(lower − o)/m, (upper − o)/m] (swapped if m < 0).
+        Limits that no value meets (sloppy gripper URDFs) are warned about and not enforced."""
+        index = {n: i for i, n in enumerate(names)}
+        for joint in description.joints:
+            mimic = joint.mimic
+            if mimic is None or joint.lower is None or mimic.multiplier == 0.0:
+                continue
+            i = index[mimic.joint]
+            a = (joint.lower - mimic.offset) / mimic.multiplier
+            b = (joint.upper - mimic.offset) / mimic.multiplier
+            lo, hi = max(lower[i], min(a, b)), min(upper[i], max(a, b))
+            follows = (f"{joint.name!r} = {mimic.multiplier:g}·q + {mimic.offset:g} within "
+                       f"[{joint.lower:g}, {joint.upper:g}]")
+            if lo > hi:
+                warnings.warn(f"{description.source}: no value of joint {mimic.joint!r} keeps it within its limits "
+                              f"and mimic joint {follows}; the mimic joint's limits are not enforced", stacklevel=2)
+            elif lo > lower[i] or hi < upper[i]:
+                lower[i], upper[i] = lo, hi
+                self._narrowed_by.setdefault(i, []).append(follows)
 
     # -- conversion -------------------------------------------------------------------------
     def to_pinocchio(self, q: np.ndarray) -> np.ndarray:
@@ -183,9 +209,11 @@ class JointSpace:
             bad = np.argwhere(outside)[0]
             i = bad[-1]
             row = f"[{bad[0]}]" if q.ndim == 2 else ""
+            why = (f" (narrowed so that mimic joint {', '.join(self._narrowed_by[i])})"
+                   if i in self._narrowed_by else "")
             raise ConfigurationError(
                 f"`{name}`{row} puts joint {self.names[i]!r} at {float(q[tuple(bad)])!r}, outside its limits "
-                f"[{float(self.lower[i])!r}, {float(self.upper[i])!r}]; clip q or pass check_limits=False")
+                f"[{float(self.lower[i])!r}, {float(self.upper[i])!r}]{why}; clip q or pass check_limits=False")
 
     # -- construction -----------------------------------------------------------------------
     def from_mapping(self, values: Mapping[str, float], base: np.ndarray, *, strict: bool = True) -> np.ndarray:

@@ -313,3 +313,35 @@ def test_robot_methods_delegate_to_their_modules(abb):
     result = abb.inverse_kinematics(target, "tool0", rng=0)
     assert isinstance(result, kinengine.IKResult) and result.success
     assert result.q.tolist() == ik.inverse_kinematics(abb, target, "tool0", rng=0).q.tolist()
+
+
+def _leader_and_follower(multiplier: float, offset: float, follower_limits: str) -> str:
+    return f"""<robot name="gripper"><link name="base"/><link name="a"/><link name="b"/>
+  <joint name="elbow" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="follower" type="revolute"><parent link="a"/><child link="b"/><origin xyz="0.2 0 0"/>
+    <axis xyz="0 0 1"/><limit {follower_limits} effort="1" velocity="1"/>
+    <mimic joint="elbow" multiplier="{multiplier}" offset="{offset}"/></joint></robot>"""
+
+
+def test_a_mimic_joint_narrows_its_leader_limits():
+    robot = kinengine.load_urdf_string(_leader_and_follower(2.0, 0.1, 'lower="-4" upper="4"'))
+    # follower = 2·elbow + 0.1 within [-4, 4]  <=>  elbow within [-2.05, 1.95]
+    np.testing.assert_allclose(robot.lower_limits, [-2.05])
+    np.testing.assert_allclose(robot.upper_limits, [1.95])
+    with pytest.raises(kinengine.ConfigurationError,
+                       match=r"joint 'elbow' at 2.0, outside its limits \[-2.05, 1.95\] \(narrowed so that "
+                             r"mimic joint 'follower' = 2·q \+ 0.1 within \[-4, 4\]\)"):
+        robot.frame_pose([2.0], check_limits=True)
+    follower = 2.0 * robot.random_configuration(rng=0, size=1000)[:, 0] + 0.1
+    assert follower.min() >= -4.0 and follower.max() <= 4.0
+    negative = kinengine.load_urdf_string(_leader_and_follower(-0.5, 0.0, 'lower="-0.25" upper="1"'))
+    np.testing.assert_allclose([negative.lower_limits[0], negative.upper_limits[0]], [-2.0, 0.5])
+
+
+def test_mimic_limits_that_no_leader_value_satisfies_are_warned_about_and_not_enforced():
+    with pytest.warns(UserWarning, match="no value of joint 'elbow' keeps it within its limits and mimic joint "
+                                         "'follower' = 1·q \\+ 0 within \\[10, 11\\]; the mimic joint's limits "
+                                         "are not enforced"):
+        robot = kinengine.load_urdf_string(_leader_and_follower(1.0, 0.0, 'lower="10" upper="11"'))
+    np.testing.assert_allclose([robot.lower_limits[0], robot.upper_limits[0]], [-3.0, 3.0])
