@@ -9,7 +9,7 @@ import argparse
 import json
 from pathlib import Path
 
-from kinengine.bench import _peer_cell, _us
+from kinengine.bench import _peer_cell, _us, case_label
 
 HERE = Path(__file__).resolve().parent
 
@@ -21,8 +21,7 @@ def markdown(report: dict, robot: str) -> str:
     lines = ["| " + " | ".join(head) + " |", "|---|" + "--:|" * (len(head) - 1)]
     for row in rows:
         k, p = row["kinengine"], row["pinocchio"]
-        case = row["case"] + (" (batch)" if row["group"] == "throughput" else "")
-        cells = [case, f"{row['n']:,}", _us(k["min_us"]), _us(k["median_us"]), f"{k['per_second']:,.0f}",
+        cells = [case_label(row), f"{row['n']:,}", _us(k["min_us"]), _us(k["median_us"]), f"{k['per_second']:,.0f}",
                  _us(p["min_us"]), f"{row['ratio']:.2f}" if "ratio" in row else ""]
         cells += [_peer_cell(row["peers"][name], k["min_us"]).replace("unsupported", "–") for name in peers]
         lines.append("| " + " | ".join(cells) + " |")

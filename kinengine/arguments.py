@@ -37,3 +37,8 @@ def output_path(text: str) -> Path:
     if not os.access(folder, os.W_OK):
         raise argparse.ArgumentTypeError(f"cannot write {text!r}: folder {str(folder)!r} is not writable")
     return path
+
+
+def summary(doc: str | None) -> str:
+    """A module docstring's first line without reST markup, for --help."""
+    return (doc or "").splitlines()[0].replace("``", "") if doc else ""

@@ -18,7 +18,7 @@ import json
 from pathlib import Path
 import sys
 
-from .arguments import output_path
+from .arguments import output_path, summary
 from .bench_run import DEFAULT_ROBOTS, FULL, QUICK, run
 
 PEER_WIDTH = 20
@@ -27,7 +27,7 @@ PEER_WIDTH = 20
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Register ``bench`` on the kinengine command line."""
     p = subparsers.add_parser("bench", help="time kinengine against raw Pinocchio (and other libraries)",
-                              description=__doc__.splitlines()[0])
+                              description=summary(__doc__))
     p.add_argument("robots", nargs="*", metavar="ROBOT", help=f"robot names or .urdf paths "
                    f"(default: {' '.join(DEFAULT_ROBOTS)})")
     p.add_argument("--quick", action="store_true", help="few repeats and small batches (tests, CI)")
@@ -54,6 +54,11 @@ def handle(args: argparse.Namespace) -> int:
     return 0
 
 
+def case_label(row: dict) -> str:
+    """The row's case, marked "(batch)" for the throughput rows (q of shape (N, dof))."""
+    return row["case"] + (" (batch)" if row["group"] == "throughput" else "")
+
+
 def _us(value: float) -> str:
     return f"{value:,.2f}" if value < 100 else f"{value:,.0f}"
 
@@ -63,7 +68,7 @@ def format_table(report: dict) -> str:
     versions = report["versions"]
     lines = [f"kinengine {versions['kinengine']} · Pinocchio {versions['pin']} · numpy {versions['numpy']} · "
              + f"{report['cpu']} ({report['cores']} cores) · {report['timestamp']}", ""]
-    header = (f"{'robot':<12} {'case':<34} {'N':>7} {'min µs':>10} {'median µs':>10} {'per s':>12} "
+    header = (f"{'robot':<12} {'case':<42} {'N':>7} {'min µs':>10} {'median µs':>10} {'per s':>12} "
               f"{'pin min µs':>10} {'ratio':>6}  note")
     lines += [header, "-" * len(header)]
     for row in report["rows"]:
@@ -72,20 +77,20 @@ def format_table(report: dict) -> str:
                 if k["status"] == "ok" else f"{'skipped':>10} {'':>10} {'':>12}")
         ratio = f"{row['ratio']:>6.2f}" if "ratio" in row else f"{'':>6}"
         note = row["note"] + ("" if p["status"] == "ok" else f" [floor {p['status']}: {p['difference']}]")
-        lines.append(f"{row['robot']:<12} {row['case']:<34} {row['n']:>7} {ours} {_us(p['min_us']):>10} "
+        lines.append(f"{row['robot']:<12} {case_label(row):<42} {row['n']:>7} {ours} {_us(p['min_us']):>10} "
                      f"{ratio}  {note}".rstrip())
     peer_rows = [row for row in report["rows"] if any(v["status"] != "unsupported"
                                                        for v in row.get("peers", {}).values())]
     if peer_rows:
         names = list(peer_rows[0]["peers"])
         lines += ["", "peers: min µs per call (× kinengine's min); 'disagrees' rows were not timed", ""]
-        head = f"{'robot':<12} {'case':<34} {'N':>7} {'kinengine':>10} " + " ".join(
+        head = f"{'robot':<12} {'case':<42} {'N':>7} {'kinengine':>10} " + " ".join(
             f"{n[:PEER_WIDTH]:>{PEER_WIDTH}}" for n in names)
         lines += [head, "-" * len(head)]
         for row in peer_rows:
             ours = row["kinengine"].get("min_us")
             cells = [_peer_cell(row["peers"][n], ours) for n in names]
-            lines.append(f"{row['robot']:<12} {row['case']:<34} {row['n']:>7} "
+            lines.append(f"{row['robot']:<12} {case_label(row):<42} {row['n']:>7} "
                          f"{_us(ours) if ours else '-':>10} " + " ".join(f"{c:>{PEER_WIDTH}}" for c in cells))
     notes = [f"  {robot['name']} / {name}: {status['note']}" for robot in report["robots"]
              for name, status in robot["peers"].items() if status["note"]]

@@ -1,4 +1,4 @@
-"""The ``kinengine`` command line: ``list``, ``info``, ``pose`` and the feature commands.
+"""The kinengine command line: list, info, pose, verify, bench and show.
 
 Every sub-command handler takes the parsed arguments and returns an exit code;
 kinengine errors are printed as one line and exit with status 2.
@@ -16,7 +16,7 @@ import warnings
 import numpy as np
 
 from . import __version__, bench, show, verify
-from .arguments import parse_vector
+from .arguments import parse_vector, summary
 from .catalog import available_robots
 from .errors import KinematicsError
 from .loading import load
@@ -32,9 +32,15 @@ def _cmd_info(args: argparse.Namespace) -> int:
     robot = load(args.robot)
     print(f"{robot.name}: {robot.dof} dof, source {robot.source}")
     print(f"end effector: {robot.end_effector}")
-    print(f"{'joint':<28} {'lower':>10} {'upper':>10}")
-    for name, lo, hi in zip(robot.joint_names, robot.lower_limits, robot.upper_limits):
-        print(f"{name:<28} {lo:>10.5g} {hi:>10.5g}")
+    print(f"root link (the frame poses are given in): {robot.description.root}")
+    print(f"{'q':>3} {'joint':<28} {'type':<11} {'lower':>10} {'upper':>10}")
+    kinds = {j.name: j.type for j in robot.description.joints}
+    for i, (name, lo, hi) in enumerate(zip(robot.joint_names, robot.lower_limits, robot.upper_limits)):
+        print(f"{i:>3} {name:<28} {kinds[name]:<11} {lo:>10.5g} {hi:>10.5g}")
+    for joint in robot.description.joints:
+        if joint.mimic is not None:
+            m = joint.mimic
+            print(f"  - {joint.name} (mimic, {joint.type}) = {m.multiplier:g}·{m.joint} + {m.offset:g}")
     print("frames: " + ", ".join(robot.frame_names))
     return 0
 
@@ -66,7 +72,7 @@ def _cmd_pose(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="kinengine", description=__doc__.splitlines()[0] if __doc__ else "")
+    parser = argparse.ArgumentParser(prog="kinengine", description=summary(__doc__))
     parser.add_argument("--version", action="version", version=f"kinengine {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 

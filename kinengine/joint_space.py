@@ -16,7 +16,7 @@ import warnings
 import numpy as np
 import pinocchio as pin
 
-from .errors import ConfigurationError, FrameNotFoundError
+from .errors import ConfigurationError, FrameNotFoundError, OptionError
 from .urdf import RobotDescription
 
 _F64 = np.dtype(np.float64)
@@ -242,6 +242,8 @@ class JointSpace:
 
     def sample(self, rng: np.random.Generator, size: int | None) -> np.ndarray:
         """Uniform samples within limits; unbounded (continuous) joints in [-π, π)."""
+        if size is not None and (isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0):
+            raise OptionError(f"`size` must be None or a number of configurations >= 0, got {size!r}")
         lo = np.where(np.isfinite(self.lower), self.lower, -np.pi)
         hi = np.where(np.isfinite(self.upper), self.upper, np.pi)
         shape = (self.dof,) if size is None else (size, self.dof)

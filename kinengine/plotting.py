@@ -110,7 +110,7 @@ def plot_robot(robot, q: object = None, ax=None, *, frames: Sequence[str] = (), 
             "ij,jkl->ikl", d.ellipsoid.axes * (d.ellipsoid_scale * d.ellipsoid.semi_axes), sphere)
         ax.plot_wireframe(*surface, color="tab:cyan", linewidth=0.5, alpha=0.6, zorder=1,
                           label=f"velocity ellipsoid of {d.ellipsoid_frame}, ×{d.ellipsoid_scale:g} "
-                                f"(1 m/s per unit |q̇| drawn as {d.ellipsoid_scale:g} m)")
+                                f"(1 m/s per unit $|\\dot{{q}}|$ drawn as {d.ellipsoid_scale:g} m)")
         points.append(surface.reshape(3, -1).T)
 
     ax.add_collection3d(Line3DCollection(d.skeleton, colors="0.25", linewidths=2.5, zorder=2,

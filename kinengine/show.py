@@ -12,7 +12,7 @@ import argparse
 from pathlib import Path
 import re
 
-from .arguments import parse_vector
+from .arguments import parse_vector, summary
 from .errors import KinematicsError
 from .loading import load
 from .plotting import plot_robot
@@ -26,7 +26,7 @@ def _names(text: str) -> list[str]:
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``show`` on the kinengine command line."""
     p = subparsers.add_parser("show", help="draw the robot at q into a PNG",
-                              description=__doc__.splitlines()[0])
+                              description=summary(__doc__))
     p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf file")
     p.add_argument("--q", type=parse_vector, default=None,
                    help="comma-separated joint values [rad | m] (default: zero); "

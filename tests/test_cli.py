@@ -54,3 +54,15 @@ def test_unknown_reference_is_an_option_error_and_a_value_error(abb):
     with pytest.raises(kinengine.OptionError, match="unknown reference 'global'") as info:
         abb.jacobian(abb.neutral(), "tool0", reference="global")
     assert isinstance(info.value, ValueError)
+
+
+def test_info_lists_coordinates_types_limits_and_mimic_joints(capsys, tmp_path):
+    from custom_robots import mixed_chain_urdf
+    path = tmp_path / "mixed.urdf"
+    path.write_text(mixed_chain_urdf())
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "root link (the frame poses are given in): base" in out
+    assert out[4].split() == ["0", "shoulder", "revolute", "-2.5", "2.5"]
+    assert out[6].split() == ["2", "spin", "continuous", "-inf", "inf"]
+    assert "  - finger_b_joint (mimic, revolute) = -1.5·finger_a_joint + 0.2" in out

@@ -215,7 +215,7 @@ def test_plot_robot_draws_its_drawing_with_equal_scales_and_a_title(robots):
     points = d.skeleton.reshape(-1, 3)
     assert np.all((points >= limits[:, 0]) & (points <= limits[:, 1]))
     labels = ax.get_legend_handles_labels()[1]
-    assert f"velocity ellipsoid of tool0, ×{d.ellipsoid_scale:g} (1 m/s per unit |q̇| drawn as " \
+    assert f"velocity ellipsoid of tool0, ×{d.ellipsoid_scale:g} (1 m/s per unit $|\\dot{{q}}|$ drawn as " \
            f"{d.ellipsoid_scale:g} m)" in labels
     assert "revolute joint axes" in labels and "prismatic joint axes" not in labels
     assert {t.get_text() for t in ax.texts} == {"tool0", "base"}

@@ -345,3 +345,9 @@ def test_mimic_limits_that_no_leader_value_satisfies_are_warned_about_and_not_en
                                          "are not enforced"):
         robot = kinengine.load_urdf_string(_leader_and_follower(1.0, 0.0, 'lower="10" upper="11"'))
     np.testing.assert_allclose([robot.lower_limits[0], robot.upper_limits[0]], [-3.0, 3.0])
+
+
+@pytest.mark.parametrize("size", [-1, 2.5, "3", True])
+def test_random_configuration_refuses_a_bad_size(abb, size):
+    with pytest.raises(kinengine.OptionError, match="`size` must be None or a number of configurations >= 0"):
+        abb.random_configuration(rng=0, size=size)
