@@ -105,8 +105,9 @@ class Robot:
 
     # -- configurations ---------------------------------------------------------------------
     def neutral(self) -> np.ndarray:
-        """The zero configuration, (dof,)."""
-        return np.zeros(self.dof)
+        """The zero configuration clipped into the joint limits, (dof,): q = 0 unless a joint's limits exclude
+        0 (e.g. the Panda's joint 4), which then sits at its nearest limit (as MoveIt's default state)."""
+        return np.clip(np.zeros(self.dof), self.lower_limits, self.upper_limits)
 
     def random_configuration(self, rng: np.random.Generator | int | None = None,
                              size: int | None = None) -> np.ndarray:

@@ -351,3 +351,13 @@ def test_mimic_limits_that_no_leader_value_satisfies_are_warned_about_and_not_en
 def test_random_configuration_refuses_a_bad_size(abb, size):
     with pytest.raises(kinengine.OptionError, match="`size` must be None or a number of configurations >= 0"):
         abb.random_configuration(rng=0, size=size)
+
+
+def test_neutral_is_zero_clipped_into_the_limits():
+    panda = kinengine.load("panda")
+    q = panda.neutral()
+    panda.check_configuration(q)  # within limits
+    joint4 = panda.joint_names.index("panda_joint4")
+    assert q[joint4] == panda.upper_limits[joint4] < 0
+    assert np.count_nonzero(q) == 1
+    np.testing.assert_array_equal(kinengine.load("abb_irb120").neutral(), np.zeros(6))
