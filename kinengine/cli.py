@@ -85,7 +85,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("pose", help="frame pose and geometric Jacobian at a configuration")
     p.add_argument("robot", help="robot name or path to a .urdf file")
-    p.add_argument("--q", type=parse_vector, default=None, help="comma-separated joint values (default: robot.neutral(), zero clipped into the limits)")
+    p.add_argument("--q", type=parse_vector, default=None,
+                   help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
     p.add_argument("--frame", default=None, help="frame name (default: the end effector)")
     p.add_argument("--reference", default="local_world_aligned",
                    choices=["local_world_aligned", "world", "local"])

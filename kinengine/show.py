@@ -29,8 +29,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                               description=summary(__doc__))
     p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf file")
     p.add_argument("--q", type=parse_vector, default=None,
-                   help="comma-separated joint values [rad | m] (default: zero clipped into the limits); "
-                   "write --q=-0.5,... when the first is negative")
+                   help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
     p.add_argument("--frames", type=_names, default=None,
                    help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)")
     p.add_argument("--ellipsoid", default=None, metavar="FRAME",
