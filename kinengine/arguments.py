@@ -41,4 +41,4 @@ def output_path(text: str) -> Path:
 
 def summary(doc: str | None) -> str:
     """A module docstring's first line without reST markup, for --help."""
-    return (doc or "").splitlines()[0].replace("``", "") if doc else ""
+    return doc.splitlines()[0].replace("``", "") if doc else ""

@@ -25,7 +25,6 @@ from dataclasses import dataclass
 import itertools
 import os
 import threading
-import weakref
 
 import numpy as np
 import pinocchio as pin
@@ -223,20 +222,12 @@ def _evaluate(chain: _Chain, qT: np.ndarray, pose: np.ndarray | None, jac: np.nd
 
 
 # -- compilation cache, thread pool, Pinocchio loop -----------------------------------------------
-_CHAINS: weakref.WeakKeyDictionary[object, dict[int, _Chain]] = weakref.WeakKeyDictionary()
 _LOCK = threading.Lock()
 _POOL: ThreadPoolExecutor | None = None
 
 
 def _chain(robot, fid: int) -> _Chain:
-    chains = _CHAINS.get(robot)
-    if chains is None:
-        with _LOCK:
-            chains = _CHAINS.setdefault(robot, {})
-    chain = chains.get(fid)
-    if chain is None:
-        chain = chains[fid] = _compile(robot, fid)
-    return chain
+    return robot._memoized(("batch chain", fid), lambda: _compile(robot, fid))
 
 
 def _pool() -> ThreadPoolExecutor:

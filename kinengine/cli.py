@@ -16,6 +16,7 @@ import warnings
 import numpy as np
 
 from . import __version__, bench, show, verify
+from .analytic import pose_map
 from .arguments import parse_vector, summary
 from .catalog import available_robots
 from .errors import KinematicsError
@@ -53,7 +54,7 @@ def _cmd_pose(args: argparse.Namespace) -> int:
     T, J = robot.frame_pose(q, frame), robot.jacobian(q, frame, args.reference)
     analytic = args.rotation is not None or args.position != "cartesian"
     if analytic:
-        labels = robot.task(frame, args.position, args.rotation, check_inputs=False).labels
+        labels = pose_map(args.position, args.rotation).labels
         chi = robot.pose_parameters(q, frame, args.position, args.rotation)
         JA = robot.analytic_jacobian(q, frame, args.position, args.rotation)
     np.set_printoptions(precision=5, suppress=True, linewidth=120)

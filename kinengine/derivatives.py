@@ -24,7 +24,6 @@ J_local = blockdiag(Cᵀ, Cᵀ)·J_lwa, ∂J_local = blockdiag(Cᵀ, Cᵀ)·(∂
 
 from __future__ import annotations
 
-import weakref
 
 import numpy as np
 import pinocchio as pin
@@ -130,15 +129,8 @@ class _Chain:
                               dtype=float).reshape(len(joints), len(joints))
 
 
-_CHAINS: "weakref.WeakKeyDictionary[object, dict[int, _Chain]]" = weakref.WeakKeyDictionary()
-
-
 def _chain(robot, fid: int) -> _Chain:
-    per_robot = _CHAINS.setdefault(robot, {})
-    chain = per_robot.get(fid)
-    if chain is None:
-        chain = per_robot[fid] = _Chain(robot._model, fid, robot.dof)
-    return chain
+    return robot._memoized(("hessian chain", fid), lambda: _Chain(robot._model, fid, robot.dof))
 
 
 def _change_reference(Jw: np.ndarray, dJw: np.ndarray, directions: np.ndarray, C: np.ndarray, p: np.ndarray,

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 import math
-import weakref
 
 import numpy as np
 import pinocchio as pin
@@ -180,17 +179,16 @@ class _Solver:
         return ep, er
 
 
-_SEED_TABLES: "weakref.WeakKeyDictionary[object, dict[str, tuple]]" = weakref.WeakKeyDictionary()
+def _seed_table(robot, frame: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """SEED_TABLE_SIZE random configurations with the positions and rotations of ``frame`` there."""
+    configs = robot.random_configuration(np.random.default_rng(SEED_TABLE_RNG), size=SEED_TABLE_SIZE)
+    poses = robot.frame_pose(configs, frame)
+    return configs, poses[:, :3, 3].copy(), poses[:, :3, :3].copy()
 
 
 def _nearest_seeds(robot, frame: str, p_d, C_d, k: int) -> np.ndarray:
     """The k stored configurations (k, dof) whose poses of ``frame`` are nearest (p_d, C_d)."""
-    tables = _SEED_TABLES.setdefault(robot, {})
-    if frame not in tables:
-        configs = robot.random_configuration(np.random.default_rng(SEED_TABLE_RNG), size=SEED_TABLE_SIZE)
-        poses = robot.frame_pose(configs, frame)
-        tables[frame] = (configs, poses[:, :3, 3].copy(), poses[:, :3, :3].copy())
-    configs, positions, rotations = tables[frame]
+    configs, positions, rotations = robot._memoized(("ik seeds", frame), lambda: _seed_table(robot, frame))
     distance = np.zeros(len(configs))
     if p_d is not None:
         distance += np.linalg.norm(positions - p_d, axis=1)

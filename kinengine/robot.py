@@ -14,7 +14,7 @@ Frames and conventions
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from math import isfinite
 import threading
 from typing import TYPE_CHECKING
@@ -78,6 +78,7 @@ class Robot:
         self._end_effector = end_effector if end_effector in self._frame_ids else _default_end_effector(
             description)
         self._tls = threading.local()
+        self._memo: dict[object, object] = {}
 
     # -- description ------------------------------------------------------------------------
     name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
@@ -137,6 +138,14 @@ class Robot:
         except (KeyError, TypeError):
             raise FrameNotFoundError(frame, self._frame_names) from None
 
+    def _memoized(self, key: object, make: Callable[[], object]) -> object:
+        """A constant derived from the model (a compiled chain, an IK seed table), made once per key.
+        Two threads may both make it the first time; their results are equal and one is kept."""
+        try:
+            return self._memo[key]
+        except KeyError:
+            return self._memo.setdefault(key, make())
+
     def _data(self) -> pin.Data:
         try:
             return self._tls.data
@@ -153,7 +162,9 @@ class Robot:
             fid = self._frame_ids[frame if frame is not None else self._end_effector]
         except (KeyError, TypeError):
             raise FrameNotFoundError(frame, self._frame_names) from None
-        # hot path inlined (a float64 (dof,) array: one float sum checks finiteness); else the full check
+        # JointSpace.check's fast path, inlined here, in jacobian and in analytic_jacobian: a call costs
+        # ~0.17 µs, 16 % of the call (measured). A float64 (dof,) array with a finite sum goes straight to
+        # Pinocchio (which reads strided vectors element by element); anything else gets the full check.
         if not (type(q) is _NDARRAY and q.dtype is _F64 and q.shape == self._shape and not check_limits
                 and isfinite(sum(q.tolist()))):
             q = self._joints.check(q, check_limits=check_limits)

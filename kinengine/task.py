@@ -150,7 +150,6 @@ class Task:
         self.analytic_jacobian_dot = _readonly(sel[2].reshape(k * ms, n))
         self.chi_dot = _readonly(sel[3].reshape(k * ms))
         self._rates = (self._twist, self._Jdot, self._JAdot, self._chi_dot) + (sel[2], sel[3])
-        self._rates_valid = True
         self._invalidate_rates()
 
     def __repr__(self) -> str:
@@ -202,10 +201,9 @@ class Task:
 
     def _invalidate_rates(self) -> None:
         """NaN in every rate attribute (until an update with q̇ fills them)."""
-        if self._rates_valid:
-            for array in self._rates:
-                array.fill(np.nan)
-            self._rates_valid = False
+        for array in self._rates:
+            array.fill(np.nan)
+        self._rates_valid = False
 
     def _update_frame(self, frame: _Frame, qdot: np.ndarray | None) -> None:
         model, data = self._model, self._data
