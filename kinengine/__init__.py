@@ -6,7 +6,6 @@
 >>> J = robot.jacobian(robot.neutral(), "tool0")              # (6, 6), rows [linear; angular]
 """
 
-from .catalog import available_robots
 from .errors import (
     ConfigurationError,
     FrameNotFoundError,
@@ -17,11 +16,12 @@ from .errors import (
     RepresentationSingularityError,
     URDFError,
 )
+from .control.ik import IKResult
+from .control.manipulability import SingularityReport
+from .control.task import Task
 from .loading import load, load_urdf_string
-from .ik import IKResult
-from .manipulability import SingularityReport
+from .model import available_robots
 from .robot import Robot
-from .task import Task
 
 __version__ = "0.1.0"
 

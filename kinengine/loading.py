@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .catalog import available_robots, catalog_entry
+from .model import available_robots, catalog_entry
 from .errors import URDFError
 from .robot import Robot
 from .urdf import LIMITS, Limits, RobotDescription, parse_urdf, read_urdf_file

@@ -1,59 +1,45 @@
-"""The :class:`Robot`: a fixed-base kinematic model built from a validated URDF.
+"""The :class:`Robot`: the public facade over one robot's kinematics.
 
 Frames and conventions
 ----------------------
-* "world" in Pinocchio is the URDF's root link frame; it is the seed's inertial frame I.
-* ``frame_pose(q, f)`` is T_IF: the pose of frame f in the root link frame, (4, 4).
+* "world" in Pinocchio is the URDF's root link frame: the inertial frame I of the Robot Dynamics
+  lecture notes, ETH Zurich, section 2.8.
+* ``frame_pose(q, f)`` is T_IF: the pose of frame f in the root link frame, (4, 4), [m].
 * ``jacobian(q, f, reference)``: rows [linear; angular], columns in ``joint_names`` order.
-  - "local_world_aligned": I J_e0 of the seed (eq. 2.155) — velocity of f's origin and
+  - "local_world_aligned": I J_e0 of the lecture notes (eq. 2.155) — velocity of f's origin and
     angular velocity, both in I.
   - "local": the same twist expressed in f: blockdiag(C_IF^T, C_IF^T) · J_lwa.
   - "world": the spatial velocity in I: linear rows are the velocity of the body point
     that currently coincides with I's origin: v_O = v_f − ω × p_f  (p_f = origin of f in I).
+
+The Robot checks its inputs once and hands them to the objects that own the work: the
+:class:`~kinengine.kinematics.Kinematics` engine (``robot.engine``: Pinocchio model, per-thread
+Data, coordinate map), the analytic layer, and the control layer.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
-from math import isfinite
-import threading
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
-from . import batch
-from .analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_at, as_rows, frame_views, pose_map
-from .errors import FrameNotFoundError, OptionError
-from .joint_space import JointSpace
-from .urdf import RobotDescription, build_pinocchio_model
+from .analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_batch, analytic_single, as_rows, pose_map
+from .analytic.hessian import analytic_hessian as _analytic_hessian
+from .control import ik as _ik
+from .control import manipulability as _manipulability
+from .control.ik import IKResult
+from .control.manipulability import DEFAULT_TOLERANCE, Rows, SingularityReport, VelocityEllipsoid
+from .control.task import Task
+from .errors import FrameNotFoundError
+from .kinematics import REFERENCES, Kinematics, resolve_reference
+from .kinematics import batch as _batch
+from .kinematics import derivatives as _derivatives
+from .urdf import RobotDescription
 
-if TYPE_CHECKING:  # imported lazily at run time: these modules import this one
-    from .ik import IKResult
-    from .manipulability import SingularityReport, VelocityEllipsoid
-    from .task import Task
-
-_NDARRAY = np.ndarray
-_F64 = np.dtype(np.float64)
-
-REFERENCES: dict[object, pin.ReferenceFrame] = {
-    "world": pin.WORLD,
-    "local": pin.LOCAL,
-    "local_world_aligned": pin.LOCAL_WORLD_ALIGNED,
-    pin.WORLD: pin.WORLD,
-    pin.LOCAL: pin.LOCAL,
-    pin.LOCAL_WORLD_ALIGNED: pin.LOCAL_WORLD_ALIGNED,
-}
-
-
-def resolve_reference(reference: object) -> pin.ReferenceFrame:
-    """Pinocchio's ReferenceFrame for "world", "local", "local_world_aligned" (or the enum itself)."""
-    try:
-        return REFERENCES[reference]
-    except (KeyError, TypeError):
-        raise OptionError(f"unknown reference {reference!r}; use 'world', 'local' or "
-                              "'local_world_aligned' (or a pinocchio.ReferenceFrame)") from None
-
+if TYPE_CHECKING:
+    import matplotlib.axes
 
 class Robot:
     """A fixed-base robot: one coordinate per independent movable joint.
@@ -65,55 +51,61 @@ class Robot:
 
     def __init__(self, description: RobotDescription, urdf_text: str, *, name: str | None = None,
                  end_effector: str | None = None) -> None:
-        model = build_pinocchio_model(description)  # from the canonical XML, checked joint for joint
-        self._model = model
+        self._kin = kin = Kinematics(description)
+        self._coords = kin.coordinates
         self._description = description
         self._urdf_text = urdf_text
         self._name = name or description.name
-        self._joints = JointSpace(model, description)
-        self._identity_q = self._joints.identity
-        self._shape = (self._joints.dof,)
-        self._frame_ids = _frame_ids(model)
-        self._frame_names = tuple(self._frame_ids)
-        self._end_effector = end_effector if end_effector in self._frame_ids else _default_end_effector(
-            description)
-        self._tls = threading.local()
-        self._memo: dict[object, object] = {}
+        if end_effector is not None:
+            kin.frame_id(end_effector)  # FrameNotFoundError with suggestions for an unknown name
+        self._end_effector = end_effector if end_effector is not None else _default_end_effector(description)
 
     # -- description ------------------------------------------------------------------------
     name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
-    dof = property(lambda self: self._joints.dof, doc="Number of coordinates in q.")
-    joint_names = property(lambda self: self._joints.names, doc="Names of q's coordinates, in order.")
-    lower_limits = property(lambda self: self._joints.lower, doc="(dof,) lower limits [rad or m]; -inf if none.")
-    upper_limits = property(lambda self: self._joints.upper, doc="(dof,) upper limits [rad or m]; +inf if none.")
-    frame_names = property(lambda self: self._frame_names, doc="Every link and joint frame, in model order.")
+    dof = property(lambda self: self._coords.dof, doc="Number of coordinates in q.")
+    joint_names = property(lambda self: self._coords.names, doc="Names of q's coordinates, in order.")
+    frame_names = property(lambda self: self._kin.frame_names, doc="Every link and joint frame, in model order.")
     end_effector = property(lambda self: self._end_effector, doc="Default end-effector frame name.")
     description = property(lambda self: self._description, doc="The validated RobotDescription.")
     urdf_text = property(lambda self: self._urdf_text, doc="The URDF text the robot was loaded from.")
     source = property(lambda self: self._description.source, doc="File the robot came from, or '<string>'.")
+    engine = property(lambda self: self._kin, doc="The Kinematics object (Pinocchio model, per-thread Data, "
+                                                  "coordinate map) that the methods below delegate to.")
+
+    @property
+    def lower_limits(self) -> np.ndarray:
+        """(dof,) lower limits [rad or m]; -inf if none (a fresh copy)."""
+        return self._coords.lower.copy()
+
+    @property
+    def upper_limits(self) -> np.ndarray:
+        """(dof,) upper limits [rad or m]; +inf if none (a fresh copy)."""
+        return self._coords.upper.copy()
 
     def __repr__(self) -> str:
-        return f"<Robot {self._name!r}: {self.dof} dof, {len(self._frame_names)} frames>"
+        return f"<Robot {self._name!r}: {self.dof} dof, {len(self.frame_names)} frames>"
 
     def pinocchio_model(self) -> pin.Model:
-        """A copy of the Pinocchio Model (continuous joints have nq = 2; mimic joints nq = 0)."""
-        return pin.Model(self._model)
+        """A copy of Pinocchio's Model: one plain joint (nq = nv = 1) per movable URDF joint, mimic joints
+        included as ordinary joints; its configuration is :meth:`pinocchio_configuration`."""
+        return pin.Model(self._kin.model)
 
     def pinocchio_configuration(self, q: object) -> np.ndarray:
-        """Pinocchio's configuration vector (nq,) for q (continuous joints as cos, sin)."""
-        q = self._joints.check(q, allow_batch=False)
-        return np.array(self._joints.to_pinocchio(q), dtype=float)
+        """Pinocchio's configuration (nq,) for q: q_pin = M q + b (every movable joint's value, mimic
+        joints at multiplier·leader + offset); equal to q for robots without mimic joints."""
+        q = self._coords.check(q, allow_batch=False)
+        return np.array(self._coords.to_pinocchio(q), dtype=float)
 
     # -- configurations ---------------------------------------------------------------------
     def neutral(self) -> np.ndarray:
         """The zero configuration clipped into the joint limits, (dof,): q = 0 unless a joint's limits exclude
         0 (e.g. the Panda's joint 4), which then sits at its nearest limit (as MoveIt's default state)."""
-        return np.clip(np.zeros(self.dof), self.lower_limits, self.upper_limits)
+        return np.clip(np.zeros(self.dof), self._coords.lower, self._coords.upper)
 
     def random_configuration(self, rng: np.random.Generator | int | None = None,
                              size: int | None = None) -> np.ndarray:
         """Uniform within limits, (dof,) or (size, dof); continuous joints in [-π, π)."""
-        return self._joints.sample(np.random.default_rng(rng), size)
+        return self._coords.sample(np.random.default_rng(rng), size)
 
     def configuration(self, values: Mapping[str, float], *, base: object = None,
                       strict: bool = True) -> np.ndarray:
@@ -121,62 +113,33 @@ class Robot:
 
         Unknown names raise FrameNotFoundError (``strict=False`` ignores them).
         """
-        start = self.neutral() if base is None else np.array(self._joints.check(base, name="base",
-                                                                              allow_batch=False))
-        return self._joints.from_mapping(values, start, strict=strict)
+        start = self.neutral() if base is None else np.array(self._coords.check(base, name="base",
+                                                                               allow_batch=False))
+        return self._coords.from_mapping(values, start, strict=strict)
 
     def check_configuration(self, q: object, *, check_limits: bool = True, batch: bool = True) -> np.ndarray:
         """A fresh float64 copy of q, (dof,) or (with ``batch``) (N, dof); ConfigurationError on bad shape,
         values or (optionally) limits."""
-        return np.array(self._joints.check(q, check_limits=check_limits, allow_batch=batch))
+        return np.array(self._coords.check(q, check_limits=check_limits, allow_batch=batch))
 
     # -- kinematics -------------------------------------------------------------------------
     def frame_id(self, frame: str) -> int:
         """Pinocchio's frame index of a frame name (FrameNotFoundError with suggestions otherwise)."""
-        try:
-            return self._frame_ids[frame]
-        except (KeyError, TypeError):
-            raise FrameNotFoundError(frame, self._frame_names) from None
+        return self._kin.frame_id(frame)
 
-    def _memoized(self, key: object, make: Callable[[], object]) -> object:
-        """A constant derived from the model (a compiled chain, an IK seed table), made once per key.
-        Two threads may both make it the first time; their results are equal and one is kept."""
-        try:
-            return self._memo[key]
-        except KeyError:
-            return self._memo.setdefault(key, make())
-
-    def _data(self) -> pin.Data:
-        try:
-            return self._tls.data
-        except AttributeError:
-            data = self._tls.data = self._model.createData()
-            return data
+    def _fid(self, frame: str | None) -> int:
+        return self._kin.frame_id(self._end_effector if frame is None else frame)
 
     def frame_pose(self, q: object, frame: str | None = None, *, check_limits: bool = False) -> np.ndarray:
         """T_IF: pose of ``frame`` (default: end_effector) in the root link frame.
 
         q (dof,) -> (4, 4); q (N, dof) -> (N, 4, 4). Translation in [m].
         """
-        try:
-            fid = self._frame_ids[frame if frame is not None else self._end_effector]
-        except (KeyError, TypeError):
-            raise FrameNotFoundError(frame, self._frame_names) from None
-        # JointSpace.check's fast path, inlined here, in jacobian and in analytic_jacobian: a call costs
-        # ~0.17 µs, 16 % of the call (measured). A float64 (dof,) array with a finite sum goes straight to
-        # Pinocchio (which reads strided vectors element by element); anything else gets the full check.
-        if not (type(q) is _NDARRAY and q.dtype is _F64 and q.shape == self._shape and not check_limits
-                and isfinite(sum(q.tolist()))):
-            q = self._joints.check(q, check_limits=check_limits)
-            if q.ndim == 2:
-                return batch.evaluate(self, q, fid, None, jacobian=False)[0]
-        try:
-            data = self._tls.data
-        except AttributeError:
-            data = self._data()
-        model = self._model
-        pin.forwardKinematics(model, data, q if self._identity_q else self._joints.to_pinocchio(q))
-        return pin.updateFramePlacement(model, data, fid).homogeneous
+        fid = self._fid(frame)
+        q = self._coords.check(q, check_limits=check_limits)
+        if q.ndim == 2:
+            return _batch.evaluate(self._kin, q, fid, None, jacobian=False)[0]
+        return self._kin.pose(q, fid)
 
     def jacobian(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
                  check_limits: bool = False) -> np.ndarray:
@@ -184,26 +147,25 @@ class Robot:
 
         q (dof,) -> (6, dof); q (N, dof) -> (N, 6, dof). See the module doc for the references.
         """
-        try:
-            fid = self._frame_ids[frame if frame is not None else self._end_effector]
-        except (KeyError, TypeError):
-            raise FrameNotFoundError(frame, self._frame_names) from None
-        try:
-            ref = REFERENCES[reference]
-        except (KeyError, TypeError):
-            ref = resolve_reference(reference)  # raises with the valid names
-        if not (type(q) is _NDARRAY and q.dtype is _F64 and q.shape == self._shape and not check_limits
-                and isfinite(sum(q.tolist()))):
-            q = self._joints.check(q, check_limits=check_limits)
-            if q.ndim == 2:
-                return batch.evaluate(self, q, fid, ref, pose=False)[1]
-        try:
-            data = self._tls.data
-        except AttributeError:
-            data = self._data()
-        J = pin.computeFrameJacobian(self._model, data, q if self._identity_q else self._joints.to_pinocchio(q),
-                                     fid, ref)
-        return J if J.ndim == 2 else J.reshape(6, 1)  # eigenpy returns a (6, 1) matrix as (6,)
+        fid = self._fid(frame)
+        ref = REFERENCES[reference] if type(reference) is str and reference in REFERENCES else \
+            resolve_reference(reference)
+        q = self._coords.check(q, check_limits=check_limits)
+        if q.ndim == 2:
+            return _batch.evaluate(self._kin, q, fid, ref, pose=False)[1]
+        return self._kin.jacobian(q, fid, ref)
+
+    def kinematics(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
+                   check_limits: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """(T_IF, J) in one pass: (4, 4) and (6, dof) for q (dof,); (N, 4, 4) and (N, 6, dof) for q (N, dof).
+        Equal to :meth:`frame_pose` and :meth:`jacobian` called separately."""
+        fid = self._fid(frame)
+        ref = resolve_reference(reference)
+        q = self._coords.check(q, check_limits=check_limits)
+        if q.ndim == 2:
+            T, J = _batch.evaluate(self._kin, q, fid, ref)
+            return T, J  # type: ignore[return-value]
+        return self._kin.pose_and_jacobian(q, fid, ref)
 
     # -- analytic Jacobians --------------------------------------------------------------------
     def pose_parameters(self, q: object, frame: str | None = None, position: str | None = "cartesian",
@@ -227,101 +189,91 @@ class Robot:
         Raises RepresentationSingularityError when χ_e is closer than ``singularity_threshold``
         to its parameterization's singular set (the message names regular alternatives).
         """
-        pmap = pose_map(position, rotation, rows if rows is None else as_rows(rows))
-        try:
-            fid = self._frame_ids[frame if frame is not None else self._end_effector]
-        except (KeyError, TypeError):
-            raise FrameNotFoundError(frame, self._frame_names) from None
-        if not (type(q) is _NDARRAY and q.dtype is _F64 and q.shape == self._shape and not check_limits
-                and isfinite(sum(q.tolist()))):
-            q = self._joints.check(q, check_limits=check_limits)
-            if q.ndim == 2:
-                return batch.analytic_jacobian(self, q, fid, pmap, singularity_threshold)
-        tls = self._tls
-        try:
-            views = tls.placements[fid]
-        except (AttributeError, KeyError):  # this thread's first call for the frame
-            if not hasattr(tls, "placements"):
-                tls.placements = {}
-            views = tls.placements[fid] = frame_views(self._data(), fid)
-        qp = q if self._identity_q else self._joints.to_pinocchio(q)
-        return analytic_at(self._model, tls.data, qp, fid, views, pmap, singularity_threshold)
+        pmap = pose_map(position, rotation, as_rows(rows))
+        fid = self._fid(frame)
+        q = self._coords.check(q, check_limits=check_limits)
+        if q.ndim == 2:
+            return analytic_batch(self._kin, q, fid, pmap, singularity_threshold)
+        return analytic_single(self._kin, q, fid, pmap, singularity_threshold)
 
     def task(self, frames: str | Sequence[str] | None = None, position: str | None = "cartesian",
-             rotation: str | None = "euler_zyx", **options: object) -> "Task":
-        """A :class:`~kinengine.task.Task` for a control loop: ``task.update(q, qdot)`` fills pose, χ,
+             rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
+             check_inputs: bool = True, continuous: bool = True,
+             singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD) -> Task:
+        """A :class:`~kinengine.control.task.Task` for a control loop: ``task.update(q, qdot)`` fills pose, χ,
         J_e0, J_A (and with q̇ the twist, J̇_e0, J̇_A) into preallocated read-only arrays.
 
-        ``frames``: one name (default: end_effector) or several (blocks stacked). Options:
-        rows, check_inputs, continuous, singularity_threshold.
+        ``frames``: one name (default: end_effector) or several (blocks stacked).
         """
-        from .task import Task
-        return Task(self, self._end_effector if frames is None else frames, position, rotation, **options)
+        return Task(self, self._end_effector if frames is None else frames, position, rotation, rows=rows,
+                    check_inputs=check_inputs, continuous=continuous,
+                    singularity_threshold=singularity_threshold)
 
-    # -- derivatives, singularities, inverse kinematics (thin wrappers; see their modules) ----------
+    # -- derivatives, singularities, inverse kinematics ----------------------------------------
     def jacobian_time_variation(self, q: object, qdot: object, frame: str | None = None,
                                 reference: object = "local_world_aligned") -> np.ndarray:
-        """J̇ = dJ/dt of the geometric Jacobian in ``reference`` along q̇, (6, dof). See kinengine.derivatives."""
-        from .derivatives import jacobian_time_variation
-        return jacobian_time_variation(self, q, qdot, frame, reference)
+        """J̇ = dJ/dt of the geometric Jacobian in ``reference`` along q̇, (6, dof). See
+        :mod:`kinengine.kinematics.derivatives`."""
+        ref, fid = resolve_reference(reference), self._fid(frame)
+        q = self._coords.check(q, allow_batch=False)
+        qdot = self._coords.check(qdot, name="qdot", allow_batch=False)
+        return _derivatives.jacobian_time_variation(self._kin, q, qdot, fid, ref)
 
     def kinematic_hessian(self, q: object, frame: str | None = None,
                           reference: object = "local_world_aligned") -> np.ndarray:
-        """∂J/∂q, (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, in ``reference``. See kinengine.derivatives."""
-        from .derivatives import kinematic_hessian
-        return kinematic_hessian(self, q, frame, reference)
+        """∂J/∂q, (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, in ``reference``. See
+        :mod:`kinengine.kinematics.derivatives`."""
+        ref, fid = resolve_reference(reference), self._fid(frame)
+        return _derivatives.kinematic_hessian(self._kin, self._coords.check(q, allow_batch=False), fid, ref)
 
     def analytic_hessian(self, q: object, frame: str | None = None, position: str | None = "cartesian",
-                         rotation: str | None = "euler_zyx", **options: object) -> np.ndarray:
-        """∂J_A/∂q, (m, dof, dof). Options: rows, singularity_threshold. See kinengine.derivatives."""
-        from .derivatives import analytic_hessian
-        return analytic_hessian(self, q, frame, position, rotation, **options)
+                         rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
+                         singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD) -> np.ndarray:
+        """∂J_A/∂q, (m, dof, dof) with [:, :, k] = ∂J_A/∂q_k. See :mod:`kinengine.analytic.hessian`."""
+        pmap, fid = pose_map(position, rotation, as_rows(rows)), self._fid(frame)
+        return _analytic_hessian(self._kin, self._coords.check(q, allow_batch=False), fid, pmap,
+                                 singularity_threshold)
 
-    def singularity_report(self, q: object, frame: str | None = None, rows: object = "all",
-                           **options: object) -> "SingularityReport":
+    def singularity_report(self, q: object, frame: str | None = None, rows: Rows = "all", *,
+                           tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
         """Singular values, manipulability, condition number and lost directions of J_e0 (kinematic singularities)."""
-        from .manipulability import singularity_report
-        return singularity_report(self, q, frame, rows, **options)
+        return _manipulability.singularity_report(self, q, frame, rows, tolerance=tolerance)
 
-    def manipulability(self, q: object, frame: str | None = None, rows: object = "all") -> float | np.ndarray:
+    def manipulability(self, q: object, frame: str | None = None, rows: Rows = "all") -> float | np.ndarray:
         """Yoshikawa's sqrt(det(J Jᵀ)) of the chosen rows of J_e0; (N,) for q (N, dof)."""
-        from .manipulability import manipulability
-        return manipulability(self, q, frame, rows)
+        return _manipulability.manipulability(self, q, frame, rows)
 
-    def velocity_ellipsoid(self, q: object, frame: str | None = None) -> "VelocityEllipsoid":
+    def velocity_ellipsoid(self, q: object, frame: str | None = None) -> VelocityEllipsoid:
         """Axes and semi-axes [m/s per unit joint speed] of {J_v u : |u| <= 1} in the root frame."""
-        from .manipulability import velocity_ellipsoid
-        return velocity_ellipsoid(self, q, frame)
+        return _manipulability.velocity_ellipsoid(self, q, frame)
 
-    def plot(self, q: object = None, ax: object = None, **options: object) -> object:
-        """A matplotlib 3D picture of the robot at q (None: neutral); returns the axes. See kinengine.plotting."""
-        from .plotting import plot_robot
-        return plot_robot(self, q, ax, **options)
-
-    def require_regular(self, q: object, frame: str | None = None, rows: object = "all",
-                        **options: object) -> "SingularityReport":
+    def require_regular(self, q: object, frame: str | None = None, rows: Rows = "all", *,
+                        tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
         """The singularity report, or KinematicSingularityError if J_e0 (rows) loses rank."""
-        from .manipulability import require_regular
-        return require_regular(self, q, frame, rows, **options)
+        return _manipulability.require_regular(self, q, frame, rows, tolerance=tolerance)
 
-    def inverse_kinematics(self, target: object, frame: str | None = None, q0: object = None,
-                           **options: object) -> "IKResult":
-        """Differential IK (damped least squares) to a 4x4 pose or a parameter target χ. See kinengine.ik."""
-        from .ik import inverse_kinematics
-        return inverse_kinematics(self, target, frame, q0, **options)
+    def inverse_kinematics(self, target: object, frame: str | None = None, q0: object = None, *,
+                           position: str | None = None, rotation: str | None = None,
+                           tol_position: float = 1e-6, tol_rotation: float = 1e-6, max_iterations: int = 100,
+                           restarts: int = 3, rng: np.random.Generator | int | None = None,
+                           nullspace_target: object = None, nullspace_gain: float = 0.1,
+                           min_damping: float = 1e-6) -> IKResult:
+        """Differential IK (damped least squares) to a 4x4 pose or a parameter target χ. See
+        :func:`kinengine.control.ik.inverse_kinematics` for the options."""
+        return _ik.inverse_kinematics(self, target, frame, q0, position=position, rotation=rotation,
+                                      tol_position=tol_position, tol_rotation=tol_rotation,
+                                      max_iterations=max_iterations, restarts=restarts, rng=rng,
+                                      nullspace_target=nullspace_target, nullspace_gain=nullspace_gain,
+                                      min_damping=min_damping)
 
-
-def _frame_ids(model: pin.Model) -> dict[str, int]:
-    """Frame name -> index for every frame but 'universe'; a link wins over a joint of the same name."""
-    ids: dict[str, int] = {}
-    for kind_first in (True, False):
-        for fid in range(model.nframes):
-            frame = model.frames[fid]
-            if frame.name == "universe" or frame.name in ids:
-                continue
-            if (frame.type == pin.FrameType.BODY) == kind_first:
-                ids[frame.name] = fid
-    return dict(sorted(ids.items(), key=lambda kv: kv[1]))
+    # -- presentation ---------------------------------------------------------------------------
+    def plot(self, q: object = None, ax: object = None, *, frames: Sequence[str] = (),
+             ellipsoid: str | None = None, axis_length: float | None = None,
+             title: bool | str = True) -> matplotlib.axes.Axes:
+        """A matplotlib 3D picture of the robot at q (None: neutral); returns the axes. See
+        :func:`kinengine.presentation.plotting.plot_robot`."""
+        from .presentation.plotting import plot_robot  # matplotlib only when asked for
+        return plot_robot(self, q, ax, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length, title=title)
 
 
 def _default_end_effector(description: RobotDescription) -> str:
@@ -337,4 +289,4 @@ def _default_end_effector(description: RobotDescription) -> str:
     return max(leaves, key=lambda n: depth.get(n, 0)) if leaves else description.root
 
 
-__all__ = ["Robot", "REFERENCES", "resolve_reference"]
+__all__ = ["Robot"]

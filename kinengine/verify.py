@@ -16,10 +16,8 @@ usable range (continuous, or lower >= upper as in some exported files) spans [-Ï
 
 from __future__ import annotations
 
-import argparse
 from dataclasses import asdict, dataclass
 import itertools
-import json
 import math
 import sys
 import warnings
@@ -27,8 +25,6 @@ import warnings
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from .arguments import output_path, positive_int
-from .loading import load
 from .reference import REFERENCES, ReferenceKinematics, read_urdf
 
 REFERENCE_ATOL = 1e-10
@@ -252,27 +248,4 @@ def _progress_bar(enabled: bool, total: int, name: str):
     return tqdm(total=total, desc=f"verify {name}", unit="step", file=sys.stderr, leave=False)
 
 
-# -- command line ---------------------------------------------------------------------------------
-def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Register ``verify TARGET [--samples N] [--seed S] [--json PATH]`` on the kinengine CLI."""
-    p = subparsers.add_parser("verify", help="cross-check poses and Jacobians against independent references")
-    p.add_argument("target", metavar="TARGET", help="robot name or path to a .urdf file")
-    p.add_argument("--samples", type=positive_int, default=20, help="random configurations (default 20)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the random configurations (default 0)")
-    p.add_argument("--json", type=output_path, metavar="PATH", default=None,
-                   help="also write the report as JSON to PATH")
-    p.set_defaults(handler=_cmd_verify)
-    return p
-
-
-def _cmd_verify(args: argparse.Namespace) -> int:
-    """Print the table; exit code 0 when every check passed, 1 otherwise."""
-    report = verify(load(args.target), samples=args.samples, seed=args.seed, progress=True)
-    print(report.table())
-    if args.json:
-        with open(args.json, "w", encoding="utf-8") as fh:
-            json.dump(report.to_dict(), fh, indent=2)
-    return 0 if report.passed else 1
-
-
-__all__ = ["CheckResult", "VerifyReport", "add_parser", "verify"]
+__all__ = ["CheckResult", "VerifyReport", "verify"]

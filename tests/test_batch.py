@@ -13,8 +13,8 @@ import pytest
 
 import kinengine
 from custom_robots import mixed_chain_urdf
-from kinengine import batch
-from kinengine.batch import batch_frame_pose, batch_jacobian, batch_pose_and_jacobian
+from kinengine.analytic import evaluate as evaluate_module
+from kinengine.kinematics import batch
 from urdf_strategies import random_urdfs
 
 REFERENCES = ("local_world_aligned", "local", "world")
@@ -97,12 +97,12 @@ def test_batch_equals_single_calls_for_every_reference(robot, strategy):
     for frame in _frames(robot, rng):
         for reference in REFERENCES:
             T_ref, J_ref = _single(robot, Q, frame, reference)
-            T, J = batch_pose_and_jacobian(robot, Q, frame, reference)
+            T, J = robot.kinematics(Q, frame, reference)
             assert T.shape == (7, 4, 4) and J.shape == (7, 6, robot.dof)
             np.testing.assert_allclose(T, T_ref, rtol=0, atol=1e-12, err_msg=f"{frame} pose")
             np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12, err_msg=f"{frame} {reference}")
-            np.testing.assert_allclose(batch_jacobian(robot, Q, frame, reference), J, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(batch_frame_pose(robot, Q, frame), T, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(robot.jacobian(Q, frame, reference), J, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(robot.frame_pose(Q, frame), T, rtol=0, atol=1e-12)
 
 
 def test_chunks_split_over_threads_cover_every_row(monkeypatch):
@@ -113,7 +113,7 @@ def test_chunks_split_over_threads_cover_every_row(monkeypatch):
     monkeypatch.setattr(batch, "CALLS_PER_CONFIGURATION", 10**6)
     Q = robot.random_configuration(4, size=301)
     T_ref, J_ref = _single(robot, Q, robot.end_effector, "local")
-    T, J = batch_pose_and_jacobian(robot, Q, reference="local")
+    T, J = robot.kinematics(Q, reference="local")
     np.testing.assert_allclose(T, T_ref, rtol=0, atol=1e-12)
     np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12)
 
@@ -123,7 +123,7 @@ def test_default_strategy_agrees_across_batch_sizes():
     for n in (1, 50, 200, 9000):
         Q = robot.random_configuration(n, size=n)
         rows = np.random.default_rng(n).choice(n, min(n, 20), replace=False)
-        T, J = batch_pose_and_jacobian(robot, Q, "tool0", "world")
+        T, J = robot.kinematics(Q, "tool0", "world")
         T_ref, J_ref = _single(robot, Q[rows], "tool0", "world")
         np.testing.assert_allclose(T[rows], T_ref, rtol=0, atol=1e-12)
         np.testing.assert_allclose(J[rows], J_ref, rtol=0, atol=1e-12)
@@ -132,27 +132,27 @@ def test_default_strategy_agrees_across_batch_sizes():
 def test_continuous_joint_is_periodic_in_the_batch(strategy):
     robot = _load("kinova")
     Q = robot.random_configuration(2, size=5)
-    shifted = Q + np.where(robot._joints.continuous, 2 * np.pi, 0.0)
-    np.testing.assert_allclose(batch_frame_pose(robot, shifted), batch_frame_pose(robot, Q),
+    shifted = Q + np.where(robot.engine.coordinates.continuous, 2 * np.pi, 0.0)
+    np.testing.assert_allclose(robot.frame_pose(shifted), robot.frame_pose(Q),
                                rtol=0, atol=1e-12)
 
 
 def test_single_configuration_and_empty_batch_shapes(strategy):
     robot = _load("panda")
     q = robot.random_configuration(3)
-    T, J = batch_pose_and_jacobian(robot, q, "panda_hand")
+    T, J = robot.kinematics(q, "panda_hand")
     np.testing.assert_allclose(T, robot.frame_pose(q, "panda_hand"), rtol=0, atol=1e-12)
     np.testing.assert_allclose(J, robot.jacobian(q, "panda_hand"), rtol=0, atol=1e-12)
     with pytest.raises(kinengine.ConfigurationError, match="empty batch"):
-        batch_pose_and_jacobian(robot, np.empty((0, robot.dof)))
+        robot.kinematics(np.empty((0, robot.dof)))
 
 
 def test_robot_without_coordinates(strategy):
     robot = kinengine.load_urdf_string('<robot name="fixed"><link name="a"/><link name="b"/><joint name="f" '
                                        'type="fixed"><parent link="a"/><child link="b"/>'
                                        '<origin xyz="0.1 0.2 0.3" rpy="0.3 0.2 0.1"/></joint></robot>')
-    assert batch_jacobian(robot, np.zeros((4, 0)), "b", "local").shape == (4, 6, 0)
-    T = batch_frame_pose(robot, np.zeros((4, 0)), "b")
+    assert robot.jacobian(np.zeros((4, 0)), "b", "local").shape == (4, 6, 0)
+    T = robot.frame_pose(np.zeros((4, 0)), "b")
     T_ref = robot.frame_pose(np.zeros(0), "b")
     np.testing.assert_allclose(T, np.broadcast_to(T_ref, (4, 4, 4)), rtol=0, atol=1e-12)
 
@@ -160,13 +160,13 @@ def test_robot_without_coordinates(strategy):
 def test_bad_input_raises_kinengine_errors():
     robot = _load("abb_irb120")
     with pytest.raises(kinengine.ConfigurationError, match=r"\(N, 6\)"):
-        batch_frame_pose(robot, np.zeros((3, 5)))
+        robot.frame_pose(np.zeros((3, 5)))
     with pytest.raises(kinengine.ConfigurationError, match="finite"):
-        batch_jacobian(robot, np.full((2, 6), np.nan))
+        robot.jacobian(np.full((2, 6), np.nan))
     with pytest.raises(kinengine.FrameNotFoundError):
-        batch_frame_pose(robot, np.zeros((2, 6)), "tool9")
+        robot.frame_pose(np.zeros((2, 6)), "tool9")
     with pytest.raises(kinengine.KinematicsError, match="local_world_aligned"):
-        batch_jacobian(robot, np.zeros((2, 6)), "tool0", "global")
+        robot.jacobian(np.zeros((2, 6)), "tool0", "global")
 
 
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -181,7 +181,7 @@ def test_random_trees_match_pinocchio(urdf):
             for frame in robot.frame_names:
                 for reference in REFERENCES:
                     T_ref, J_ref = _single(robot, Q, frame, reference)
-                    T, J = batch_pose_and_jacobian(robot, Q, frame, reference)
+                    T, J = robot.kinematics(Q, frame, reference)
                     np.testing.assert_allclose(T, T_ref, rtol=0, atol=1e-12)
                     np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12)
     finally:
@@ -261,13 +261,13 @@ def test_robot_batch_routing_takes_the_fast_path_for_each_size(monkeypatch):
     robot = kinengine.load("abb_irb120")
     used = []
 
-    def spy(name, label):
-        original = getattr(batch, name)
-        monkeypatch.setattr(batch, name, lambda *args: used.append(label) or original(*args))
+    def spy(module, name, label):
+        original = getattr(module, name)
+        monkeypatch.setattr(module, name, lambda *args, **kw: used.append(label) or original(*args, **kw))
 
-    spy("_run", "numpy")
-    spy("_pinocchio_loop", "loop")
-    spy("_analytic_loop", "analytic loop")
+    spy(batch, "run_chain", "numpy")
+    spy(batch, "_pinocchio_loop", "loop")
+    spy(evaluate_module, "_analytic_loop", "analytic loop")
     for n in (1, 2, 1000):
         Q = robot.random_configuration(n, size=n)
         robot.frame_pose(Q)

@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 
 import kinengine
-from kinengine import bench, bench_run
-from kinengine.bench_cases import Case, throughput_cases
+from kinengine.cli.bench import command as bench
+from kinengine.cli.bench import run as bench_run
+from kinengine.cli.bench.cases import Case, throughput_cases
 from kinengine.parameterizations import ROTATION_PARAMETERIZATIONS
 
 

@@ -10,7 +10,6 @@ import pytest
 import kinengine
 from custom_robots import mixed_chain_urdf
 from finite_differences import assert_close_relative
-from kinengine.derivatives import analytic_hessian, jacobian_time_variation, kinematic_hessian
 
 REFERENCES = ("local_world_aligned", "local", "world")
 
@@ -76,7 +75,7 @@ def test_time_variation_equals_finite_differences_along_qdot(name, frame, refere
         q, qdot = robot.random_configuration(rng), rng.normal(size=robot.dof)
         Jdot_fd = (robot.jacobian(q + h * qdot, frame, reference)
                    - robot.jacobian(q - h * qdot, frame, reference)) / (2 * h)
-        Jdot = jacobian_time_variation(robot, q, qdot, frame, reference)
+        Jdot = robot.jacobian_time_variation(q, qdot, frame, reference)
         assert Jdot.shape == (6, robot.dof)
         assert_close_relative(Jdot, Jdot_fd, 1e-6, f"{name} {frame} {reference}")
 
@@ -89,7 +88,7 @@ def test_hessian_equals_finite_differences(name, frame, reference):
     rng = np.random.default_rng(12)
     for _ in range(2):
         q = robot.random_configuration(rng)
-        H = kinematic_hessian(robot, q, frame, reference)
+        H = robot.kinematic_hessian(q, frame, reference)
         assert H.shape == (6, robot.dof, robot.dof)
         assert_close_relative(H, _hessian_fd(robot, q, frame, reference), 1e-6, f"{name} {frame} {reference}")
 
@@ -102,8 +101,8 @@ def test_hessian_contracted_with_qdot_is_the_time_variation(name, frame):
     rng = np.random.default_rng(13)
     q, qdot = robot.random_configuration(rng), rng.normal(size=robot.dof)
     for reference in REFERENCES:
-        Jdot = jacobian_time_variation(robot, q, qdot, frame, reference)
-        H = kinematic_hessian(robot, q, frame, reference)
+        Jdot = robot.jacobian_time_variation(q, qdot, frame, reference)
+        H = robot.kinematic_hessian(q, frame, reference)
         np.testing.assert_allclose(H @ qdot, Jdot, rtol=0, atol=1e-12)
 
 
@@ -122,30 +121,27 @@ def test_pinocchio_frame_hessian_agrees_once_read_in_fortran_order(name, frame, 
     pin.updateFramePlacements(model, data)
     ref = kinengine.robot.resolve_reference(reference)
     raw = pin.getFrameKinematicHessian(model, data, robot.frame_id(frame), ref)
-    ours = kinematic_hessian(robot, q, frame, reference)
+    ours = robot.kinematic_hessian(q, frame, reference)
     np.testing.assert_allclose(np.reshape(raw.ravel(), raw.shape, order="F"), ours, rtol=0, atol=1e-12)
     assert np.max(np.abs(raw - ours)) > 1e-3  # the raw C-order reading is not the Hessian
 
 
-def test_pinocchio_local_time_variations_are_wrong_below_a_revolute_mimic_joint():
-    """Why derivatives.py starts from WORLD: Pinocchio 4.1's LOCAL and LOCAL_WORLD_ALIGNED J̇ miss the
-    mimic joint's motion (WORLD is right). If this test fails after an upgrade, Pinocchio was fixed."""
+def test_pinocchio_time_variations_of_the_plain_joint_model_fold_to_ours_in_every_reference():
+    """With plain joints Pinocchio's J̇ is right in all three references: J̇ = J̇_pin(q_pin, M q̇)·M."""
     robot = _load("mixed")
     model = robot.pinocchio_model()
     data = model.createData()
+    M = robot.engine.coordinates.matrix
     rng = np.random.default_rng(15)
     q, qdot = robot.random_configuration(rng), rng.normal(size=robot.dof)
-    pin.computeJointJacobiansTimeVariation(model, data, robot.pinocchio_configuration(q), qdot)
+    pin.computeJointJacobiansTimeVariation(model, data, robot.pinocchio_configuration(q), M @ qdot)
     pin.updateFramePlacements(model, data)
     fid = robot.frame_id("finger_b")
-    errors = {}
     for reference in REFERENCES:
-        ref = kinengine.robot.resolve_reference(reference)
-        theirs = pin.getFrameJacobianTimeVariation(model, data, fid, ref)
-        ours = jacobian_time_variation(robot, q, qdot, "finger_b", reference)
-        errors[reference] = np.max(np.abs(theirs - ours))
-    assert errors["world"] < 1e-12
-    assert errors["local_world_aligned"] > 1e-3 and errors["local"] > 1e-3
+        ref = {"world": pin.WORLD, "local": pin.LOCAL, "local_world_aligned": pin.LOCAL_WORLD_ALIGNED}[reference]
+        theirs = pin.getFrameJacobianTimeVariation(model, data, fid, ref) @ M
+        ours = robot.jacobian_time_variation(q, qdot, "finger_b", reference)
+        np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12)
 
 
 def test_planar_arm_hessian_matches_its_closed_form():
@@ -159,7 +155,7 @@ def test_planar_arm_hessian_matches_its_closed_form():
     for j in range(3):
         for k in range(3):
             expected[:3, j, k] = -r[max(j, k)]
-    np.testing.assert_allclose(kinematic_hessian(robot, q, "ee"), expected, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(robot.kinematic_hessian(q, "ee"), expected, rtol=0, atol=1e-14)
 
 
 @pytest.mark.parametrize("position,rotation", [("cartesian", "euler_zyx"), ("spherical", "quaternion"),
@@ -171,7 +167,7 @@ def test_analytic_hessian_equals_finite_differences_of_the_analytic_jacobian(nam
     rng = np.random.default_rng(16)
     h = 1e-6
     q = robot.random_configuration(rng)
-    HA = analytic_hessian(robot, q, frame, position, rotation)
+    HA = robot.analytic_hessian(q, frame, position, rotation)
     HA_fd = np.stack([(robot.analytic_jacobian(q + h * e, frame, position, rotation)
                        - robot.analytic_jacobian(q - h * e, frame, position, rotation)) / (2 * h)
                       for e in np.eye(robot.dof)], axis=-1)
@@ -187,24 +183,24 @@ def test_analytic_hessian_equals_finite_differences_of_the_analytic_jacobian(nam
 def test_analytic_hessian_row_selection_and_representation_singularity():
     robot = _load("abb_irb120")
     q = np.array([0.3, 0.2, -0.4, 0.5, 0.7, 1.0])
-    full = analytic_hessian(robot, q, "tool0", "cartesian", "euler_zyz")
-    picked = analytic_hessian(robot, q, "tool0", "cartesian", "euler_zyz", rows=("z", "chi2_y"))
+    full = robot.analytic_hessian(q, "tool0", "cartesian", "euler_zyz")
+    picked = robot.analytic_hessian(q, "tool0", "cartesian", "euler_zyz", rows=("z", "chi2_y"))
     np.testing.assert_array_equal(picked, full[[2, 4]])
     with pytest.raises(kinengine.RepresentationSingularityError, match="euler_zyx"):
-        analytic_hessian(robot, robot.neutral(), "tool0", "cartesian", "euler_zyx")  # tool0 x axis vertical
+        robot.analytic_hessian(robot.neutral(), "tool0", "cartesian", "euler_zyx")  # tool0 x axis vertical
 
 
 def test_frames_no_joint_moves_have_zero_derivatives_and_inputs_are_checked():
     robot = _load("abb_irb120")
     q = robot.random_configuration(17)
     for reference in REFERENCES:
-        np.testing.assert_array_equal(kinematic_hessian(robot, q, "base", reference), 0.0)
-        np.testing.assert_array_equal(jacobian_time_variation(robot, q, np.ones(6), "base", reference), 0.0)
+        np.testing.assert_array_equal(robot.kinematic_hessian(q, "base", reference), 0.0)
+        np.testing.assert_array_equal(robot.jacobian_time_variation(q, np.ones(6), "base", reference), 0.0)
     with pytest.raises(kinengine.ConfigurationError, match="qdot"):
-        jacobian_time_variation(robot, q, np.ones(5), "tool0")
+        robot.jacobian_time_variation(q, np.ones(5), "tool0")
     with pytest.raises(kinengine.ConfigurationError, match=r"\(6,\)"):
-        kinematic_hessian(robot, np.zeros((2, 6)), "tool0")
+        robot.kinematic_hessian(np.zeros((2, 6)), "tool0")
     with pytest.raises(kinengine.FrameNotFoundError, match="tool0"):
-        kinematic_hessian(robot, q, "tool")
+        robot.kinematic_hessian(q, "tool")
     with pytest.raises(kinengine.KinematicsError, match="reference"):
-        kinematic_hessian(robot, q, "tool0", "global")
+        robot.kinematic_hessian(q, "tool0", "global")

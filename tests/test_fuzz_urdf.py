@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import kinengine
-from kinengine.catalog import catalog_entry, shipped_robots_dir
+from kinengine.model import catalog_entry, shipped_robots_dir
 from kinengine.reference import ReferenceKinematics
 from urdf_strategies import random_urdfs
 

@@ -13,7 +13,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import kinengine
-from kinengine.ik import inverse_kinematics
+from kinengine.control.ik import inverse_kinematics
 
 
 def _pose_errors(robot, q, frame, T):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import kinengine
-from kinengine.manipulability import (
+from kinengine.control.manipulability import (
     analyze_jacobian,
     describe_twist,
     manipulability,

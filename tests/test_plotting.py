@@ -17,9 +17,9 @@ import pytest  # noqa: E402
 from hypothesis import given, settings, strategies as st  # noqa: E402
 
 import kinengine  # noqa: E402
-from kinengine.catalog import available_robots, catalog_entry  # noqa: E402
+from kinengine.model import available_robots, catalog_entry  # noqa: E402
 from kinengine.cli import main  # noqa: E402
-from kinengine.plotting import drawing, plot_robot  # noqa: E402
+from kinengine.presentation.plotting import drawing, plot_robot  # noqa: E402
 from kinengine.reference import ReferenceKinematics  # noqa: E402
 
 from custom_robots import mixed_chain_urdf  # noqa: E402

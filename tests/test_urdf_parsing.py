@@ -24,8 +24,8 @@ from scipy.spatial.transform import Rotation
 import yourdfpy
 
 from kinengine.errors import KinematicsError, URDFError
-from kinengine.urdf import (LIMITS, Limits, RobotDescription, build_pinocchio_model, check_pinocchio_model,
-                            parse_urdf, read_urdf_file)
+from kinengine.model import build_pinocchio_model, check_pinocchio_model
+from kinengine.urdf import (LIMITS, Limits, RobotDescription, parse_urdf, read_urdf_file)
 from urdf_strategies import random_urdfs
 
 LIMIT = '<limit lower="-1" upper="1" effort="2" velocity="3"/>'
@@ -447,8 +447,11 @@ def test_mimic_rules():
     chained = robot_xml(["base", "l1", "l2", "l3"], [
         joint_xml("a", "base", "l1"), joint_xml("b", "base", "l2", body=LIMIT + '<mimic joint="a"/>'),
         joint_xml("c", "base", "l3", body=LIMIT + '<mimic joint="b"/>')])
-    refused(chained, r"mimics joint 'b', which is itself a mimic joint \(of 'a'\); "
-                     "make it follow 'a' directly")
+    assert parse_urdf(chained).joint("c").mimic.joint == "b"  # a mimic of a mimic: composed by the model
+    cycle = robot_xml(["base", "l1", "l2", "l3"], [
+        joint_xml("a", "base", "l1"), joint_xml("b", "base", "l2", body=LIMIT + '<mimic joint="c"/>'),
+        joint_xml("c", "base", "l3", body=LIMIT + '<mimic joint="b"/>')])
+    refused(cycle, r"joint 'b': is part of a cycle of mimic joints 'b' -> 'c' -> 'b'")
 
 
 def test_mimic_on_a_fixed_joint_is_ignored_with_a_warning():
@@ -459,21 +462,21 @@ def test_mimic_on_a_fixed_joint_is_ignored_with_a_warning():
 
 @pytest.mark.parametrize("leader_kind, follower_kind",
                          [("continuous", "revolute"), ("revolute", "continuous")])
-def test_mimic_pairing_pinocchio_cannot_build_is_refused(leader_kind, follower_kind):
-    text = mimic_robot('<mimic joint="a_leader" multiplier="2"/>', leader_kind, follower_kind)
-    refused(text, "Pinocchio 4.1 pairs a continuous joint only with a continuous one", line=6)
+def test_mimic_pairs_of_any_revolute_kind_build_as_plain_joints(leader_kind, follower_kind):
+    """Pinocchio 4.1's own mimic joints cannot pair continuous with revolute; kinengine's plain joints can."""
+    text = mimic_robot('<mimic joint="a_leader" multiplier="2" offset="0.1"/>', leader_kind, follower_kind)
     with pytest.raises(ValueError, match="configuration spaces have different sizes"):
-        pin.buildModelFromXML(text, mimic=True)  # the refusal is Pinocchio's real limitation
-    both = parse_urdf(mimic_robot('<mimic joint="a_leader"/>', "continuous", "continuous"))
-    assert build_pinocchio_model(both).nv == 1
+        pin.buildModelFromXML(text, mimic=True)  # what the 0.1 design ran into
+    model = build_pinocchio_model(parse_urdf(text))
+    assert (model.nq, model.nv) == (2, 2)
 
 
-def test_mimic_joint_ordered_before_its_leader_is_refused_like_pinocchio_would():
+def test_mimic_joint_ordered_before_its_leader_builds():
     text = mimic_robot('<mimic joint="b_leader"/>', leader="b_leader", follower="a_follower")
     text = text.replace("a_leader", "b_leader")
-    refused(text, "'a_follower'.*comes before its leader 'b_leader'.*rename the joints")
     with pytest.raises(ValueError, match="mimic joint is not in the kinematic tree"):
-        pin.buildModelFromXML(text, mimic=True)
+        pin.buildModelFromXML(text, mimic=True)  # what the 0.1 design ran into
+    assert list(build_pinocchio_model(parse_urdf(text)).names) == ["universe", "a_follower", "b_leader"]
 
 
 # -- inertials --------------------------------------------------------------------------------------------
@@ -523,16 +526,17 @@ def test_pinocchio_builds_the_description_exactly_as_it_builds_the_original(rela
     path = ERD_ROOT / relative
     description = read_urdf_file(path)
     ours = build_pinocchio_model(description)
-    theirs = pin.buildModelFromUrdf(str(path), mimic=True)
+    theirs = pin.buildModelFromUrdf(str(path))  # mimic joints as plain joints, continuous as (cos, sin)
     assert list(ours.names) == list(theirs.names)
-    assert [j.name for j in description.movable_joints] == [n for i, n in enumerate(theirs.names)
-                                                            if i > 0 and theirs.joints[i].nv == 1]
+    assert ours.nq == ours.nv == theirs.nv == len([j for j in description.joints if j.movable])
     for a, b in zip(ours.jointPlacements, theirs.jointPlacements):
         np.testing.assert_allclose(a.homogeneous, b.homogeneous, rtol=0, atol=1e-12)
-    q = pin.randomConfiguration(theirs, -np.ones(theirs.nq), np.ones(theirs.nq)) if theirs.nq else np.zeros(0)
+    q = np.random.default_rng(0).uniform(-1, 1, ours.nq)
+    q_theirs = np.concatenate([[q[i - 1]] if theirs.joints[i].nq == 1 else [np.cos(q[i - 1]), np.sin(q[i - 1])]
+                               for i in range(1, theirs.njoints)]) if ours.nq else np.zeros(0)
     data_ours, data_theirs = ours.createData(), theirs.createData()
     pin.forwardKinematics(ours, data_ours, q)
-    pin.forwardKinematics(theirs, data_theirs, q)
+    pin.forwardKinematics(theirs, data_theirs, q_theirs)
     for a, b in zip(data_ours.oMi, data_theirs.oMi):
         np.testing.assert_allclose(a.homogeneous, b.homogeneous, rtol=0, atol=1e-12)
 
@@ -555,11 +559,13 @@ def test_every_example_robot_data_urdf_parses_or_is_refused_like_pinocchio_refus
             description = read_urdf_file(path)
         except URDFError as error:
             assert type(error) is URDFError and str(path) in str(error)
+            if "mimics joint" in str(error):  # Pinocchio without mimic joints never reads the reference
+                return
             with pytest.raises(ValueError):  # Pinocchio's own parser refuses these files too
-                pin.buildModelFromUrdf(str(path), mimic=True)
+                pin.buildModelFromUrdf(str(path))
             return
     model = build_pinocchio_model(description)
-    assert list(model.names) == list(pin.buildModelFromUrdf(str(path), mimic=True).names)
+    assert list(model.names) == list(pin.buildModelFromUrdf(str(path)).names)
     assert without_lines(parse_urdf(description.to_xml())) == without_lines(description)
 
 
@@ -597,8 +603,12 @@ def test_values_agree_with_yourdfpy(relative):
 def test_random_trees_round_trip_and_agree_with_pinocchio(text):
     description = parse_urdf(text)
     assert without_lines(parse_urdf(description.to_xml())) == without_lines(description)
-    check_pinocchio_model(description, pin.buildModelFromXML(text, mimic=True))
-    check_pinocchio_model(description, build_pinocchio_model(description))
+    ours = build_pinocchio_model(description)
+    check_pinocchio_model(description, ours)
+    theirs = pin.buildModelFromXML(text)  # the original text: same joints, same placements
+    assert list(theirs.names) == list(ours.names)
+    for a, b in zip(ours.jointPlacements, theirs.jointPlacements):
+        np.testing.assert_allclose(a.homogeneous, b.homogeneous, rtol=0, atol=1e-12)
 
 
 def test_parsing_in_worker_threads_gives_the_same_descriptions():

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import kinengine
-from kinengine.verify import VerifyReport, add_parser, verify
+from kinengine.cli.verify import add_parser
+from kinengine.verify import VerifyReport, verify
 from urdf_strategies import random_urdfs
 
 REFERENCE_ROWS = ("pose vs reference", "jacobian local_world_aligned vs reference",

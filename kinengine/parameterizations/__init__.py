@@ -46,6 +46,12 @@ def get_rotation(name: str) -> RotationParameterization:
         raise ParameterizationError.unknown("rotation", name, list(ROTATION_PARAMETERIZATIONS)) from None
 
 
+def parameter_labels(position: str | None, rotation: str | None) -> tuple[str, ...]:
+    """Row labels of χ = (χ_P, χ_R) for the named parameterizations (None leaves a part out)."""
+    p = () if position is None else tuple(get_position(position).labels)
+    return p + (() if rotation is None else tuple(get_rotation(rotation).labels))
+
+
 __all__ = [
     "EULER_SEQUENCES",
     "POSITION_PARAMETERIZATIONS",
@@ -64,4 +70,5 @@ __all__ = [
     "Spherical",
     "get_position",
     "get_rotation",
+    "parameter_labels",
 ]

@@ -8,7 +8,6 @@
 from .description import Inertial, Joint, Link, Mimic, RobotDescription
 from .limits import LIMITS, Limits
 from .parser import parse_urdf, read_urdf_file
-from .pinocchio_check import build_pinocchio_model, check_pinocchio_model
 
-__all__ = ["Inertial", "Joint", "LIMITS", "Limits", "Link", "Mimic", "RobotDescription",
-           "build_pinocchio_model", "check_pinocchio_model", "parse_urdf", "read_urdf_file"]
+__all__ = ["Inertial", "Joint", "LIMITS", "Limits", "Link", "Mimic", "RobotDescription", "parse_urdf",
+           "read_urdf_file"]

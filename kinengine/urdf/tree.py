@@ -2,7 +2,8 @@
 
 Rules: unique link and joint names; every joint's parent and child exist; no
 link has two parents; exactly one root; no cycles; every link reachable; mimic
-joints follow an existing, movable, non-mimic joint other than themselves.
+joints follow an existing movable joint (a mimic of a mimic is resolved to its
+root leader; a cycle of mimic joints is refused).
 
 Order: joints depth-first from the root, the child joints of a link sorted by
 name (byte order of UTF-8), which is the order urdfdom stores them in and so
@@ -110,7 +111,8 @@ def _cycle(start: str, parent_joint: dict[str, Joint]) -> str:
 
 
 def _check_mimics(ordered: list[Joint], joint_by_name: dict[str, Joint], source: str) -> None:
-    position = {j.name: i for i, j in enumerate(ordered)}
+    """Each mimic joint follows an existing movable joint of any type, before or after it in joint
+    order; a mimic of a mimic is fine (it composes down to its root leader), a cycle of mimics is not."""
     for joint in ordered:
         if joint.mimic is None:
             continue
@@ -124,18 +126,16 @@ def _check_mimics(ordered: list[Joint], joint_by_name: dict[str, Joint], source:
         if not leader.movable:
             raise _error(f"mimics joint {target!r}, which is fixed; a mimic leader must be revolute, "
                          "continuous or prismatic", joint, source)
-        if leader.mimic is not None:
-            grand = leader.mimic.joint
-            raise _error(f"mimics joint {target!r}, which is itself a mimic joint (of {grand!r}); "
-                         f"make it follow {grand!r} directly", joint, source)
-        if (leader.type == "continuous") != (joint.type == "continuous"):
-            raise _error(f"({joint.type}) mimics {leader.type} joint {target!r}: Pinocchio 4.1 pairs a "
-                         "continuous joint only with a continuous one; make both continuous or neither",
-                         joint, source)
-        if position[target] > position[joint.name]:
-            raise _error(f"comes before its leader {target!r} in the joint order (depth-first, sibling "
-                         "joints sorted by name) and Pinocchio 4.1 cannot build a mimic joint before its "
-                         "leader; rename the joints so that the leader comes first", joint, source)
+        seen = [joint.name]
+        while leader.mimic is not None:  # follow the chain to its root leader
+            seen.append(leader.name)
+            if leader.mimic.joint not in joint_by_name:
+                break  # reported when that joint is checked
+            leader = joint_by_name[leader.mimic.joint]
+            if leader.name in seen:
+                cycle = " -> ".join(repr(n) for n in seen[seen.index(leader.name):] + [leader.name])
+                raise _error(f"is part of a cycle of mimic joints {cycle}; one of them must be independent",
+                             joint, source)
 
 
 def _hint(name: str, known: dict) -> str:

@@ -18,8 +18,8 @@ import json
 from pathlib import Path
 import sys
 
-from .arguments import output_path, summary
-from .bench_run import DEFAULT_ROBOTS, FULL, QUICK, run
+from ..arguments import output_path, summary
+from .run import DEFAULT_ROBOTS, FULL, QUICK, run
 
 PEER_WIDTH = 20
 

@@ -13,9 +13,9 @@ With several frames the per-frame blocks are stacked: ``chi`` (k·m,), ``jacobia
 
 How: one ``computeForwardKinematicsDerivatives`` fills Pinocchio's world-frame joint Jacobians
 J_w and J̇_w (no array is returned, so nothing is allocated; ``computeJointJacobians`` would be
-0.38 µs faster without q̇ on the ABB IRB 120 but returns a copy of J_w). Robots with mimic joints
-use ``computeJointJacobians(TimeVariation)`` instead (Pinocchio's derivatives refuse mimic joints),
-whose returned copy is the one allocation per update there; per frame,
+0.38 µs faster without q̇ on the ABB IRB 120 but returns a copy of J_w). Pinocchio's model has plain
+joints only; with mimic joints q_pin = M q + b and q̇_pin = M q̇ are written into preallocated arrays
+and J_w, J̇_w are folded, J_w·M, in place (see :mod:`kinengine.model.coordinates`); per frame,
 J_e0 = X(p)·J_w with X = [[I, −[p]x], [0, I]] (the spatial velocity moved from I's origin to the
 frame origin p) and J̇_e0 = X·J̇_w + Ẋ·J_w with Ẋ = [[0, −[ṗ]x], [0, 0]], ṗ = v.
 
@@ -32,9 +32,9 @@ import struct
 import numpy as np
 import pinocchio as pin
 
-from .analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
+from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
+from ..errors import OptionError, RepresentationSingularityError
 from .continuity import continuity_rule
-from .errors import OptionError, RepresentationSingularityError
 
 
 class _Part:
@@ -55,16 +55,15 @@ class _Frame:
         self.fid = fid
         placement = data.oMf[fid]  # a reference into data: these views follow every update
         self.R, self.p = placement.rotation, placement.translation
-        # With mimic joints J_w has extra columns (model.nvExtended): ask Pinocchio for the frame Jacobian.
-        self.uses_mimic = model.nvExtended != model.nv
-        mask = np.zeros(dof)
+        mask = np.zeros(model.nv)  # Pinocchio's columns of the joints that move this frame
         for j in model.supports[model.frames[fid].parentJoint][1:]:
             joint = model.joints[j]
             mask[joint.idx_v:joint.idx_v + joint.nv] = 1.0
         self.mask = None if mask.all() else mask
         self.X = np.eye(6)
         self.Xdot_lin = np.zeros((3, 3))   # −[ṗ]x
-        self.masked, self.masked_dot = np.empty((6, dof)), np.empty((6, dof))
+        self.masked, self.masked_dot = np.empty((6, model.nv)), np.empty((6, model.nv))
+        self.folded, self.folded_dot = np.empty((6, dof)), np.empty((6, dof))
         self.tmp = np.empty((3, dof))
         self.previous: list[float] | None = None
 
@@ -97,8 +96,9 @@ class Task:
         self.frames, self.labels = names, pmap.labels
         self.check_inputs, self.continuous = check_inputs, continuous
         self.singularity_threshold = singularity_threshold
-        self._joints = joints = robot._joints
-        self._model = model = robot._model
+        kin = robot.engine
+        self._coords = coords = kin.coordinates
+        self._model = model = kin.model
         self._data = data = model.createData()
         self.dof = n = robot.dof
         k = len(fids)
@@ -106,9 +106,8 @@ class Task:
         m = sum(p.size for p in params)
         self._m = m
         self._Jw, self._dJw = data.J, data.dJ  # views of Pinocchio's world-frame joint Jacobians
-        self._has_mimic = any(model.joints[j].nv == 0 for j in range(1, model.njoints))
-        self._zero = np.zeros(n)
-        self._qp = np.empty(model.nq)
+        self._zero = np.zeros(model.nv)
+        self._qp, self._vp = np.empty(model.nq), np.empty(model.nv)
         self._pose = np.zeros((k, 4, 4))
         self._pose[:, 3, 3] = 1.0
         self._J, self._Jdot = np.zeros((k, 6, n)), np.zeros((k, 6, n))
@@ -166,24 +165,23 @@ class Task:
         Without q̇, ``twist``, ``chi_dot``, ``jacobian_dot`` and ``analytic_jacobian_dot`` are NaN
         (never the rates of an earlier q).
         """
-        joints = self._joints
+        coords = self._coords
         if self.check_inputs:
-            q = joints.check(q, allow_batch=False)
+            q = coords.check(q, allow_batch=False)
             if qdot is not None:
-                qdot = joints.check(qdot, name="qdot", allow_batch=False)
-        if joints.identity:
-            qp = q
-        else:  # continuous joints: (cos, sin) into a preallocated Pinocchio q
+                qdot = coords.check(qdot, name="qdot", allow_batch=False)
+        qp, vp = q, qdot
+        if not coords.identity:  # mimic joints: q_pin = M q + b, q̇_pin = M q̇, written in place
             qp = self._qp
-            joints.write_pinocchio(q.tolist(), qp)
-        model, data = self._model, self._data
-        if not self._has_mimic:  # returns nothing: no allocation
-            pin.computeForwardKinematicsDerivatives(model, data, qp, self._zero if qdot is None else qdot,
-                                                    self._zero)
-        elif qdot is None:  # Pinocchio's derivatives do not support mimic joints; these return a copy
-            pin.computeJointJacobians(model, data, qp)
-        else:
-            pin.computeJointJacobiansTimeVariation(model, data, qp, qdot)
+            np.dot(coords.matrix, q, out=qp)
+            if coords.has_offset:
+                np.add(qp, coords.offset, out=qp)
+            if qdot is not None:
+                vp = self._vp
+                np.dot(coords.matrix, qdot, out=vp)
+        # returns nothing: no allocation
+        pin.computeForwardKinematicsDerivatives(self._model, self._data, qp, self._zero if vp is None else vp,
+                                                self._zero)
         if qdot is None:
             if self._rates_valid:
                 self._invalidate_rates()
@@ -214,13 +212,13 @@ class Task:
         X = frame.X
         X[0, 4], X[0, 5], X[1, 3], X[1, 5], X[2, 3], X[2, 4] = pz, -py, -pz, px, py, -px
         J = frame.J
-        if frame.uses_mimic:  # the frame's own WORLD Jacobian (mimic columns summed into leaders)
-            Jw = pin.getFrameJacobian(model, data, frame.fid, pin.WORLD)
-        elif frame.mask is not None:
+        Jw = self._Jw
+        if frame.mask is not None:
+            np.multiply(Jw, frame.mask, out=frame.masked)
             Jw = frame.masked
-            np.multiply(self._Jw, frame.mask, out=Jw)
-        else:
-            Jw = self._Jw
+        if not self._coords.identity:
+            np.dot(Jw, self._coords.matrix, out=frame.folded)
+            Jw = frame.folded
         np.dot(X, Jw, out=J)
         values: list[float] = []
         entries: tuple[float, ...] = ()
@@ -253,15 +251,13 @@ class Task:
         """twist, J̇_e0 = X·J̇w + Ẋ·Jw, J̇_A = Ė·J_e0 + E·J̇_e0, χ̇ = J_A·q̇."""
         twist, J, Jdot = frame.twist, frame.J, frame.Jdot
         np.dot(J, qdot, out=twist)
-        if frame.uses_mimic:
-            # WORLD only: Pinocchio 4.1's LOCAL and LOCAL_WORLD_ALIGNED time variations are wrong
-            # below revolute mimic joints (tests/test_task.py checks ours against finite differences)
-            dJw = pin.getFrameJacobianTimeVariation(self._model, self._data, frame.fid, pin.WORLD)
-        elif frame.mask is not None:
+        dJw = self._dJw
+        if frame.mask is not None:
+            np.multiply(dJw, frame.mask, out=frame.masked_dot)
             dJw = frame.masked_dot
-            np.multiply(self._dJw, frame.mask, out=dJw)
-        else:
-            dJw = self._dJw
+        if not self._coords.identity:
+            np.dot(dJw, self._coords.matrix, out=frame.folded_dot)
+            dJw = frame.folded_dot
         np.dot(frame.X, dJw, out=Jdot)
         vx, vy, vz, wx, wy, wz = twist.tolist()
         S = frame.Xdot_lin

@@ -1,15 +1,15 @@
-"""Pose parameters χ_e(q) and analytic Jacobians J_eA = E_e(χ_e) · J_e0 (seed eq. 2.180–2.181).
+"""Pose parameters χ_e(q) and analytic Jacobians J_eA = E_e(χ_e) · J_e0 (Robot Dynamics lecture notes, ETH Zurich, section 2.8, eqs. 2.180–2.181).
 
 J_e0 is the geometric Jacobian in the inertial frame ("local_world_aligned": origin velocity
 and angular velocity in I) and E_e = blockdiag(E_P(χ_P), E_R(χ_R)) maps that twist to χ̇_e.
 A :class:`PoseMap` binds one position and one rotation parameterization (either may be
 absent) and, optionally, a selection of rows by label (the operational-space coordinates of
-seed 2.8.2). It is resolved once per (position, rotation, rows) and cached.
+lecture notes, section 2.8.2). It is resolved once per (position, rotation, rows) and cached.
 
 The formulas are the parameterizations' own, written once over ``xp`` (see
 :mod:`kinengine.parameterizations.base`): one configuration evaluates them on Python floats
-(:func:`analytic_at`, :meth:`PoseMap.jacobian_single`), a batch on numpy arrays over a chunk of
-configurations (:meth:`PoseMap.fill_columns`, called by :func:`kinengine.batch.analytic_jacobian`).
+(:meth:`PoseMap.jacobian_single`), a batch on numpy arrays over a chunk of configurations
+(:meth:`PoseMap.fill_columns`, called by :mod:`kinengine.analytic.evaluate`).
 """
 
 from __future__ import annotations
@@ -22,10 +22,9 @@ import struct
 import warnings
 
 import numpy as np
-import pinocchio as pin
 
-from .errors import ParameterizationError, RepresentationSingularityError
-from .parameterizations import (
+from ..errors import ParameterizationError, RepresentationSingularityError
+from ..parameterizations import (
     POSITION_PARAMETERIZATIONS,
     ROTATION_PARAMETERIZATIONS,
     get_position,
@@ -213,28 +212,6 @@ def _pose(C: Sequence[Sequence[float]], p: Sequence[float]) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = C, p
     return T
-
-
-def frame_views(data, fid: int) -> tuple[np.ndarray, np.ndarray]:
-    """(C_IF (3, 3), p (3,)) as live views of ``data.oMf[fid]``: every placement update shows in them.
-
-    Valid as long as ``data`` lives; reading them costs a third of building ``.homogeneous``.
-    """
-    placement = data.oMf[fid]
-    return placement.rotation, placement.translation
-
-
-def analytic_at(model, data, qp: np.ndarray, fid: int, views: tuple[np.ndarray, np.ndarray], pmap: PoseMap,
-                threshold: float, row: int | None = None) -> np.ndarray:
-    """J_A (m, dof) at one Pinocchio configuration qp: J_e0 and T_IF from Pinocchio, E by scalar math.
-
-    ``views``: :func:`frame_views` of the same data and frame.
-    """
-    # in LOCAL_WORLD_ALIGNED, computeFrameJacobian also places the frame: data.oMf[fid], which the views show
-    J = pin.computeFrameJacobian(model, data, qp, fid, pin.LOCAL_WORLD_ALIGNED)
-    if J.ndim == 1:  # eigenpy returns a (6, 1) matrix as (6,)
-        J = J.reshape(6, 1)
-    return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, row)
 
 
 @lru_cache(maxsize=256)

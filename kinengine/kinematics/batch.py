@@ -1,8 +1,8 @@
 """Frame poses and geometric Jacobians for a batch of configurations Q (N, dof), vectorized over N.
 
->>> T, J = batch_pose_and_jacobian(robot, Q, "tool0", "local_world_aligned")   # (N, 4, 4), (N, 6, dof)
+>>> T, J = evaluate(kin, Q, fid, pin.LOCAL_WORLD_ALIGNED)       # (N, 4, 4), (N, 6, dof); Q checked
 
-Same conventions as :class:`~kinengine.robot.Robot`: T_IF in the root link frame I [m], J rows
+Same conventions as :mod:`kinengine.kinematics.engine`: T_IF in the root link frame I [m], J rows
 [linear; angular] in "local_world_aligned", "local" or "world", columns in ``joint_names`` order.
 
 How: the chain from the root to the frame is compiled once from the Pinocchio model. Joint i is
@@ -13,8 +13,9 @@ carried as S_i = C_Ii · Q_i, where Q_i is a constant rotation with Q_i e_z = a_
 
 so the world axis of joint i is the third column of S_i, and for axis-aligned joints K_i is a signed
 permutation: composing with it costs nothing. Columns of S are (3, n) arrays over a chunk of n
-configurations; chunks run on a thread pool (numpy releases the GIL). A mimic joint uses
-θ = multiplier · q_leader + offset and adds multiplier × its column to the leader's column. Small
+configurations; chunks run on a thread pool of one thread per core this process may use (numpy
+releases the GIL; a forked child makes its own pool). A mimic joint uses θ = multiplier · q_leader +
+offset and adds multiplier × its column to the leader's column. Small
 batches loop over Pinocchio instead, which is faster there (see ``CALLS_PER_CONFIGURATION``).
 """
 
@@ -29,23 +30,20 @@ import threading
 import numpy as np
 import pinocchio as pin
 
-from .analytic import analytic_at, frame_views
+from .engine import Kinematics
 
 CHUNK = 8192
 """Most configurations per numpy pass (the temporaries stay in the core's cache)."""
 MIN_PER_WORKER = 4096
 """Batches are split over several threads only when each gets at least this many rows."""
-WORKERS = max(1, min(4, os.cpu_count() or 1))
+WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
+"""Threads per batch (this one included): the cores this process may use."""
 CALLS_PER_CONFIGURATION = 3
 """One configuration in Pinocchio's loop costs about as much as this many numpy calls over a chunk
 (measured on the ABB IRB 120, UR5 and Panda: 1.75 µs against 0.55 µs): a chain that takes c numpy
 calls per chunk loops over Pinocchio for batches smaller than c / this."""
 MIN_CALLS = 12
 """The fewest numpy calls of any chain (a pose of a frame fixed to the root)."""
-ANALYTIC_CALLS = 100
-"""numpy calls for χ, E and E·J_e0 over a chunk (about; they vary with the parameterization). A row
-of the analytic single-call loop costs about twice a row of Pinocchio's pose and Jacobian loop."""
-
 Terms = tuple[tuple[tuple[int, float], ...], ...]
 
 
@@ -95,34 +93,31 @@ def _compose_calls(terms: Terms) -> int:
     return sum(0 if len(t) == 1 and t[0][1] == 1.0 else 2 * len(t) - 1 for t in terms)
 
 
-def _compile(robot, fid: int) -> _Chain:
+def _compile(kin: Kinematics, fid: int) -> _Chain:
     """The chain of movable joints from the root to frame ``fid``, with its constants."""
-    model = robot._model
-    joints = {j.name: j for j in robot.description.joints}
+    model, coords = kin.model, kin.coordinates
+    joints = {j.name: j for j in kin.description.joints}
     frame = model.frames[fid]
     steps, seen = [], set()
     Q_parent = np.eye(3)
     for jid in list(model.supports[frame.parentJoint])[1:]:
-        jmodel = model.joints[jid]
+        k = model.joints[jid].idx_v  # Pinocchio's coordinate: row k of the coordinate map
         joint = joints[model.names[jid]]
-        scaling, offset = 1.0, 0.0
-        if jmodel.shortname() == "JointModelMimic":
-            mimic = jmodel.extract()
-            scaling, offset = float(mimic.scaling), float(mimic.offset)
+        coordinate = int(coords.leader[k])
         axis = np.asarray(joint.axis, dtype=float)
         Q = _axis_basis(axis / np.linalg.norm(axis))
         placement = model.jointPlacements[jid]
-        steps.append(_Step(joint.type == "prismatic", jmodel.idx_v, scaling, offset,
-                           _terms(Q_parent.T @ placement.rotation @ Q),
-                           _vector_terms(Q_parent.T @ placement.translation), jmodel.idx_v in seen))
-        seen.add(jmodel.idx_v)
+        steps.append(_Step(joint.type == "prismatic", coordinate, float(coords.multiplier[k]),
+                           float(coords.offset[k]), _terms(Q_parent.T @ placement.rotation @ Q),
+                           _vector_terms(Q_parent.T @ placement.translation), coordinate in seen))
+        seen.add(coordinate)
         Q_parent = Q
     rotation = _terms(Q_parent.T @ frame.placement.rotation)
     translation = _vector_terms(Q_parent.T @ frame.placement.translation)
     pose_calls = 12 + _compose_calls(rotation) + 2 * len(translation) + sum(
         _compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 8) for s in steps)
     jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
-    return _Chain(tuple(steps), rotation, translation, robot.dof, pose_calls, jacobian_calls)
+    return _Chain(tuple(steps), rotation, translation, kin.dof, pose_calls, jacobian_calls)
 
 
 def _compose(columns: list, terms: Terms) -> list:
@@ -226,8 +221,9 @@ _LOCK = threading.Lock()
 _POOL: ThreadPoolExecutor | None = None
 
 
-def _chain(robot, fid: int) -> _Chain:
-    return robot._memoized(("batch chain", fid), lambda: _compile(robot, fid))
+def compiled_chain(kin: Kinematics, fid: int) -> _Chain:
+    """The chain to frame ``fid``, compiled once per robot and frame."""
+    return kin.memoized(("batch chain", fid), lambda: _compile(kin, fid))
 
 
 def _pool() -> ThreadPoolExecutor:
@@ -238,9 +234,19 @@ def _pool() -> ThreadPoolExecutor:
         return _POOL
 
 
-def _run(chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None) -> None:
-    """Evaluate Q in chunks of at most CHUNK rows, split evenly over up to WORKERS threads."""
-    workers = max(1, min(WORKERS, len(Q) // MIN_PER_WORKER))
+def _forget_pool() -> None:
+    """In a forked child: the parent's pool threads do not exist here, so start a new pool on demand."""
+    global _POOL, _LOCK
+    _POOL, _LOCK = None, threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
+
+
+def run_chain(chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None, workers: int | None = None) -> None:
+    """Evaluate Q in chunks of at most CHUNK rows, split evenly over up to ``workers`` (WORKERS) threads."""
+    workers = max(1, min(WORKERS if workers is None else workers, len(Q) // MIN_PER_WORKER))
     pieces = workers * -(-len(Q) // (workers * CHUNK))
     chunks = list(itertools.pairwise(len(Q) * i // pieces for i in range(pieces + 1)))
 
@@ -257,44 +263,51 @@ def _run(chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None) -> N
         future.result()
 
 
-def _pinocchio_loop(robot, Q: np.ndarray, fid: int, pose, jac, reference) -> None:
+def _pinocchio_loop(kin: Kinematics, Q: np.ndarray, fid: int, pose, jac, reference) -> None:
     """The same outputs from a Python loop over Pinocchio (faster for small batches)."""
-    model, data = robot._model, robot._data()
-    if robot.dof == 0:
-        jac = None  # nothing to fill (and Pinocchio 4.1's getFrameJacobian crashes when nv = 0)
+    model, data, coords = kin.model, kin.data(), kin.coordinates
+    if kin.dof == 0:
+        if jac is not None:
+            jac[...] = 0.0
+            jac = None  # nothing to fill (and Pinocchio 4.1's getFrameJacobian crashes when nv = 0)
     if pose is None and jac is None:
         return
-    for i, qi in enumerate(robot._joints.to_pinocchio(Q)):
+    for i, qi in enumerate(coords.to_pinocchio(Q)):
         if jac is None:
             pin.forwardKinematics(model, data, qi)
         elif pose is None:
-            jac[i] = pin.computeFrameJacobian(model, data, qi, fid, reference).reshape(6, -1)  # dof 1: (6,)
+            jac[i] = coords.fold(pin.computeFrameJacobian(model, data, qi, fid, reference).reshape(6, -1))
             continue
         else:  # computeFrameJacobian leaves data.oMi stale in LOCAL: place every joint first
             pin.computeJointJacobians(model, data, qi)
-            jac[i] = pin.getFrameJacobian(model, data, fid, reference).reshape(6, -1)
+            jac[i] = coords.fold(pin.getFrameJacobian(model, data, fid, reference).reshape(6, -1))
         pose[i] = pin.updateFramePlacement(model, data, fid).homogeneous
 
 
-def evaluate(robot, Q: np.ndarray, fid: int, reference: pin.ReferenceFrame | None, *, pose: bool = True,
-             jacobian: bool = True) -> tuple[np.ndarray | None, np.ndarray | None]:
+def evaluate(kin: Kinematics, Q: np.ndarray, fid: int, reference: pin.ReferenceFrame | None, *,
+             pose: bool = True, jacobian: bool = True, out: tuple[np.ndarray | None, np.ndarray | None] | None = None,
+             workers: int | None = None) -> tuple[np.ndarray | None, np.ndarray | None]:
     """(T (N, 4, 4) or None, J (N, 6, dof) or None) for an already checked float64 Q (N, dof).
 
-    The entry point for :class:`~kinengine.robot.Robot`, which has checked q and resolved the
-    frame index and the reference (a pin.ReferenceFrame; unused when ``jacobian`` is False).
+    ``reference`` is a pin.ReferenceFrame (unused when ``jacobian`` is False); ``out`` optional
+    preallocated (T, J) arrays of those shapes, filled in place; ``workers`` caps the threads.
     """
     n = len(Q)
-    T = np.empty((n, 4, 4)) if pose else None
-    J = np.empty((n, 6, robot.dof)) if jacobian else None
-    chain = _numpy_chain(robot, fid, n, jacobian)
+    T, J = out if out is not None else (None, None)
+    if pose and T is None:
+        T = np.empty((n, 4, 4))
+    if jacobian and J is None:
+        J = np.empty((n, 6, kin.dof))
+    chain = numpy_chain(kin, fid, n, jacobian)
     if chain is None:
-        _pinocchio_loop(robot, Q, fid, T, J, reference)
+        _pinocchio_loop(kin, Q, fid, T if pose else None, J if jacobian else None, reference)
     else:
-        _run(chain, Q, T, J, reference)
-    return T, J
+        run_chain(chain, Q, T if pose else None, J if jacobian else None, reference, workers=workers)
+    return (T if pose else None), (J if jacobian else None)
 
 
-def _numpy_chain(robot, fid: int, n: int, jacobian: bool, extra: int = 0, row_cost: int = 1) -> _Chain | None:
+def numpy_chain(kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 0,
+                row_cost: int = 1) -> _Chain | None:
     """The compiled chain if numpy over the batch is the faster path, else None (loop row by row).
 
     A loop row costs ``row_cost`` × CALLS_PER_CONFIGURATION numpy calls; the numpy path costs the
@@ -303,65 +316,9 @@ def _numpy_chain(robot, fid: int, n: int, jacobian: bool, extra: int = 0, row_co
     budget = row_cost * n * CALLS_PER_CONFIGURATION
     if budget < MIN_CALLS + extra:  # the chain is not even looked up
         return None
-    chain = _chain(robot, fid)
+    chain = compiled_chain(kin, fid)
     return chain if budget >= chain.pose_calls + (chain.jacobian_calls if jacobian else 0) + extra else None
 
 
-def analytic_jacobian(robot, Q: np.ndarray, fid: int, pmap, threshold: float) -> np.ndarray:
-    """J_A = E(χ)·J_e0 for every row of an already checked Q (N, dof) -> (N, m, dof).
-
-    ``pmap`` is the :class:`~kinengine.analytic.PoseMap`. Small batches take the single-call path
-    row by row; larger ones evaluate χ, E and E·J_e0 with numpy over each chunk, next to the chain.
-    RepresentationSingularityError names the first row within ``threshold`` of a singular set.
-    """
-    n = len(Q)
-    out = np.empty((n, pmap.size, robot.dof))
-    # (Pinocchio 4.1 crashes on a Jacobian with nv = 0: such robots take the numpy chain)
-    chain = _numpy_chain(robot, fid, n, True, ANALYTIC_CALLS, row_cost=2) if robot.dof else _chain(robot, fid)
-    if chain is None:
-        return _analytic_loop(robot, Q, fid, pmap, threshold, out)
-    distances = np.empty((n, len(pmap.parts)))
-    _run(chain, Q, None, None, pin.LOCAL_WORLD_ALIGNED, (pmap, out, distances))
-    pmap.raise_if_singular(distances, threshold, lambda row: evaluate(robot, Q[row:row + 1], fid, None,
-                                                                      jacobian=False)[0][0])
-    return out
-
-
-def _analytic_loop(robot, Q: np.ndarray, fid: int, pmap, threshold: float, out: np.ndarray) -> np.ndarray:
-    model, data = robot._model, robot._data()
-    views = frame_views(data, fid)
-    for i, qi in enumerate(robot._joints.to_pinocchio(Q)):
-        out[i] = analytic_at(model, data, qi, fid, views, pmap, threshold, i)
-    return out
-
-
-def _batch(robot, Q: object, frame: str | None, reference: object, pose: bool, jacobian: bool):
-    from .robot import resolve_reference  # robot.py routes its batches here: import it late
-    fid = robot.frame_id(frame if frame is not None else robot.end_effector)
-    ref = resolve_reference(reference) if jacobian else None
-    Q = robot._joints.check(Q, name="Q")
-    single = Q.ndim == 1
-    out = tuple(a[0] if single else a for a in evaluate(robot, Q[None] if single else Q, fid, ref,
-                                                       pose=pose, jacobian=jacobian) if a is not None)
-    return out if len(out) == 2 else out[0]
-
-
-def batch_frame_pose(robot, Q: object, frame: str | None = None) -> np.ndarray:
-    """T_IF for every row of Q: (N, dof) -> (N, 4, 4) (a single (dof,) q gives (4, 4)). [m]"""
-    return _batch(robot, Q, frame, None, True, False)
-
-
-def batch_jacobian(robot, Q: object, frame: str | None = None,
-                   reference: object = "local_world_aligned") -> np.ndarray:
-    """Geometric Jacobians for every row of Q: (N, dof) -> (N, 6, dof), rows [linear; angular]."""
-    return _batch(robot, Q, frame, reference, False, True)
-
-
-def batch_pose_and_jacobian(robot, Q: object, frame: str | None = None,
-                            reference: object = "local_world_aligned") -> tuple[np.ndarray, np.ndarray]:
-    """(T, J) in one pass over the chain: (N, 4, 4) and (N, 6, dof) for Q (N, dof)."""
-    return _batch(robot, Q, frame, reference, True, True)
-
-
-__all__ = ["CALLS_PER_CONFIGURATION", "CHUNK", "analytic_jacobian", "batch_frame_pose", "batch_jacobian",
-           "batch_pose_and_jacobian", "evaluate"]
+__all__ = ["CALLS_PER_CONFIGURATION", "CHUNK", "WORKERS", "compiled_chain", "evaluate", "numpy_chain",
+           "run_chain"]

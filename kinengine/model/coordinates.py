@@ -1,10 +1,13 @@
-"""The user's joint coordinates q and their map to Pinocchio's configuration vector.
+"""The user's joint coordinates q and the constant affine map to Pinocchio's: q_pin = M q + b.
 
-kinengine's q holds exactly one coordinate per independent movable joint, in
-``joint_names`` order (Pinocchio's depth-first tree order): revolute and continuous
-joints in [rad], prismatic joints in [m]. Mimic joints take no coordinate. Pinocchio
-stores a continuous joint as (cos q, sin q); that mapping lives here and nowhere else.
-Velocities need no map: Pinocchio's nv equals ``dof`` in the same order.
+kinengine's q holds exactly one coordinate per independent movable joint, in ``names`` order
+(Pinocchio's depth-first tree order, mimic joints left out): revolute and continuous joints in
+[rad], prismatic joints in [m]. Pinocchio's model has one plain joint per movable URDF joint
+(nq = nv = 1 each, continuous joints included), so its configuration is the vector of every
+movable joint's value. Row i of (M, b) says which coordinate drives Pinocchio's joint i and how:
+an independent joint is an identity row; a mimic joint θ = m·q_leader + o (a mimic of a mimic
+composed down to its root leader). Velocities and Jacobians fold the same way: q̇_pin = M q̇,
+J = J_pin · M. Without mimic joints M is the identity and q passes to Pinocchio untouched.
 """
 
 from __future__ import annotations
@@ -14,116 +17,114 @@ import math
 import warnings
 
 import numpy as np
-import pinocchio as pin
 
-from .errors import ConfigurationError, FrameNotFoundError, OptionError
-from .urdf import RobotDescription
+from ..errors import ConfigurationError, FrameNotFoundError, OptionError
+from ..urdf import RobotDescription
 
 _F64 = np.dtype(np.float64)
 _STRIDES = (_F64.itemsize,)  # a C-contiguous float64 vector
-_SMALL_BATCH = 8  # rows up to which to_pinocchio converts row by row in Python (measured on kinova)
 
 
-class JointSpace:
-    """Joint names, limits and the checked conversion of q to Pinocchio's q."""
+def mimic_roots(description: RobotDescription) -> dict[str, tuple[str, float, float]]:
+    """Mimic joint name -> (root leader, multiplier, offset), chains of mimics composed:
+    θ_a = m₁θ_b + o₁ and θ_b = m₂θ_c + o₂ give θ_a = (m₁m₂)θ_c + (m₁o₂ + o₁)."""
+    direct = {j.name: j.mimic for j in description.joints if j.movable and j.mimic is not None}
+    roots: dict[str, tuple[str, float, float]] = {}
+    for name in direct:
+        multiplier, offset, leader, seen = 1.0, 0.0, name, {name}
+        while leader in direct:  # the parser has refused cycles
+            m = direct[leader]
+            multiplier, offset = multiplier * m.multiplier, multiplier * m.offset + offset
+            leader = m.joint
+            if leader in seen:
+                raise AssertionError(f"mimic cycle through {leader!r}")
+            seen.add(leader)
+        roots[name] = (leader, multiplier, offset)
+    return roots
 
-    def __init__(self, model: pin.Model, description: RobotDescription) -> None:
-        joints = {j.name: j for j in description.joints}
-        names, idx_q, continuous = [], [], []
-        for jid in range(1, model.njoints):
-            name = model.names[jid]
-            jmodel = model.joints[jid]
-            if jmodel.nv == 0:  # a mimic joint: follows its leader, owns no coordinate
-                continue
-            names.append(name)
-            idx_q.append(jmodel.idx_q)
-            continuous.append(joints[name].type == "continuous")
+
+class CoordinateMap:
+    """Joint names, limits, the checked input q and its constant map to Pinocchio's coordinates."""
+
+    def __init__(self, description: RobotDescription) -> None:
+        movable = [j for j in description.joints if j.movable]
+        roots = mimic_roots(description)
+        names = [j.name for j in movable if j.name not in roots]
+        index = {n: i for i, n in enumerate(names)}
         self.names: tuple[str, ...] = tuple(names)
         self.dof = len(names)
-        if self.dof != model.nv:
-            raise AssertionError(f"joint map mismatch: {self.dof} coordinates, Pinocchio nv = {model.nv}")
-        self.nq = model.nq
-        lower = np.array([joints[n].lower if joints[n].lower is not None else -np.inf for n in names])
-        upper = np.array([joints[n].upper if joints[n].upper is not None else np.inf for n in names])
+        self.nq = len(movable)
+        self.pinocchio_names: tuple[str, ...] = tuple(j.name for j in movable)
+        leader = np.empty(self.nq, dtype=np.intp)
+        multiplier, offset = np.ones(self.nq), np.zeros(self.nq)
+        for k, joint in enumerate(movable):
+            root, m, o = roots.get(joint.name, (joint.name, 1.0, 0.0))
+            leader[k], multiplier[k], offset[k] = index[root], m, o
+        self.leader, self.multiplier, self.offset = leader, multiplier, offset
+        self.identity = not roots
+        M = np.zeros((self.nq, self.dof))
+        M[np.arange(self.nq), leader] = multiplier
+        self.matrix, self.has_offset = M, bool(offset.any())
+        self.independent = np.array([k for k, j in enumerate(movable) if j.name not in roots], dtype=np.intp)
+        joints = {j.name: j for j in movable}
+        lower = np.array([_or(joints[n].lower, -np.inf) for n in names])
+        upper = np.array([_or(joints[n].upper, np.inf) for n in names])
         self._narrowed_by: dict[int, list[str]] = {}
-        self._narrow_by_mimics(description, names, lower, upper)
+        self._narrow_by_mimics(description, roots, index, lower, upper)
         lower.flags.writeable = upper.flags.writeable = False
         self.lower, self.upper = lower, upper
-        self.continuous = np.array(continuous, dtype=bool)
-        self.identity = not any(continuous)
-        cont = np.flatnonzero(self.continuous)
-        lin = np.flatnonzero(~self.continuous)
-        idx = np.asarray(idx_q, dtype=np.intp)
-        self._lin_user, self._lin_pin = lin, idx[lin]
-        self._cont_user, self._cos_pin, self._sin_pin = cont, idx[cont], idx[cont] + 1
-        self._linear = tuple(zip(lin.tolist(), idx[lin].tolist()))      # (user index, Pinocchio index)
-        self._circular = tuple(zip(cont.tolist(), idx[cont].tolist()))  # (user index, index of cos)
-        self._index = {n: i for i, n in enumerate(names)}
+        self.continuous = np.array([joints[n].type == "continuous" for n in names], dtype=bool)
+        self._index = index
         self._shape = (self.dof,)
-        self._mimics = {j.name: j.mimic.joint for j in description.joints if j.mimic is not None}
+        self._mimics = {name: root[0] for name, root in roots.items()}
 
-    def _narrow_by_mimics(self, description: RobotDescription, names: list[str], lower: np.ndarray,
-                          upper: np.ndarray) -> None:
+    def _narrow_by_mimics(self, description: RobotDescription, roots: dict[str, tuple[str, float, float]],
+                          index: dict[str, int], lower: np.ndarray, upper: np.ndarray) -> None:
         """A coordinate's limits also keep each mimic joint that follows it within that joint's own limits:
         lower ≤ m·q + o ≤ upper of the follower, i.e. q within [(lower − o)/m, (upper − o)/m] (swapped if m < 0).
-        Limits that no value meets (sloppy gripper URDFs) are warned about and not enforced."""
-        index = {n: i for i, n in enumerate(names)}
+        Narrowing that would leave the leader an empty or zero-width range (sloppy gripper URDFs, e.g. a
+        vendor's Robotiq 2F-85) is warned about once and not enforced: the leader keeps its own limits."""
         for joint in description.joints:
-            mimic = joint.mimic
-            if mimic is None or joint.lower is None or mimic.multiplier == 0.0:
+            if joint.name not in roots or joint.lower is None or joint.upper is None:
                 continue
-            i = index[mimic.joint]
-            a = (joint.lower - mimic.offset) / mimic.multiplier
-            b = (joint.upper - mimic.offset) / mimic.multiplier
+            root, m, o = roots[joint.name]
+            if m == 0.0:
+                continue
+            i = index[root]
+            a, b = (joint.lower - o) / m, (joint.upper - o) / m
             lo, hi = max(lower[i], min(a, b)), min(upper[i], max(a, b))
-            follows = (f"{joint.name!r} = {mimic.multiplier:g}·q + {mimic.offset:g} within "
-                       f"[{joint.lower:g}, {joint.upper:g}]")
-            if lo > hi:
-                warnings.warn(f"{description.source}: no value of joint {mimic.joint!r} keeps it within its limits "
-                              f"and mimic joint {follows}; the mimic joint's limits are not enforced", stacklevel=2)
+            follows = f"{joint.name!r} = {m:g}·q + {o:g} within [{joint.lower:g}, {joint.upper:g}]"
+            if not lo < hi:
+                what = "no value" if lo > hi else "only one value"
+                warnings.warn(f"{description.source}: {what} of joint {root!r} keeps it within its limits and "
+                              f"mimic joint {follows}; the mimic joint's limits are not enforced", stacklevel=3)
             elif lo > lower[i] or hi < upper[i]:
                 lower[i], upper[i] = lo, hi
                 self._narrowed_by.setdefault(i, []).append(follows)
 
-    # -- conversion -------------------------------------------------------------------------
+    # -- the map ------------------------------------------------------------------------------
     def to_pinocchio(self, q: np.ndarray) -> np.ndarray:
-        """Pinocchio's configuration for a checked q of shape (dof,) (or (N, dof) -> (N, nq))."""
+        """Pinocchio's configuration for a checked q: (dof,) -> (nq,), (N, dof) -> (N, nq); q itself if M = I."""
         if self.identity:
             return q
-        if q.ndim == 1:  # scalar Python is ~4x faster than numpy fancy indexing for one vector
-            out = np.empty(self.nq)
-            self.write_pinocchio(q.tolist(), out)
-            return out
-        if len(q) <= _SMALL_BATCH:  # ... and for a few
-            out = np.empty((len(q), self.nq))
-            for row, values in zip(out, q.tolist()):
-                self.write_pinocchio(values, row)
-            return out
-        out = np.empty(q.shape[:-1] + (self.nq,))
-        out[..., self._lin_pin] = q[..., self._lin_user]
-        qc = q[..., self._cont_user]
-        out[..., self._cos_pin] = np.cos(qc)
-        out[..., self._sin_pin] = np.sin(qc)
+        out = q[..., self.leader] * self.multiplier
+        if self.has_offset:
+            out += self.offset
         return out
-
-    def write_pinocchio(self, values: list[float], out: np.ndarray) -> None:
-        """Write one checked q, given as a list, into Pinocchio's configuration ``out`` (nq,) in place."""
-        for user, index in self._linear:
-            out[index] = values[user]
-        for user, index in self._circular:
-            out[index], out[index + 1] = math.cos(values[user]), math.sin(values[user])
 
     def from_pinocchio(self, q_pin: np.ndarray) -> np.ndarray:
-        """The user's q from Pinocchio's configuration (continuous angles in (-π, π])."""
-        q_pin = np.asarray(q_pin, dtype=float)
-        if self.identity:
-            return q_pin.copy()
-        out = np.empty(q_pin.shape[:-1] + (self.dof,))
-        out[..., self._lin_user] = q_pin[..., self._lin_pin]
-        out[..., self._cont_user] = np.arctan2(q_pin[..., self._sin_pin], q_pin[..., self._cos_pin])
-        return out
+        """The user's q from a Pinocchio configuration (the independent joints' entries), a fresh array."""
+        return np.array(np.asarray(q_pin, dtype=float)[..., self.independent])
 
-    # -- checking ---------------------------------------------------------------------------
+    def velocity_to_pinocchio(self, qdot: np.ndarray) -> np.ndarray:
+        """q̇_pin = M q̇ (q̇ itself if M = I)."""
+        return qdot if self.identity else self.matrix @ qdot
+
+    def fold(self, J_pin: np.ndarray) -> np.ndarray:
+        """J = J_pin · M for arrays whose last axis is over Pinocchio's nv (or J_pin itself if M = I)."""
+        return J_pin if self.identity else J_pin @ self.matrix
+
+    # -- checking -----------------------------------------------------------------------------
     def check(self, q: object, *, name: str = "q", check_limits: bool = False,
               allow_batch: bool = True) -> np.ndarray:
         """q as a C-contiguous float64 array of shape (dof,) or (N >= 1, dof); ConfigurationError otherwise.
@@ -133,8 +134,8 @@ class JointSpace:
         modified). NaN/inf, strings, None, booleans, complex, masked entries, empty batches
         and wrongly shaped input are refused with the expected shape in the message.
         """
-        # Hot path: a contiguous float64 vector of the right shape costs one float sum (~0.15 µs)
-        # to check; a non-finite sum (NaN, inf or overflow) is confirmed element-wise.
+        # Hot path: a contiguous float64 vector of the right shape costs one float sum to check; a
+        # non-finite sum (NaN, inf or overflow) is confirmed element-wise.
         if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._shape and q.strides == _STRIDES:
             if not math.isfinite(sum(q.tolist())) and not np.isfinite(q).all():
                 self._raise_nonfinite(q, name)
@@ -215,7 +216,7 @@ class JointSpace:
                 f"`{name}`{row} puts joint {self.names[i]!r} at {float(q[tuple(bad)])!r}, outside its limits "
                 f"[{float(self.lower[i])!r}, {float(self.upper[i])!r}]{why}; clip q or pass check_limits=False")
 
-    # -- construction -----------------------------------------------------------------------
+    # -- construction -------------------------------------------------------------------------
     def from_mapping(self, values: Mapping[str, float], base: np.ndarray, *, strict: bool = True) -> np.ndarray:
         """q from joint name -> value (e.g. a ROS JointState); joints not named keep ``base``."""
         if not isinstance(values, Mapping):
@@ -248,3 +249,10 @@ class JointSpace:
         hi = np.where(np.isfinite(self.upper), self.upper, np.pi)
         shape = (self.dof,) if size is None else (size, self.dof)
         return rng.uniform(lo, hi, size=shape)
+
+
+def _or(value: float | None, default: float) -> float:
+    return default if value is None else value
+
+
+__all__ = ["CoordinateMap", "mimic_roots"]

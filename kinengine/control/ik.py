@@ -27,8 +27,8 @@ import math
 import numpy as np
 import pinocchio as pin
 
-from .errors import OptionError, ParameterizationError
-from .parameterizations import get_position, get_rotation
+from ..errors import OptionError, ParameterizationError
+from ..parameterizations import get_position, get_rotation
 
 SEEDS_PER_ATTEMPT = 8
 PROBE_ITERATIONS = 10
@@ -76,7 +76,7 @@ def inverse_kinematics(robot, target: object, frame: str | None = None, q0: obje
     p_d, C_d = _target(target, position, rotation)
     frame = robot.end_effector if frame is None else frame
     fid = robot.frame_id(frame)
-    joints = robot._joints
+    joints = robot.engine.coordinates
     q_ns = None if nullspace_target is None else joints.check(nullspace_target, name="nullspace_target",
                                                              allow_batch=False)
     solver = _Solver(robot, fid, p_d, C_d, min_damping ** 2, q_ns, nullspace_gain)
@@ -117,9 +117,10 @@ class _Solver:
     """The iteration for one target: one computeFrameJacobian, one placement and one m×m solve each."""
 
     def __init__(self, robot, fid, p_d, C_d, damping_sq: float, q_ns, gain: float) -> None:
-        self.model, self.data = robot._model, robot._data()
-        self.to_pin = robot._joints.to_pinocchio
-        lower, upper = robot._joints.lower, robot._joints.upper
+        kin = robot.engine
+        self.model, self.data = kin.model, kin.data()
+        self.to_pin, self.fold = kin.coordinates.to_pinocchio, kin.coordinates.fold
+        lower, upper = kin.coordinates.lower, kin.coordinates.upper
         self.lower, self.upper = lower, upper
         self.bounded = np.isfinite(lower) & np.isfinite(upper)
         self.span_sq = np.where(self.bounded, upper - lower, 0.0) ** 2
@@ -142,7 +143,7 @@ class _Solver:
             if (ep <= tol_p and er <= tol_r) or iteration == max_iterations:
                 return q, iteration, ep, er
             iteration += 1
-            Jr = J.reshape(6, -1)[rows]
+            Jr = self.fold(J.reshape(6, -1))[rows]
             err = e[rows]
             JW = Jr * self._inverse_weights(q)          # J W⁻¹
             A = JW @ Jr.T
@@ -188,7 +189,7 @@ def _seed_table(robot, frame: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _nearest_seeds(robot, frame: str, p_d, C_d, k: int) -> np.ndarray:
     """The k stored configurations (k, dof) whose poses of ``frame`` are nearest (p_d, C_d)."""
-    configs, positions, rotations = robot._memoized(("ik seeds", frame), lambda: _seed_table(robot, frame))
+    configs, positions, rotations = robot.engine.memoized(("ik seeds", frame), lambda: _seed_table(robot, frame))
     distance = np.zeros(len(configs))
     if p_d is not None:
         distance += np.linalg.norm(positions - p_d, axis=1)

@@ -15,8 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .batch import batch_pose_and_jacobian
-from .errors import RepresentationSingularityError
+from ...errors import RepresentationSingularityError
 
 REFERENCES = ("local_world_aligned", "local", "world")
 _PIN_REFERENCES = {"local_world_aligned": pin.LOCAL_WORLD_ALIGNED, "local": pin.LOCAL, "world": pin.WORLD}
@@ -56,10 +55,12 @@ class _Floor:
     """Raw Pinocchio on the robot's model, with its own Data."""
 
     def __init__(self, robot, frame: str) -> None:
-        self.model, self.data = robot._model, robot._model.createData()
+        self.model = robot.pinocchio_model()
+        self.data = self.model.createData()
         self.fid = robot.frame_id(frame)
-        self.to_pin = robot._joints.to_pinocchio
-        self.from_pin = robot._joints.from_pinocchio
+        coords = robot.engine.coordinates
+        self.to_pin = coords.to_pinocchio
+        self.from_pin = coords.from_pinocchio
 
     def pose(self, qp: np.ndarray) -> np.ndarray:
         pin.forwardKinematics(self.model, self.data, qp)
@@ -202,8 +203,8 @@ def throughput_cases(robot, frame: str, sizes: list[int], seed: int = 3) -> list
                  lambda loop=loop: loop(lambda qp: floor.jacobian(qp, pin.LOCAL_WORLD_ALIGNED),
                                         (6, robot.dof)),
                  compare=True, q=Q),
-            Case("throughput", "pose+jacobian", n, lambda Q=Q: batch_pose_and_jacobian(robot, Q, frame),
-                 both, "kinengine.batch.batch_pose_and_jacobian; floor: two loops", compare=True)]
+            Case("throughput", "pose+jacobian", n, lambda Q=Q: robot.kinematics(Q, frame),
+                 both, "robot.kinematics(Q); floor: two loops", compare=True)]
         for rot in ("euler_zyx", "quaternion"):
             cases.append(Case(
                 "throughput", f"analytic_jacobian[{rot}]", n,

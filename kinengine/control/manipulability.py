@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ConfigurationError, KinematicSingularityError, ParameterizationError
+from ..errors import ConfigurationError, KinematicSingularityError, ParameterizationError
 
 ROW_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
 ROW_SETS = {"all": (0, 1, 2, 3, 4, 5), "linear": (0, 1, 2), "angular": (3, 4, 5)}
@@ -108,7 +108,7 @@ def singularity_report(robot, q: object, frame: str | None = None, rows: Rows = 
                        tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
     """The :class:`SingularityReport` of J_e0(q) of ``frame`` (default: end effector), q (dof,)."""
     frame = robot.end_effector if frame is None else frame
-    q = robot._joints.check(q, allow_batch=False)  # manipulability() takes batches
+    q = robot.check_configuration(q, check_limits=False, batch=False)  # manipulability() takes batches
     return analyze_jacobian(robot.jacobian(q, frame), rows, tolerance=tolerance, frame=frame)
 
 
@@ -125,7 +125,7 @@ def manipulability(robot, q: object, frame: str | None = None, rows: Rows = "all
 def velocity_ellipsoid(robot, q: object, frame: str | None = None) -> VelocityEllipsoid:
     """The velocity manipulability ellipsoid of ``frame``'s origin (eigenvectors of J_v J_vᵀ), q (dof,)."""
     frame = robot.end_effector if frame is None else frame
-    q = robot._joints.check(q, allow_batch=False)
+    q = robot.check_configuration(q, check_limits=False, batch=False)
     T = robot.frame_pose(q, frame)
     U, s, _ = np.linalg.svd(robot.jacobian(q, frame)[:3], full_matrices=True)
     semi = np.zeros(3)

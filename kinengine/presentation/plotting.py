@@ -21,8 +21,8 @@ import textwrap
 
 import numpy as np
 
-from .errors import KinematicsError
-from .manipulability import VelocityEllipsoid
+from ..errors import KinematicsError
+from ..control.manipulability import VelocityEllipsoid
 
 AXIS_FRACTION = 0.15
 """Default arrow and triad length as a fraction of the skeleton's largest extent."""

@@ -25,10 +25,10 @@ import timeit
 import numpy as np
 from tqdm import tqdm
 
-from .bench_cases import Case, latency_cases, throughput_cases
-from .bench_peers import RUNTIMES, Skip, load_peers
-from .loading import load
-from .parameterizations import ROTATION_PARAMETERIZATIONS
+from .cases import Case, latency_cases, throughput_cases
+from .peers import RUNTIMES, Skip, load_peers
+from ...loading import load
+from ...parameterizations import ROTATION_PARAMETERIZATIONS
 
 DEFAULT_ROBOTS = ("abb_irb120",)
 

@@ -3,7 +3,7 @@
     kinengine show ROBOT [--q v1,v2,...] [--frames tool0,...] [--ellipsoid tool0] [-o robot.png]
                    [--view ELEV,AZIM] [--dpi N]
 
-Drawn by :func:`kinengine.plotting.plot_robot` in the root link frame [m], headless (Agg backend).
+Drawn by :func:`kinengine.presentation.plotting.plot_robot` in the root link frame [m], headless (Agg backend).
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from pathlib import Path
 import re
 
 from .arguments import parse_vector, summary
-from .errors import KinematicsError
-from .loading import load
-from .plotting import plot_robot
+from ..errors import KinematicsError
+from ..loading import load
+from ..presentation.plotting import plot_robot
 
 
 def _names(text: str) -> list[str]:

@@ -14,7 +14,7 @@ from functools import lru_cache
 import importlib.metadata
 from pathlib import Path
 
-from .errors import URDFError
+from ..errors import URDFError
 
 _ERD_PREFIX = "cmeel.prefix/share/example-robot-data/robots"
 
@@ -62,9 +62,9 @@ _SHIPPED_END_EFFECTORS = {"abb_irb120": "tool0"}
 
 def shipped_robots_dir() -> Path:
     """The folder of shipped descriptions: inside the installed package, else the source tree's robots/."""
-    here = Path(__file__).resolve().parent
-    installed = here / "robots"
-    return installed if installed.is_dir() else here.parent / "robots"
+    package = Path(__file__).resolve().parent.parent
+    installed = package / "robots"
+    return installed if installed.is_dir() else package.parent / "robots"
 
 
 @lru_cache(maxsize=1)

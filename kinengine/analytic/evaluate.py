@@ -1,0 +1,76 @@
+"""Analytic Jacobians J_A = E(χ)·J_e0 evaluated on a robot's kinematics: one configuration (J_e0 and
+T_IF from Pinocchio, χ and E by scalar math) or a batch (numpy over the compiled chain for large
+batches, the single path row by row for small ones). q is checked by the caller.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..kinematics import batch
+from ..kinematics.engine import Kinematics
+from .pose_map import PoseMap
+
+ANALYTIC_CALLS = 100
+"""numpy calls for χ, E and E·J_e0 over a chunk (about; they vary with the parameterization). A row
+of the analytic single-call loop costs about twice a row of Pinocchio's pose and Jacobian loop."""
+
+
+def frame_views(data: pin.Data, fid: int) -> tuple[np.ndarray, np.ndarray]:
+    """(C_IF (3, 3), p (3,)) as live views of ``data.oMf[fid]``: every placement update shows in them.
+
+    Valid as long as ``data`` lives; reading them costs a third of building ``.homogeneous``.
+    """
+    placement = data.oMf[fid]
+    return placement.rotation, placement.translation
+
+
+def analytic_at(kin: Kinematics, q: np.ndarray, fid: int, views: tuple[np.ndarray, np.ndarray], pmap: PoseMap,
+                threshold: float, row: int | None = None) -> np.ndarray:
+    """J_A (m, dof) at one checked q (dof,). ``views``: :func:`frame_views` of this thread's Data and frame."""
+    if kin.dof == 0:
+        kin.pose(q, fid)  # places the frame for the views; a 0-dof Jacobian is (6, 0)
+        J = np.zeros((6, 0))
+    else:  # in LOCAL_WORLD_ALIGNED, computeFrameJacobian also places the frame (data.oMf[fid])
+        J = pin.computeFrameJacobian(kin.model, kin.data(), kin.coordinates.to_pinocchio(q), fid,
+                                     pin.LOCAL_WORLD_ALIGNED)
+        J = kin.coordinates.fold(J.reshape(6, -1))  # eigenpy returns a (6, 1) matrix as (6,)
+    return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, row)
+
+
+def analytic_single(kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float) -> np.ndarray:
+    """J_A (m, dof) at one checked q, with this thread's cached views of the frame."""
+    views = kin.per_thread(("frame views", fid), lambda: frame_views(kin.data(), fid))
+    return analytic_at(kin, q, fid, views, pmap, threshold)
+
+
+def analytic_batch(kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, threshold: float) -> np.ndarray:
+    """J_A = E(χ)·J_e0 for every row of a checked Q (N, dof) -> (N, m, dof).
+
+    Small batches take the single-call path row by row; larger ones evaluate χ, E and E·J_e0 with numpy
+    over each chunk, next to the chain. RepresentationSingularityError names the first row within
+    ``threshold`` of a singular set.
+    """
+    n = len(Q)
+    out = np.empty((n, pmap.size, kin.dof))
+    chain = (batch.numpy_chain(kin, fid, n, True, ANALYTIC_CALLS, row_cost=2) if kin.dof
+             else batch.compiled_chain(kin, fid))
+    if chain is None:
+        return _analytic_loop(kin, Q, fid, pmap, threshold, out)
+    distances = np.empty((n, len(pmap.parts)))
+    batch.run_chain(chain, Q, None, None, pin.LOCAL_WORLD_ALIGNED, (pmap, out, distances))
+    pmap.raise_if_singular(distances, threshold,
+                           lambda row: batch.evaluate(kin, Q[row:row + 1], fid, None, jacobian=False)[0][0])
+    return out
+
+
+def _analytic_loop(kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, threshold: float,
+                   out: np.ndarray) -> np.ndarray:
+    views = frame_views(kin.data(), fid)
+    for i, qi in enumerate(Q):
+        out[i] = analytic_at(kin, qi, fid, views, pmap, threshold, i)
+    return out
+
+
+__all__ = ["ANALYTIC_CALLS", "analytic_at", "analytic_batch", "analytic_single", "frame_views"]

@@ -1,0 +1,30 @@
+"""``kinengine info ROBOT``: joints (coordinate index, type, limits), mimic joints and frames."""
+
+from __future__ import annotations
+
+import argparse
+
+from .. import load
+
+
+def _run(args: argparse.Namespace) -> int:
+    robot = load(args.robot)
+    print(f"{robot.name}: {robot.dof} dof, source {robot.source}")
+    print(f"end effector: {robot.end_effector}")
+    print(f"root link (the frame poses are given in): {robot.description.root}")
+    print(f"{'q':>3} {'joint':<28} {'type':<11} {'lower':>10} {'upper':>10}")
+    kinds = {j.name: j.type for j in robot.description.joints}
+    for i, (name, lo, hi) in enumerate(zip(robot.joint_names, robot.lower_limits, robot.upper_limits)):
+        print(f"{i:>3} {name:<28} {kinds[name]:<11} {lo:>10.5g} {hi:>10.5g}")
+    for joint in robot.description.joints:
+        if joint.mimic is not None:
+            m = joint.mimic
+            print(f"  - {joint.name} (mimic, {joint.type}) = {m.multiplier:g}·{m.joint} + {m.offset:g}")
+    print("frames: " + ", ".join(robot.frame_names))
+    return 0
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("info", help="joints, limits and frames of a robot")
+    p.add_argument("robot", help="robot name or path to a .urdf file")
+    p.set_defaults(handler=_run)

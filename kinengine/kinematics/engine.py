@@ -1,0 +1,141 @@
+"""The per-robot kinematics object: Pinocchio's model, each thread's Data, frame ids and a memo.
+
+Frames and conventions
+----------------------
+* "world" in Pinocchio is the URDF's root link frame: the inertial frame I of the Robot Dynamics
+  lecture notes, ETH Zurich, section 2.8.
+* ``pose(q, fid)`` is T_IF, the pose of frame F in I, (4, 4), translation in [m].
+* ``jacobian(q, fid, ref)``: rows [linear; angular], columns in the coordinate map's order.
+  - LOCAL_WORLD_ALIGNED: I J_e0 of the lecture notes — velocity of F's origin and angular
+    velocity, both in I.
+  - LOCAL: the same twist expressed in F: blockdiag(C_IFᵀ, C_IFᵀ) · J_lwa.
+  - WORLD: the spatial velocity in I: the linear rows are the velocity of the body point that
+    currently coincides with I's origin, v_O = v_F − ω × p_F.
+
+Every method here takes an already checked q (see :meth:`CoordinateMap.check`); the Robot facade
+and the frame handles check it once. Pinocchio's Data is per thread, so one object serves several
+threads at once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import threading
+from typing import TypeVar
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import FrameNotFoundError, OptionError
+from ..model import CoordinateMap, build_pinocchio_model
+from ..urdf import RobotDescription
+
+T = TypeVar("T")
+
+REFERENCES: dict[object, pin.ReferenceFrame] = {
+    "world": pin.WORLD,
+    "local": pin.LOCAL,
+    "local_world_aligned": pin.LOCAL_WORLD_ALIGNED,
+}
+_ENUMS = (pin.WORLD, pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
+
+
+def resolve_reference(reference: object) -> pin.ReferenceFrame:
+    """Pinocchio's ReferenceFrame for "world", "local", "local_world_aligned" (or the enum itself).
+    Anything else — including True, 1.0 and numpy integers — is an OptionError."""
+    if type(reference) is str and reference in REFERENCES:
+        return REFERENCES[reference]
+    if type(reference) is pin.ReferenceFrame and reference in _ENUMS:
+        return reference
+    raise OptionError(f"unknown reference {reference!r}; use 'world', 'local' or "
+                      "'local_world_aligned' (or a pinocchio.ReferenceFrame)")
+
+
+class Kinematics:
+    """Pinocchio model + coordinate map of one robot; poses and Jacobians at checked configurations."""
+
+    def __init__(self, description: RobotDescription) -> None:
+        self.description = description
+        self.model = build_pinocchio_model(description)
+        self.coordinates = CoordinateMap(description)
+        self.dof = self.coordinates.dof
+        self.frame_ids = _frame_ids(self.model)
+        self.frame_names: tuple[str, ...] = tuple(self.frame_ids)
+        self._tls = threading.local()
+        self._memo: dict[object, object] = {}
+
+    def data(self) -> pin.Data:
+        """This thread's Pinocchio Data (created on first use)."""
+        try:
+            return self._tls.data
+        except AttributeError:
+            data = self._tls.data = self.model.createData()
+            return data
+
+    def memoized(self, key: object, make: Callable[[], T]) -> T:
+        """A constant derived from the model (a compiled chain, an IK seed table), made once per key.
+        Two threads may both make it the first time; their results are equal and one is kept."""
+        try:
+            return self._memo[key]  # type: ignore[return-value]
+        except KeyError:
+            return self._memo.setdefault(key, make())  # type: ignore[return-value]
+
+    def per_thread(self, key: object, make: Callable[[], T]) -> T:
+        """A value made once per thread and key (e.g. views into this thread's Data)."""
+        try:
+            return self._tls.values[key]  # type: ignore[no-any-return]
+        except AttributeError:
+            self._tls.values = {}
+        except KeyError:
+            pass
+        value = self._tls.values[key] = make()
+        return value
+
+    def frame_id(self, frame: object) -> int:
+        """Pinocchio's frame index of a frame name (FrameNotFoundError with suggestions otherwise)."""
+        try:
+            return self.frame_ids[frame]  # type: ignore[index]
+        except (KeyError, TypeError):
+            raise FrameNotFoundError(frame, self.frame_names) from None
+
+    # -- single configurations (q checked by the caller) ----------------------------------------
+    def pose(self, q: np.ndarray, fid: int) -> np.ndarray:
+        """T_IF (4, 4) at a checked q (dof,)."""
+        data = self.data()
+        pin.forwardKinematics(self.model, data, self.coordinates.to_pinocchio(q))
+        return pin.updateFramePlacement(self.model, data, fid).homogeneous
+
+    def jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> np.ndarray:
+        """J (6, dof) in ``ref`` at a checked q (dof,)."""
+        if self.dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
+            return np.zeros((6, 0))
+        J = pin.computeFrameJacobian(self.model, self.data(), self.coordinates.to_pinocchio(q), fid, ref)
+        if J.ndim == 1:  # eigenpy returns a (6, 1) matrix as (6,)
+            J = J.reshape(6, 1)
+        return self.coordinates.fold(J)
+
+    def pose_and_jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
+        """(T_IF (4, 4), J (6, dof) in ``ref``) from one pass of Pinocchio's joint Jacobians."""
+        model, data = self.model, self.data()
+        if self.dof == 0:
+            return self.pose(q, fid), np.zeros((6, 0))
+        pin.computeJointJacobians(model, data, self.coordinates.to_pinocchio(q))
+        T = pin.updateFramePlacement(model, data, fid).homogeneous
+        J = pin.getFrameJacobian(model, data, fid, ref)
+        return T, self.coordinates.fold(J.reshape(6, -1))
+
+
+def _frame_ids(model: pin.Model) -> dict[str, int]:
+    """Frame name -> index for every frame but 'universe'; a link wins over a joint of the same name."""
+    ids: dict[str, int] = {}
+    for kind_first in (True, False):
+        for fid in range(model.nframes):
+            frame = model.frames[fid]
+            if frame.name == "universe" or frame.name in ids:
+                continue
+            if (frame.type == pin.FrameType.BODY) == kind_first:
+                ids[frame.name] = fid
+    return dict(sorted(ids.items(), key=lambda kv: kv[1]))
+
+
+__all__ = ["REFERENCES", "Kinematics", "resolve_reference"]

@@ -1,0 +1,1 @@
+"""The presentation layer: pictures of a robot (matplotlib skeletons; the browser viewer)."""
