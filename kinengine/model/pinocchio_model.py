@@ -17,6 +17,7 @@ import pinocchio as pin
 
 from ..errors import URDFError
 from ..urdf import RobotDescription
+from .stack import call_with_big_stack
 
 _UNBOUNDED = float(np.finfo(np.float64).max)
 
@@ -39,10 +40,9 @@ def build_pinocchio_model(description: RobotDescription) -> pin.Model:
     """Pinocchio's Model of ``description`` (see the module doc), checked by :func:`check_pinocchio_model`.
     URDFError (naming the file) if Pinocchio fails or disagrees."""
     try:
-        model = pin.buildModelFromXML(pinocchio_xml(description))
+        model = _build(pinocchio_xml(description))
     except Exception as exc:  # Pinocchio signals everything with ValueError/RuntimeError text
-        raise URDFError(f"Pinocchio could not build {description.source}: "
-                        f"{' '.join(str(exc).split())}") from None
+        raise _pinocchio_error(description, exc) from None
     check_pinocchio_model(description, model)
     for joint in description.joints:
         if joint.type == "continuous":
@@ -70,6 +70,31 @@ def check_pinocchio_model(description: RobotDescription, model: pin.Model) -> No
         if got != (1, 1) or model.parents[i] != parent or model.joints[i].idx_q != i - 1:
             raise URDFError(f"Pinocchio's joint {joint.name!r} has (nq, nv) = {got} and parent "
                             f"{model.parents[i]}, expected (1, 1) and parent {parent}")
+
+
+def _pinocchio_error(description: RobotDescription, exc: Exception) -> URDFError:
+    """A URDFError with Pinocchio's reason, naming the first joint whose addition makes the build fail
+    (found by bisection over prefixes of the tree order: each prefix is a subtree; ~log2(joints) builds)."""
+    reason = f"Pinocchio could not build it: {' '.join(str(exc).split())}"
+    lo, hi = 0, len(description.joints)  # the prefix of lo joints builds, of hi joints fails
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        sub = dataclasses.replace(description, joints=description.joints[:mid], links=description.links[:mid + 1])
+        try:
+            _build(pinocchio_xml(sub))
+            lo = mid
+        except Exception:
+            hi = mid
+    if hi == 0:
+        return URDFError(reason, source=description.source)
+    joint = description.joints[hi - 1]
+    return URDFError(reason, source=description.source, element=f"joint {joint.name!r}", line=joint.line)
+
+
+def _build(xml: str) -> pin.Model:
+    """``pin.buildModelFromXML(xml)`` on a thread with a known, big stack: Pinocchio's parser recurses once
+    per tree level and a small thread stack would overflow (see :mod:`kinengine.model.stack`)."""
+    return call_with_big_stack(lambda: pin.buildModelFromXML(xml))
 
 
 def _nonnegative(value: float | None) -> float | None:

@@ -1,0 +1,59 @@
+"""Running Pinocchio's recursive C++ on a thread whose stack is known to be big enough.
+
+Pinocchio's URDF model builder recurses once per level of the kinematic tree (~2 KiB of stack per
+level, measured on pin 4.1), and Python cannot tell how much stack the calling thread has left: a
+thread made with ``threading.stack_size(128 * 1024)`` crashes (SIGSEGV) on a 120-level chain that the
+default :class:`~kinengine.urdf.Limits` admit. So every Pinocchio model build runs on a fresh,
+short-lived thread made with :data:`BUILD_STACK` bytes of stack, whatever thread called ``load``;
+the calling thread waits for it. ``threading.stack_size`` is process-wide, so it is set and restored
+under a lock, only around ``Thread.start``. When no thread can be started (interpreter shutdown) the
+work runs on the calling thread, as it would without this module.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import threading
+from typing import TypeVar
+
+T = TypeVar("T")
+
+BUILD_STACK = 16 * 1024 * 1024
+"""[bytes] stack of the build thread: 4x what the deepest admitted tree (Limits.max_tree_depth = 128,
+~300 KiB) needs, and 2x a Linux main thread's default; only the pages it touches are ever resident."""
+
+_START_LOCK = threading.Lock()
+
+
+def call_with_big_stack(function: Callable[[], T]) -> T:
+    """``function()`` run on a thread with :data:`BUILD_STACK` bytes of stack; its result, or its
+    exception re-raised in the calling thread."""
+    box: list[tuple[bool, object]] = []
+
+    def run() -> None:
+        try:
+            box.append((True, function()))
+        except BaseException as exc:  # handed to the caller, re-raised there
+            box.append((False, exc))
+
+    thread = threading.Thread(target=run, name="kinengine-model-build", daemon=True)
+    with _START_LOCK:
+        previous = threading.stack_size()
+        try:
+            threading.stack_size(BUILD_STACK)
+            thread.start()
+            started = True
+        except (RuntimeError, ValueError, MemoryError):  # shutdown, no threads, or no memory for the stack
+            started = False
+        finally:
+            threading.stack_size(previous)
+    if not started:
+        return function()
+    thread.join()
+    returned, value = box[0]
+    if not returned:
+        raise value  # type: ignore[misc]
+    return value  # type: ignore[return-value]
+
+
+__all__ = ["BUILD_STACK", "call_with_big_stack"]
