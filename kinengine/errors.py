@@ -12,7 +12,21 @@ import difflib
 
 
 class KinematicsError(Exception):
-    """Base class of every kinengine error."""
+    """Base class of every kinengine error.
+
+    Every kinengine error pickles (so it crosses process boundaries, e.g. out of a
+    ``multiprocessing.Pool`` worker) and deep-copies: it is rebuilt with the arguments its
+    constructor was given, then its attributes are restored.
+    """
+
+    def __reduce__(self) -> tuple:
+        args, kwargs = self.__dict__.get("_init", (self.args, {}))
+        return _rebuild, (type(self), tuple(args), dict(kwargs)), dict(self.__dict__)
+
+
+def _rebuild(cls: type, args: tuple, kwargs: dict) -> KinematicsError:
+    """An error of class ``cls`` made again from its constructor arguments (the pickle path)."""
+    return cls(*args, **kwargs)
 
 
 class URDFError(KinematicsError, ValueError):
@@ -24,6 +38,7 @@ class URDFError(KinematicsError, ValueError):
 
     def __init__(self, message: str, *, source: str | None = None,
                  element: str | None = None, line: int | None = None) -> None:
+        self._init = ((message,), {"source": source, "element": element, "line": line})
         self.source = source
         self.element = element
         self.line = line
@@ -45,6 +60,7 @@ class FrameNotFoundError(KinematicsError, KeyError):
     def __init__(self, name: object, known: Iterable[str], *, kind: str = "frame") -> None:
         self.name = name
         self.known = list(known)
+        self._init = ((name, self.known), {"kind": kind})
         close = difflib.get_close_matches(str(name), self.known, n=3, cutoff=0.5)
         hint = (f" Did you mean {', '.join(repr(c) for c in close)}?" if close
                 else f" Known {kind}s: {', '.join(self.known[:12])}"
@@ -76,24 +92,43 @@ class ParameterizationError(KinematicsError, ValueError):
 class RepresentationSingularityError(KinematicsError, ValueError):
     """The pose parameterization is singular (E_e(χ) has no finite value) here.
 
-    This is a property of the chosen coordinates χ, not of the robot: another
-    parameterization (``alternatives``) is regular at the same pose.
+    This is a property of the chosen coordinates χ: another parameterization (``alternatives``) is
+    regular at the same pose. Whether the robot is *also* kinematically singular there is decided
+    from the geometric Jacobian's singular values by the code that raises: ``robot_rank`` is the rank of
+    J_e0 (σ_i > 1e-6·σ_max) and ``full_rank`` its generic rank min(6, dof); both None when no robot is
+    involved (a parameterization evaluated on its own). The message says which is the case.
     """
 
     def __init__(self, parameterization: str, distance: float, threshold: float,
-                 alternatives: Sequence[str], detail: str = "") -> None:
+                 alternatives: Sequence[str], detail: str = "", robot_rank: int | None = None,
+                 full_rank: int | None = None) -> None:
         self.parameterization = parameterization
         self.distance = distance
         self.threshold = threshold
         self.alternatives = list(alternatives)
+        self.detail = detail
+        self.robot_rank = robot_rank
+        self.full_rank = full_rank
+        self.args_for_pickle = (parameterization, distance, threshold, self.alternatives, detail, robot_rank,
+                                full_rank)
         msg = (f"{parameterization!r} is at a representation singularity "
                f"(distance {distance:.3g} < threshold {threshold:.3g})")
         if detail:
             msg += f": {detail}"
-        msg += (". The robot itself is not singular here; use a parameterization that is "
-                f"regular at this pose, e.g. {', '.join(repr(a) for a in self.alternatives)}, "
-                "or lower singularity_threshold to accept huge entries.")
+        if robot_rank is None or full_rank is None:
+            robot = ". This is a property of the parameterization"
+        elif robot_rank < full_rank:
+            robot = (f". The robot itself is also kinematically singular here (rank {robot_rank} of {full_rank}): "
+                     "no parameterization removes that; for the representation")
+        else:
+            robot = f". The robot itself is not singular here (rank {robot_rank} of {full_rank})"
+        msg += (f"{robot}; use a parameterization that is regular at this pose, e.g. "
+                f"{', '.join(repr(a) for a in self.alternatives)}, or lower singularity_threshold to accept "
+                "huge entries, or pass on_singularity='nan'.")
         super().__init__(msg)
+
+    def __reduce__(self):
+        return (type(self), self.args_for_pickle)
 
 
 class KinematicSingularityError(KinematicsError, ValueError):

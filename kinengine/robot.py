@@ -85,6 +85,11 @@ class Robot:
     def __repr__(self) -> str:
         return f"<Robot {self._name!r}: {self.dof} dof, {len(self.frame_names)} frames>"
 
+    def __reduce__(self) -> tuple:
+        """Pickle and deepcopy: rebuilt from its validated description, URDF text, name and end effector
+        (a fresh Pinocchio model and Data in the receiving process; nothing per-thread is sent)."""
+        return _rebuild_robot, (self._description, self._urdf_text, self._name, self._end_effector)
+
     def pinocchio_model(self) -> pin.Model:
         """A copy of Pinocchio's Model: one plain joint (nq = nv = 1) per movable URDF joint, mimic joints
         included as ordinary joints; its configuration is :meth:`pinocchio_configuration`."""
@@ -274,6 +279,11 @@ class Robot:
         :func:`kinengine.presentation.plotting.plot_robot`."""
         from .presentation.plotting import plot_robot  # matplotlib only when asked for
         return plot_robot(self, q, ax, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length, title=title)
+
+
+def _rebuild_robot(description: RobotDescription, urdf_text: str, name: str, end_effector: str) -> Robot:
+    """The Robot of :meth:`Robot.__reduce__` (the unpickling path)."""
+    return Robot(description, urdf_text, name=name, end_effector=end_effector)
 
 
 def _default_end_effector(description: RobotDescription) -> str:
