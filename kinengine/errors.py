@@ -109,26 +109,23 @@ class RepresentationSingularityError(KinematicsError, ValueError):
         self.detail = detail
         self.robot_rank = robot_rank
         self.full_rank = full_rank
-        self.args_for_pickle = (parameterization, distance, threshold, self.alternatives, detail, robot_rank,
-                                full_rank)
+        self._init = ((parameterization, distance, threshold, self.alternatives, detail, robot_rank, full_rank),
+                      {})
         msg = (f"{parameterization!r} is at a representation singularity "
                f"(distance {distance:.3g} < threshold {threshold:.3g})")
         if detail:
             msg += f": {detail}"
         if robot_rank is None or full_rank is None:
-            robot = ". This is a property of the parameterization"
+            robot = ". This is a property of the parameterization, not of a robot"
         elif robot_rank < full_rank:
-            robot = (f". The robot itself is also kinematically singular here (rank {robot_rank} of {full_rank}): "
-                     "no parameterization removes that; for the representation")
+            robot = (f". The robot itself is also kinematically singular here (rank {robot_rank} of {full_rank}), "
+                     "which no parameterization removes. For the representation singularity")
         else:
             robot = f". The robot itself is not singular here (rank {robot_rank} of {full_rank})"
-        msg += (f"{robot}; use a parameterization that is regular at this pose, e.g. "
+        msg += (f"{robot}: use a parameterization that is regular at this pose, e.g. "
                 f"{', '.join(repr(a) for a in self.alternatives)}, or lower singularity_threshold to accept "
                 "huge entries, or pass on_singularity='nan'.")
         super().__init__(msg)
-
-    def __reduce__(self):
-        return (type(self), self.args_for_pickle)
 
 
 class KinematicSingularityError(KinematicsError, ValueError):

@@ -20,6 +20,7 @@ Data, coordinate map), the analytic layer, and the control layer.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -36,6 +37,7 @@ from .errors import FrameNotFoundError
 from .kinematics import REFERENCES, Kinematics, resolve_reference
 from .kinematics import batch as _batch
 from .kinematics import derivatives as _derivatives
+from .model.editing import add_frame, lock_joints
 from .urdf import RobotDescription
 
 if TYPE_CHECKING:
@@ -50,8 +52,9 @@ class Robot:
     """
 
     def __init__(self, description: RobotDescription, urdf_text: str, *, name: str | None = None,
-                 end_effector: str | None = None) -> None:
+                 end_effector: str | None = None, packages: Mapping[str, str] | None = None) -> None:
         self._kin = kin = Kinematics(description)
+        self._packages = MappingProxyType(dict(packages or {}))
         self._coords = kin.coordinates
         self._description = description
         self._urdf_text = urdf_text
@@ -69,6 +72,8 @@ class Robot:
     description = property(lambda self: self._description, doc="The validated RobotDescription.")
     urdf_text = property(lambda self: self._urdf_text, doc="The URDF text the robot was loaded from.")
     source = property(lambda self: self._description.source, doc="File the robot came from, or '<string>'.")
+    packages = property(lambda self: self._packages, doc="ROS package name -> folder given to load() (read-only "
+                        "mapping) for $(find pkg) and package:// URIs (meshes).")
     engine = property(lambda self: self._kin, doc="The Kinematics object (Pinocchio model, per-thread Data, "
                                                   "coordinate map) that the methods below delegate to.")
 
@@ -88,7 +93,8 @@ class Robot:
     def __reduce__(self) -> tuple:
         """Pickle and deepcopy: rebuilt from its validated description, URDF text, name and end effector
         (a fresh Pinocchio model and Data in the receiving process; nothing per-thread is sent)."""
-        return _rebuild_robot, (self._description, self._urdf_text, self._name, self._end_effector)
+        return _rebuild_robot, (self._description, self._urdf_text, self._name, self._end_effector,
+                                dict(self._packages))
 
     def pinocchio_model(self) -> pin.Model:
         """A copy of Pinocchio's Model: one plain joint (nq = nv = 1) per movable URDF joint, mimic joints
@@ -271,6 +277,26 @@ class Robot:
                                       nullspace_target=nullspace_target, nullspace_gain=nullspace_gain,
                                       min_damping=min_damping)
 
+    # -- model editing ---------------------------------------------------------------------------
+    def with_frame(self, name: str, parent: str, placement: object) -> Robot:
+        """A new Robot with frame ``name`` fixed to frame ``parent`` (a link or joint) at ``placement``:
+        T_parent,name as a (4, 4) homogeneous transform [m], or a pair (xyz [m], rpy [rad]). The frame is a
+        new link on a fixed joint ``<name>_joint``; it is in ``frame_names``, ``urdf_text`` (regenerated)
+        and everything else. See :func:`kinengine.model.editing.add_frame`."""
+        return self._edited(add_frame(self._description, name, parent, placement))
+
+    def locked(self, values: Mapping[str, float]) -> Robot:
+        """A new Robot with the named joints fixed at their values [rad or m] (mimic followers too, at
+        multiplier·value + offset); the other coordinates keep their order. Its poses and Jacobians equal
+        this robot's at those values with the locked columns removed. ConfigurationError for a value
+        outside the limits. See :func:`kinengine.model.editing.lock_joints`."""
+        return self._edited(lock_joints(self._description, values))
+
+    def _edited(self, description: RobotDescription) -> Robot:
+        """The Robot of an edited description: same name, end effector and packages; URDF text regenerated."""
+        return Robot(description, description.to_xml(), name=self._name, end_effector=self._end_effector,
+                     packages=self._packages)
+
     # -- presentation ---------------------------------------------------------------------------
     def plot(self, q: object = None, ax: object = None, *, frames: Sequence[str] = (),
              ellipsoid: str | None = None, axis_length: float | None = None,
@@ -281,9 +307,10 @@ class Robot:
         return plot_robot(self, q, ax, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length, title=title)
 
 
-def _rebuild_robot(description: RobotDescription, urdf_text: str, name: str, end_effector: str) -> Robot:
+def _rebuild_robot(description: RobotDescription, urdf_text: str, name: str, end_effector: str,
+                   packages: Mapping[str, str] | None = None) -> Robot:
     """The Robot of :meth:`Robot.__reduce__` (the unpickling path)."""
-    return Robot(description, urdf_text, name=name, end_effector=end_effector)
+    return Robot(description, urdf_text, name=name, end_effector=end_effector, packages=packages)
 
 
 def _default_end_effector(description: RobotDescription) -> str:
