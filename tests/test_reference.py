@@ -3,8 +3,9 @@ yourdfpy's own forward kinematics and raw Pinocchio.
 
 Frames: I = root link frame; T = T_IF (4, 4); Jacobians rows [linear; angular], columns in
 the reference's ``joint_names`` order. Pinocchio is only ever used here as a second opinion:
-``pinocchio.buildModelFromXML(text, mimic=True)`` on the very same text, continuous joints
-entered as (cos q, sin q).
+raw ``pinocchio.buildModelFromXML(text)`` on the very same text, continuous joints entered as
+(cos q, sin q), mimic joints as ordinary joints set to multiplier · leader + offset (recursively,
+for mimics of mimics) by this file's own code, their Jacobian columns summed by the chain rule.
 
 Typo in the printed course text corrected below: eq. 2.175, entry (3, 1) reads
 -l1 s1 - l2 s12 - l3 c123; with n = e_y and r_1E = (x, 0, z - l0), n × r = (z - l0, 0, -x), so
@@ -21,6 +22,7 @@ from hypothesis import given, settings, strategies as st
 import numpy as np
 import pinocchio as pin
 import pytest
+from lxml import etree
 from scipy.spatial.transform import Rotation
 import yourdfpy
 
@@ -78,18 +80,45 @@ MIXED = _robot(
 
 # -- helpers --------------------------------------------------------------------------------------
 def _pinocchio(text: str) -> tuple[pin.Model, list[str]]:
-    """Pinocchio's model of ``text`` and its independent joints (nv > 0) in its own order."""
-    model = pin.buildModelFromXML(text, mimic=True)
-    return model, [model.names[i] for i in range(1, model.njoints) if model.joints[i].nv > 0]
+    """Raw Pinocchio's model of ``text`` (mimic joints built as ordinary joints, continuous joints with
+    nq = 2) and the independent joints in its own order."""
+    model = pin.buildModelFromXML(text)
+    mimics = _mimics(text)
+    return model, [model.names[i] for i in range(1, model.njoints) if model.names[i] not in mimics]
 
 
-def _pin_q(model: pin.Model, names: list[str], q: np.ndarray) -> np.ndarray:
-    """Pinocchio's configuration (nq,) for q in ``names`` order: continuous joints as (cos, sin)."""
-    qp = np.zeros(model.nq)
-    for value, name in zip(q, names):
-        joint = model.joints[model.getJointId(name)]
+def _mimics(text: str) -> dict[str, tuple[str, float, float]]:
+    """Movable joint name -> (leader, multiplier, offset), read straight from the XML."""
+    out = {}
+    for joint in etree.fromstring(text.encode()).iter("joint"):
+        mimic = joint.find("mimic")
+        if joint.get("type") != "fixed" and mimic is not None:
+            out[joint.get("name")] = (mimic.get("joint"), float(mimic.get("multiplier", 1)),
+                                      float(mimic.get("offset", 0)))
+    return out
+
+
+def _pin_q(model: pin.Model, names: list[str], q: np.ndarray, text: str) -> tuple[np.ndarray, np.ndarray]:
+    """Pinocchio's configuration (nq,) for q in ``names`` order (continuous joints as (cos, sin), each
+    mimic joint at multiplier · its leader's value + offset, recursively) and dθ/dq (nv, dof)."""
+    mimics = _mimics(text)
+    column = {n: k for k, n in enumerate(names)}
+
+    def theta(name: str) -> tuple[float, np.ndarray]:
+        if name not in mimics:
+            grad = np.zeros(len(names))
+            grad[column[name]] = 1.0
+            return float(q[column[name]]), grad
+        leader, multiplier, offset = mimics[name]
+        value, grad = theta(leader)
+        return multiplier * value + offset, multiplier * grad
+
+    qp, A = np.zeros(model.nq), np.zeros((model.nv, len(names)))
+    for i in range(1, model.njoints):
+        joint = model.joints[i]
+        value, A[joint.idx_v] = theta(model.names[i])
         qp[joint.idx_q:joint.idx_q + joint.nq] = (np.cos(value), np.sin(value)) if joint.nq == 2 else value
-    return qp
+    return qp, A
 
 
 def _fd_jacobian(ref: ReferenceKinematics, q: np.ndarray, frame: str, reference: str,
@@ -133,7 +162,7 @@ def _assert_matches_pinocchio(text: str, q: np.ndarray, atol: float) -> None:
     jacobians = {(f, r): ref.jacobian(q, f, r) for f in ref.frame_names for r in REFERENCES}
     pin_refs = {"local_world_aligned": pin.LOCAL_WORLD_ALIGNED, "local": pin.LOCAL, "world": pin.WORLD}
     for i, qi in enumerate(q):
-        qp = _pin_q(model, names, qi)
+        qp, A = _pin_q(model, names, qi, text)
         pin.forwardKinematics(model, data, qp)
         for frame in ref.frame_names:
             fid = model.getFrameId(frame)
@@ -141,7 +170,7 @@ def _assert_matches_pinocchio(text: str, q: np.ndarray, atol: float) -> None:
                                        poses[frame][i], rtol=0, atol=atol, err_msg=frame)
             for r in REFERENCES:
                 # eigenpy hands a (6, 1) matrix back as a (6,) array: restore the column.
-                J_pin = pin.computeFrameJacobian(model, data, qp, fid, pin_refs[r]).reshape(6, ref.dof)
+                J_pin = pin.computeFrameJacobian(model, data, qp, fid, pin_refs[r]).reshape(6, model.nv) @ A
                 np.testing.assert_allclose(J_pin, jacobians[frame, r][i], rtol=0, atol=atol,
                                            err_msg=f"{frame} {r}")
 
@@ -379,7 +408,7 @@ def test_malformed_xml_is_refused_although_yourdfpy_alone_would_recover_it():
     (_robot("a b c", _joint("j", "fixed", "a", "b"),
             _joint("k", "revolute", "b", "c", f'{LIMIT}<mimic joint="j"/>')), "is fixed"),
     (_robot("a b c", _joint("j", "revolute", "a", "b", f'{LIMIT}<mimic joint="k"/>'),
-            _joint("k", "revolute", "b", "c", f'{LIMIT}<mimic joint="j"/>')), "itself a mimic"),
+            _joint("k", "revolute", "b", "c", f'{LIMIT}<mimic joint="j"/>')), "form a cycle"),
 ])
 def test_invalid_urdfs_raise_urdf_error(text, message):
     with pytest.raises(URDFError, match=message):

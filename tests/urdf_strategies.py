@@ -3,15 +3,17 @@
 ``random_urdfs(max_links=8)`` draws a branching tree of links with random origins
 (xyz [m], rpy [rad]), random unit axes (cardinal ones too, which Pinocchio builds as
 special joint models), every supported joint type (revolute, continuous, prismatic,
-fixed), limits with lower < upper, and mimic joints (multiplier, offset) following an
-earlier independent revolute or prismatic joint. Joint elements appear in shuffled
-file order and joint names are shuffled, so file order, name order and tree order all
-differ. Floats are written with ``repr`` so every parser reads the same doubles.
+fixed), limits with lower < upper, and mimic joints (multiplier, offset) of every shape
+kinengine accepts: a mimic joint of any movable type following a leader of any movable
+type (a continuous joint following a revolute one, a prismatic one following a revolute
+one), before or after its leader in tree order, and mimics of mimics (chains, composed
+by the loader). Joint elements appear in shuffled file order and joint names are shuffled,
+so file order, name order and tree order all differ. Floats are written with ``repr`` so
+every parser reads the same doubles.
 
-"Earlier" is meant in Pinocchio's order: urdfdom visits the children of a link sorted
-by joint name (byte order), and Pinocchio refuses a mimic joint met before its leader.
-Mimic joints are revolute or prismatic and so are their leaders: Pinocchio 4.1 cannot
-pair a continuous joint (nq = 2) with a one-coordinate joint.
+Acyclic by construction: the movable joints are visited in a random order and each one is
+either independent or follows a joint visited before it in that order (which may itself be
+a mimic joint); that order is unrelated to the tree order.
 """
 
 from __future__ import annotations
@@ -55,20 +57,6 @@ def _origin(draw: st.DrawFn) -> str:
     return f'<origin xyz="{_v(xyz)}" rpy="{_v(rpy)}"/>'
 
 
-def _pinocchio_order(parents: list[int], names: list[str]) -> list[int]:
-    """Joint indices (joint i has child link i + 1) depth-first, siblings by joint name."""
-    children: dict[int, list[int]] = {}
-    for i, parent in enumerate(parents):
-        children.setdefault(parent, []).append(i)
-    order: list[int] = []
-    stack = sorted(children.get(0, []), key=lambda i: names[i].encode(), reverse=True)
-    while stack:
-        i = stack.pop()
-        order.append(i)
-        stack.extend(sorted(children.get(i + 1, []), key=lambda k: names[k].encode(), reverse=True))
-    return order
-
-
 @st.composite
 def random_urdfs(draw: st.DrawFn, max_links: int = 8) -> str:
     """URDF text of a random valid tree with 1..max_links links (0..max_links-1 joints)."""
@@ -81,15 +69,14 @@ def random_urdfs(draw: st.DrawFn, max_links: int = 8) -> str:
     types = [draw(st.sampled_from(JOINT_TYPES)) for _ in range(n - 1)]
 
     mimic: dict[int, str] = {}
-    seen: list[int] = []  # independent revolute/prismatic joints met so far, in Pinocchio's order
-    for i in _pinocchio_order(parents, names):
-        if types[i] in ("revolute", "prismatic"):
-            if seen and draw(st.integers(0, 3)) == 0:
-                leader = names[draw(st.sampled_from(seen))]
-                multiplier, offset = draw(_floats(-2, 2)), draw(_floats(-1, 1))
-                mimic[i] = f'<mimic joint="{leader}" multiplier="{multiplier!r}" offset="{offset!r}"/>'
-            else:
-                seen.append(i)
+    movable = [i for i in range(n - 1) if types[i] != "fixed"]
+    seen: list[int] = []  # movable joints visited so far in a random order: the possible leaders
+    for i in draw(st.permutations(movable)):
+        if seen and draw(st.integers(0, 2)) == 0:
+            leader = names[draw(st.sampled_from(seen))]
+            multiplier, offset = draw(_floats(-2, 2)), draw(_floats(-1, 1))
+            mimic[i] = f'<mimic joint="{leader}" multiplier="{multiplier!r}" offset="{offset!r}"/>'
+        seen.append(i)
 
     elements = [f'<joint name="{names[i]}" type="{types[i]}">'
                 f'<parent link="{links[parents[i]]}"/><child link="{links[i + 1]}"/>{_origin(draw)}'

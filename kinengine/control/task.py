@@ -105,7 +105,8 @@ class Task:
         params = [p for p in (pmap.position, pmap.rotation) if p is not None]
         m = sum(p.size for p in params)
         self._m = m
-        self._Jw, self._dJw = data.J, data.dJ  # views of Pinocchio's world-frame joint Jacobians
+        # views of Pinocchio's world-frame joint Jacobians (eigenpy hands a (6, 1) matrix over as (6,))
+        self._Jw, self._dJw = data.J.reshape(6, model.nv), data.dJ.reshape(6, model.nv)
         self._zero = np.zeros(model.nv)
         self._qp, self._vp = np.empty(model.nq), np.empty(model.nv)
         self._pose = np.zeros((k, 4, 4))

@@ -56,7 +56,7 @@ def kinematic_hessian(kin: Kinematics, q: np.ndarray, fid: int, ref: pin.Referen
     model, data = kin.model, kin.data()
     pin.computeJointJacobians(model, data, kin.coordinates.to_pinocchio(q))
     chain = kin.memoized(("hessian chain", fid), lambda: _Chain(kin, fid))
-    S = data.J[:, chain.columns]                       # (6, p) world axes of the supporting joints
+    S = data.J.reshape(6, model.nv)[:, chain.columns]  # (6, p) world axes of the supporting joints
     v, w = S[:3].T, S[3:].T                            # (p, 3)
     bracket = np.empty((6, len(chain.columns), len(chain.columns)))  # [:, b, a] = ad(S_b)·S_a
     bracket[:3] = np.moveaxis(np.cross(w[:, None], v[None]) + np.cross(v[:, None], w[None]), -1, 0)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigurationError, FrameNotFoundError, KinematicsError
-from .tree import KinematicTree, TreeJoint, read_urdf
+from .tree import KinematicTree, TreeJoint, read_urdf, resolve_mimic
 
 REFERENCES = ("local_world_aligned", "local", "world")
 
@@ -43,9 +43,14 @@ class ReferenceKinematics:
         self._joint_names = names
         self._frames = tree.frames
         column = {name: k for k, name in enumerate(names)}
-        # q_j = multiplier · q[column] + offset for every movable joint j (mimic joints use their leader).
-        self._coordinate = {j.name: (column[j.leader or j.name], j.multiplier, j.offset)
-                            for j in tree.joints if j.movable}
+        # q_j = a · q[column] + b for every movable joint j: (1, 0) and its own column for an independent
+        # joint, a mimic joint's chain of leaders composed down to the independent joint that drives it.
+        by_name = {j.name: j for j in tree.joints}
+        self._coordinate = {}
+        for j in tree.joints:
+            if j.movable:
+                root, a, b = resolve_mimic(by_name, j.name)
+                self._coordinate[j.name] = (column[root], a, b)
 
     @classmethod
     def from_urdf_string(cls, text: str | bytes, *, joint_names: Sequence[str] | None = None,
@@ -76,7 +81,8 @@ class ReferenceKinematics:
 
         * "local_world_aligned": I J_e0 of eqs. 2.154/2.155, column k = [n_k × r_kE; n_k]
           (revolute, continuous) or [n_k; 0] (prismatic), all in I. A mimic joint adds
-          multiplier × its own column to its leader's column (chain rule).
+          a × its own column to the column of the independent joint that drives it (chain rule;
+          a = the product of the multipliers along a chain of mimic joints).
         * "local": the same twist in F: [C_IF^T v; C_IF^T ω].
         * "world": the spatial velocity in I; the linear part is the velocity of the body
           point at I's origin, v_O = v_F + ω × (0 − r_IF) (rigid-body velocity field).

@@ -49,7 +49,8 @@ class TreeJoint:
     """One URDF joint: the constant origin T_{parent,joint} (4, 4) and the unit axis in the joint frame.
 
     The joint frame is the child link frame. Mimic joints (``leader`` set) follow
-    q = multiplier · q_leader + offset; fixed joints carry no mimic.
+    q = multiplier · q_leader + offset (the leader may itself be a mimic joint, see
+    :func:`resolve_mimic`); fixed joints carry no mimic.
     """
 
     name: str
@@ -172,17 +173,34 @@ def _tree_joint(j: yourdfpy.Joint, source: str) -> TreeJoint:
 
 
 def _check_mimics(joints: list[TreeJoint], source: str) -> None:
+    """Every mimic joint follows an existing movable joint (of any type, anywhere in the tree); a chain
+    of mimics must end at an independent joint (no cycle)."""
     by_name = {j.name: j for j in joints}
     for j in joints:
         if j.leader is None:
             continue
         leader = by_name.get(j.leader)
         problem = ("does not exist" if leader is None
-                   else "is fixed" if not leader.movable
-                   else "is itself a mimic joint" if leader.leader is not None else None)
+                   else "is fixed" if not leader.movable else None)
         if problem:
             raise URDFError(f"mimics joint {j.leader!r}, which {problem}", source=source,
                             element=f"joint {j.name!r}")
+        chain = [j.name]
+        while leader is not None and leader.leader is not None:
+            if leader.name in chain:
+                raise URDFError(f"mimic joints {chain} form a cycle", source=source, element=f"joint {j.name!r}")
+            chain.append(leader.name)
+            leader = by_name.get(leader.leader)
+
+
+def resolve_mimic(joints: Mapping[str, TreeJoint], name: str) -> tuple[str, float, float]:
+    """(independent joint, a, b) with q_name = a · q_independent + b, following a chain of mimic joints:
+    q_name = m₁ q₁ + o₁, q₁ = m₂ q₂ + o₂, ... composed step by step (a ← a·m, b ← a·o + b)."""
+    a, b, joint = 1.0, 0.0, joints[name]
+    while joint.leader is not None:
+        a, b = a * joint.multiplier, a * joint.offset + b
+        joint = joints[joint.leader]
+    return joint.name, a, b
 
 
 def _unique(names: list[str], kind: str, source: str) -> None:

@@ -34,10 +34,11 @@ _FLOATING = ("a fixed-base model cannot have a {type} joint: kinengine models ar
 
 
 class Where:
-    """Where an element sits, for error messages: ``source``, ``joint 'elbow'``, line."""
+    """Where an element sits, for error messages: ``source``, ``joint 'elbow'``, line; and the list
+    that warnings about it go to (None: not kept)."""
 
-    def __init__(self, source: str, label: str) -> None:
-        self.source, self.label = source, label
+    def __init__(self, source: str, label: str, warnings: list[str] | None = None) -> None:
+        self.source, self.label, self.warnings = source, label, warnings
 
     def error(self, message: str, element: etree._Element) -> URDFError:
         return URDFError(message, source=self.source, element=self.label, line=element.sourceline)
@@ -59,10 +60,10 @@ def read_name(element: etree._Element, attribute: str, where: Where, limits: Lim
     return value
 
 
-def read_link(element: etree._Element, source: str, limits: Limits) -> Link:
-    """A link: its name and, if present, its inertial [kg, m, rad, kg m^2]."""
+def read_link(element: etree._Element, source: str, limits: Limits, warnings: list[str] | None = None) -> Link:
+    """A link: its name and, if present, its inertial [kg, m, rad, kg m^2]; appends to ``warnings``."""
     name = read_name(element, "name", Where(source, "link"), limits)
-    where = Where(source, f"link {name!r}")
+    where = Where(source, f"link {name!r}", warnings)
     inertial = _single(_children(element), "inertial", where)
     return Link(name=name, inertial=None if inertial is None else _inertial(inertial, where),
                 line=element.sourceline)
@@ -71,7 +72,7 @@ def read_link(element: etree._Element, source: str, limits: Limits) -> Link:
 def read_joint(element: etree._Element, source: str, limits: Limits, warnings: list[str]) -> Joint:
     """A joint with its origin [m, rad], unit axis, limits [rad or m] and mimic; appends to ``warnings``."""
     name = read_name(element, "name", Where(source, "joint"), limits)
-    where = Where(source, f"joint {name!r}")
+    where = Where(source, f"joint {name!r}", warnings)
     kind = element.get("type")
     if kind in ("floating", "planar"):
         raise where.error(_FLOATING.format(type=kind), element)
@@ -123,10 +124,12 @@ def _children(element: etree._Element) -> dict[str, list[etree._Element]]:
 
 
 def _single(children: dict[str, list[etree._Element]], tag: str, where: Where) -> etree._Element | None:
+    """The first ``<tag>`` child, as urdfdom and yourdfpy read it; more than one is warned about."""
     found = children.get(tag, ())
-    if len(found) > 1:
+    if len(found) > 1 and where.warnings is not None:
         lines = ", ".join(str(f.sourceline) for f in found)
-        raise where.error(f"has {len(found)} <{tag}> elements (lines {lines}); give one", found[1])
+        where.warnings.append(f"{where.label} (line {found[0].getparent().sourceline}) has {len(found)} <{tag}> "
+                              f"elements (lines {lines}); the first one is used, as urdfdom does")
     return found[0] if found else None
 
 

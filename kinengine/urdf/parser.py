@@ -50,7 +50,7 @@ def parse_urdf(document: str | bytes, source: str = "<string>", *,
                             f"{limit}; pass parse_urdf(..., limits=Limits(max_{what}=...)) to allow more",
                             source=source, element=f"robot {name!r}")
     found: list[str] = []
-    links = [read_link(e, source, limits) for e in link_elements]
+    links = [read_link(e, source, limits, found) for e in link_elements]
     joints = [read_joint(e, source, limits, found) for e in joint_elements]
     description = assemble(name, links, joints, source=source, warnings=found, limits=limits)
     for message in found:

@@ -4,6 +4,12 @@ No DTD is ever loaded, no entity is ever declared, resolved or expanded, nothing
 is fetched from the network, and a malformed document is an error (never
 "recovered" into a smaller one). Size, markup count, nesting depth and
 attribute length are bounded by :class:`~kinengine.urdf.limits.Limits`.
+
+Namespaces are read as urdfdom (TinyXML, which knows none) reads them: a prefix that
+the root element does not declare (``<sensor:camera>`` in a ``<gazebo>`` block) is
+declared on the root with a placeholder URI before parsing, so such an element parses
+and is ignored like any non-URDF element; a default ``xmlns="..."`` is dropped from the
+element names after parsing, so ``<robot xmlns="...">`` holds plain ``<link>`` and ``<joint>``.
 """
 
 from __future__ import annotations
@@ -28,6 +34,11 @@ _WIDE_ENCODINGS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-3
 _DECLARED_ENCODING = re.compile(r"\A(\ufeff?<\?xml\s[^>]*?\bencoding\s*=\s*)(['\"])[^'\"]*\2")
 _FIRST_START_TAG = re.compile(r"<[^!?]")
 _DTD_MARKUP = re.compile(r"<!(DOCTYPE|ENTITY)\b")
+_PROLOG = re.compile(r"(?:\ufeff|\xef\xbb\xbf)?(?:\s|<\?.*?\?>|<!--.*?-->)*", re.DOTALL)
+_ROOT_TAG = re.compile(r"<([^\s/>]+)((?:\s+[^\s=/>]+\s*=\s*(?:\"[^\"]*\"|'[^']*'))*)\s*/?>")
+_USED_PREFIX = re.compile(r"</?([A-Za-z_][\w.-]*):[A-Za-z_]|\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=", re.ASCII)
+_DECLARED_PREFIX = re.compile(r"xmlns:([A-Za-z_][\w.-]*)\s*=", re.ASCII)
+_PLACEHOLDER_URI = "urn:kinengine:undeclared-prefix:"
 _NO_DTD = ("is not allowed: kinengine reads no DTD and no entity declaration (they can read local "
            "files or expand without bound); remove it and write the values out")
 
@@ -44,6 +55,7 @@ def parse_xml(document: str | bytes, *, source: str = "<string>", limits: Limits
     if tags > limits.max_tags:
         raise URDFError(f"the document has {tags} markup tags, more than Limits.max_tags = {limits.max_tags}",
                         source=source)
+    data = _declare_prefixes(data)
     parser = etree.XMLParser(**_PARSER_OPTIONS)  # one parser per call: lxml parsers are not thread-safe
     try:
         root = etree.fromstring(data, parser)
@@ -53,7 +65,32 @@ def parse_xml(document: str | bytes, *, source: str = "<string>", limits: Limits
     if docinfo.doctype or docinfo.internalDTD is not None or docinfo.externalDTD is not None:
         raise URDFError(f"a <!DOCTYPE> {_NO_DTD}", source=source)
     _check_shape(root, source, limits)
+    for element in root.xpath("//*[namespace-uri() != '' and not(contains(name(), ':'))]"):
+        element.tag = etree.QName(element).localname  # a default xmlns: <robot xmlns="..."> is <robot>
     return root
+
+
+def _declare_prefixes(data: bytes) -> bytes:
+    """``data`` with each namespace prefix used in it but not declared on the root element declared there
+    (xmlns:p="urn:kinengine:undeclared-prefix:p"); ``data`` itself if none is missing or the root start
+    tag cannot be found. Only attributes are added to the root start tag, on its own line: no entity,
+    DTD or markup is introduced and line numbers stay as they were."""
+    codec = next((c for prefix, c in _WIDE_ENCODINGS if data.startswith(prefix)), "latin-1")
+    if codec == "latin-1" and b":" not in data:
+        return data
+    try:
+        text = data.decode(codec)
+    except UnicodeDecodeError:
+        return data  # lxml reports the bad encoding
+    root = _ROOT_TAG.match(text, _PROLOG.match(text).end())
+    if root is None:
+        return data
+    used = {a or b for a, b in _USED_PREFIX.findall(text)} - {"xml", "xmlns"}
+    missing = sorted(used - set(_DECLARED_PREFIX.findall(root.group(2))))
+    if not missing:
+        return data
+    declarations = "".join(f' xmlns:{p}="{_PLACEHOLDER_URI}{p}"' for p in missing)
+    return (text[:root.end(1)] + declarations + text[root.end(1):]).encode(codec)
 
 
 def _to_bytes(document: object, source: str, limits: Limits) -> bytes:
