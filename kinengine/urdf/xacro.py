@@ -1,0 +1,227 @@
+"""Expanding a xacro file into URDF text without a ROS installation.
+
+Owns :func:`expand_xacro`. The macro processor is the PyPI ``xacro`` package
+(ROS's own, pinned); this module only feeds it: ``$(find pkg)`` goes through
+:func:`.packages.resolve_package`, every file it reads is size-checked and
+refused if it holds a DTD or entity declaration (it is parsed by
+:func:`.safe_xml.parse_xml` first), its messages become ``UserWarning``s, its
+errors one-line :class:`~kinengine.errors.URDFError`s, and its module-level
+state is reset on each call under a lock. The text returned is still to be
+parsed by :func:`.parser.parse_urdf`.
+
+xacro evaluates ``${...}`` as Python (without builtins) and ``$(env ...)``,
+``$(optenv ...)`` and ``xacro.load_yaml`` read the environment and files:
+expand only files you would also build with ROS.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import stat
+import threading
+import warnings
+import xml.dom.minidom
+import xml.parsers.expat
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from types import ModuleType
+
+from ..errors import URDFError
+from .limits import LIMITS, Limits
+from .packages import resolve_package
+from .safe_xml import parse_xml
+
+XACRO_REQUIREMENT = "xacro==2.1.1"
+_LOCK = threading.Lock()  # xacro keeps its file stack, arguments and symbols in module globals
+_XACRO_NS = "http://www.ros.org/wiki/xacro"
+
+
+def expand_xacro(path: str | os.PathLike[str], *, args: Mapping[str, str] | None = None,
+                 packages: Mapping[str, str | os.PathLike[str]] | None = None) -> str:
+    """The URDF text (str) that xacro file ``path`` expands to; URDFError (one line) otherwise.
+
+    ``args`` sets ``xacro:arg`` values (as ``xacro file name:=value`` does; values are
+    converted with ``str``); ``packages`` maps ROS package names to folders for
+    ``$(find pkg)``, which is otherwise resolved from ``ROS_PACKAGE_PATH`` and then the
+    folders above ``path`` (see :func:`.packages.resolve_package`). Refused: a missing
+    argument, an unknown macro, an undefined property or block, an unreadable or
+    malformed file, a DTD or entity declaration in any file read, a file (or all files
+    together) over ``Limits().max_bytes`` bytes, more than ``Limits().max_tags`` elements
+    processed, a result over ``Limits().max_bytes`` bytes, and a result whose root is not
+    a named ``<robot>`` with at least one ``<link>`` (e.g. a file that only defines macros).
+    xacro's warnings (e.g. an unknown attribute) are re-issued as ``UserWarning``.
+    Thread-safe: calls are serialized.
+    """
+    try:
+        source = os.fsdecode(os.fspath(path))
+    except TypeError:
+        raise URDFError(f"expected a path to a .xacro file, got {type(path).__name__}") from None
+    mappings = _arguments(args, source)
+    if packages is not None and not isinstance(packages, Mapping):
+        raise URDFError(f"packages= takes a mapping of package name to folder, got {type(packages).__name__}",
+                        source=source)
+    try:
+        info = os.stat(source)
+    except (OSError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or exc
+        raise URDFError(f"cannot open the file: {reason}", source=source) from None
+    if not stat.S_ISREG(info.st_mode):
+        raise URDFError("not a regular file", source=source)
+    try:
+        import xacro
+    except ImportError:
+        raise URDFError(f"expanding xacro files needs the xacro package: pip install {XACRO_REQUIREMENT}",
+                        source=source) from None
+    messages: list[str] = []
+    with _LOCK, _xacro_hooks(xacro, packages, LIMITS, messages):
+        try:
+            xacro.init_stacks(source)
+            document = xacro.parse(None, source)
+            xacro.process_doc(document, mappings=mappings, verbosity=0)
+            text = document.documentElement.toprettyxml(indent="  ")  # as the xacro command writes it
+        except URDFError:
+            raise
+        except RecursionError:
+            raise URDFError("xacro error: macros nested too deeply (a macro that calls itself?)",
+                            source=source) from None
+        except Exception as exc:  # xacro raises XacroException, and lets anything from eval() through
+            raise _translate(exc, source) from None
+    for message in dict.fromkeys(messages):
+        warnings.warn(f"{source}: xacro: {message}", UserWarning, stacklevel=2)
+    _check_result(text, source, LIMITS)
+    return text
+
+
+def _arguments(args: object, source: str) -> dict[str, str]:
+    if args is None:
+        return {}
+    if not isinstance(args, Mapping):
+        raise URDFError(f"args= takes a mapping of xacro argument name to value, got {type(args).__name__}",
+                        source=source)
+    for key in args:
+        if not isinstance(key, str) or not key:
+            raise URDFError(f"xacro argument names are non-empty strings, got {key!r}", source=source)
+    return {key: str(value) for key, value in args.items()}
+
+
+@contextlib.contextmanager
+def _xacro_hooks(xacro: ModuleType, packages: Mapping[str, str | os.PathLike[str]] | None, limits: Limits,
+                 messages: list[str]) -> Iterator[None]:
+    """xacro with fresh global state, our file reader, package finder, message sink and element budget."""
+    from xacro import color
+    from xacro import substitution_args as subst
+
+    budget = {"bytes": limits.max_bytes, "elements": limits.max_tags}
+    handle_macro_call = xacro.handle_macro_call
+
+    def find(name: str) -> str:
+        stack = getattr(xacro, "filestack", None) or [None]
+        start = Path(stack[-1]).parent if stack[-1] else None
+        return str(resolve_package(name, packages=packages, start=start))
+
+    def parse(inp: object, filename: str | None = None) -> object:
+        if inp is not None:
+            return xml.dom.minidom.parseString(inp) if isinstance(inp, str) else inp
+        data = _read(os.path.join(xacro.root_dir, str(filename)), budget, limits, xacro)
+        parse_xml(data, source=str(filename), limits=limits)  # refuses DTDs, entities, bad or oversized XML
+        return xml.dom.minidom.parseString(data)
+
+    def counted_macro_call(node: object, macros: object, symbols: object) -> bool:
+        budget["elements"] -= 1
+        if budget["elements"] < 0:
+            raise URDFError(f"the expansion processes more than Limits.max_tags = {limits.max_tags} elements "
+                            "(a macro that expands exponentially?)", source=_failing_file("?"))
+        return bool(handle_macro_call(node, macros, symbols))
+
+    def message(msg: object, *args: object, **kwargs: object) -> None:
+        messages.append(" ".join(str(a) for a in (msg, *args)).replace("\n", " "))
+
+    patches = [(xacro, "parse", parse), (xacro, "handle_macro_call", counted_macro_call),
+               (xacro, "print_location", lambda: None), (xacro, "message", message),
+               (color, "message", message), (subst, "_eval_find", find), (xacro, "root_dir", os.curdir),
+               (xacro, "verbosity", 0),
+               (xacro, "all_includes", []), (xacro, "filestack", None), (xacro, "macrostack", None),
+               (xacro, "_global_symbols", xacro.create_global_symbols())]  # eval() can mutate the old ones
+    originals = [(module, name, getattr(module, name)) for module, name, _ in patches]
+    original_find = subst._eval_dict.get("find")
+    for module, name, value in patches:
+        setattr(module, name, value)
+    subst._eval_dict["find"] = find
+    xacro.substitution_args_context.clear()
+    try:
+        yield
+    finally:
+        for module, name, value in originals:
+            setattr(module, name, value)
+        subst._eval_dict["find"] = original_find
+        xacro.substitution_args_context.clear()
+
+
+def _read(filename: str, budget: dict[str, int], limits: Limits, xacro: ModuleType) -> bytes:
+    """The bytes of one file xacro includes, within the per-file and total byte budget."""
+    try:
+        with open(filename, "rb") as f:
+            if not stat.S_ISREG(os.fstat(f.fileno()).st_mode):
+                raise URDFError("not a regular file", source=filename)
+            data = f.read(limits.max_bytes + 1)
+    except OSError as exc:
+        xacro.filestack.pop()  # as xacro.parse does: the error is not "in" the missing file
+        raise xacro.XacroException(f"cannot read {filename!r}: {exc.strerror}", exc=exc) from None
+    budget["bytes"] -= len(data)
+    if budget["bytes"] < 0:
+        raise URDFError(f"the file (or all files read) is more than Limits.max_bytes = {limits.max_bytes} "
+                        "bytes", source=filename)
+    return data
+
+
+_PATTERNS = (  # (what xacro says, how kinengine says it)
+    (re.compile(r"Undefined substitution argument (\S+)"),
+     r"missing xacro argument '\1': pass args={'\1': ...} (CLI: \1:=value) or give its xacro:arg a default"),
+    (re.compile(r"unknown macro name: (\S+)"), r"unknown xacro macro <\1> (not defined nor included)"),
+    (re.compile(r"name '(.+?)' is not defined"), r"undefined xacro property or name '\1'"),
+)
+
+
+def _translate(exc: BaseException, source: str) -> URDFError:
+    """One URDFError for whatever xacro raised: a wrapped URDFError as is, else its message on one line."""
+    seen: object = exc
+    for _ in range(64):  # xacro wraps errors raised in $(...) in XacroException(exc=...)
+        if isinstance(seen, URDFError):
+            return seen
+        if not isinstance(seen, BaseException):
+            break
+        seen = getattr(seen, "exc", None) or seen.__cause__ or seen.__context__
+    file = _failing_file(source)
+    if isinstance(exc, xml.parsers.expat.ExpatError):
+        return URDFError(f"not well-formed XML: {exc}", source=file)
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    for pattern, replacement in _PATTERNS:
+        found = pattern.search(text)
+        if found:
+            return URDFError(f"{found.expand(replacement)} ({text})", source=file)
+    return URDFError(f"xacro error: {text}", source=file)
+
+
+def _failing_file(source: str) -> str:
+    """The file xacro was in when it failed (innermost include), else ``source``."""
+    import xacro
+
+    stack = [f for f in (getattr(xacro, "filestack", None) or []) if f]
+    return stack[-1] if stack else source
+
+
+def _check_result(text: str, source: str, limits: Limits) -> None:
+    size = len(text.encode("utf-8"))
+    if size > limits.max_bytes:
+        raise URDFError(f"the expanded URDF is {size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
+                        source=source)
+    root = parse_xml(text, source=source, limits=limits)
+    if root.tag != "robot":
+        raise URDFError(f"the expansion's root element is <{root.tag}>, expected <robot name=...>",
+                        source=source)
+    if not root.get("name") or root.find("link") is None:
+        missing = "no <link>" if root.get("name") else "a <robot> without a name"
+        raise URDFError(f"the expansion has {missing}: a file that only defines macros (e.g. *_macro.xacro) "
+                        "is meant to be included by a xacro that calls them; expand that one", source=source)
