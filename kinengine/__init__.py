@@ -18,6 +18,7 @@ from .errors import (
 )
 from .control.ik import IKResult
 from .control.manipulability import SingularityReport
+from .control.frame_task import FrameTask
 from .control.task import Task
 from .loading import load, load_urdf_string
 from .model import available_robots
@@ -28,6 +29,7 @@ __version__ = "0.1.0"
 __all__ = [
     "ConfigurationError",
     "FrameNotFoundError",
+    "FrameTask",
     "IKResult",
     "KinematicSingularityError",
     "KinematicsError",

@@ -23,7 +23,7 @@ import warnings
 
 import numpy as np
 
-from ..errors import ParameterizationError, RepresentationSingularityError
+from ..errors import OptionError, ParameterizationError, RepresentationSingularityError
 from ..parameterizations import (
     POSITION_PARAMETERIZATIONS,
     ROTATION_PARAMETERIZATIONS,
@@ -36,6 +36,34 @@ DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 (e.g. |cos χ2| for Tait–Bryan angles, ρ for cylindrical) is below this; E's entries grow like
 1/distance, so 1e-6 admits entries up to about 1e6."""
 
+ON_SINGULARITY = ("raise", "nan")
+"""What a configuration closer than the threshold to a singular set gives: RepresentationSingularityError
+("raise", the default) or NaN in the rows of the singular parameterization ("nan"; other rows stay exact)."""
+
+RANK_TOLERANCE = 1e-6
+"""Relative tolerance of :func:`robot_rank`: σ_i > RANK_TOLERANCE·σ_max counts (the value of
+kinengine.control.manipulability.DEFAULT_TOLERANCE, taken relative to the largest singular value)."""
+
+
+def check_on_singularity(on_singularity: object) -> bool:
+    """True for "nan", False for "raise"; OptionError otherwise."""
+    if on_singularity == "nan":
+        return True
+    if on_singularity == "raise":
+        return False
+    raise OptionError(f"on_singularity must be 'raise' or 'nan', got {on_singularity!r}")
+
+
+def robot_rank(J: np.ndarray) -> tuple[int, int]:
+    """(rank, generic rank) of a geometric Jacobian J (6, dof): rank counts σ_i > RANK_TOLERANCE·σ_max,
+    the generic rank is min(6, dof). The robot is kinematically singular when rank < generic rank."""
+    J = np.asarray(J, dtype=float)
+    full = min(J.shape[0], J.shape[1])
+    if full == 0 or not np.isfinite(J).all():
+        return 0, full
+    s = np.linalg.svd(J, compute_uv=False)
+    return int(np.count_nonzero(s > RANK_TOLERANCE * s[0])) if s[0] > 0 else 0, full
+
 
 @dataclass(frozen=True)
 class PoseMap:
@@ -46,9 +74,17 @@ class PoseMap:
     labels: tuple[str, ...]          # labels of the selected rows
     rows: tuple[int, ...] | None     # indices into the full (χ_P, χ_R) stack; None: all rows
     layout: _Layout = field(init=False, repr=False, compare=False)
+    part_rows: tuple[tuple[int, ...], ...] = field(init=False, repr=False, compare=False)
+    """Per part (in :attr:`parts` order), the indices of its rows among the selected rows."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layout", _Layout(self.position, self.rotation))
+        selected = tuple(range(len(self.labels))) if self.rows is None else self.rows
+        spans, start = [], 0
+        for part in (p for p in (self.position, self.rotation) if p is not None):
+            spans.append(tuple(i for i, r in enumerate(selected) if start <= r < start + part.size))
+            start += part.size
+        object.__setattr__(self, "part_rows", tuple(spans))
 
     @property
     def size(self) -> int:
@@ -59,32 +95,60 @@ class PoseMap:
         """The parameterizations in χ's order (position first), without the absent one."""
         return tuple(p for p in (self.position, self.rotation) if p is not None)
 
-    def parameters(self, T: np.ndarray) -> np.ndarray:
-        """χ from poses T_IF, (4, 4) -> (m,) or (N, 4, 4) -> (N, m)."""
-        parts = []
-        if self.position is not None:
-            parts.append(self.position.from_position(T[..., :3, 3]))
-        if self.rotation is not None:
-            parts.append(self.rotation.from_rotation(T[..., :3, :3]))
-        chi = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
-        return chi if self.rows is None else chi[..., self.rows]
+    def parameters(self, T: np.ndarray, threshold: float | None = None, nan: bool = False,
+                   J: Callable[[int | None], np.ndarray] | None = None) -> np.ndarray:
+        """χ from poses T_IF, (4, 4) -> (m,) or (N, 4, 4) -> (N, m).
 
-    def jacobian(self, T: np.ndarray, J: np.ndarray, threshold: float) -> np.ndarray:
+        ``threshold`` None: χ everywhere (a UserWarning at gimbal lock). Otherwise a pose within
+        ``threshold`` of a part's singular set raises RepresentationSingularityError (``nan`` False;
+        ``J(row)`` gives that pose's geometric Jacobian for the message) or gets NaN in that part's rows.
+        """
+        parts, distances = [], []
+        with warnings.catch_warnings():
+            if threshold is not None:
+                warnings.simplefilter("ignore", UserWarning)
+            if self.position is not None:
+                parts.append(self.position.from_position(T[..., :3, 3]))
+            if self.rotation is not None:
+                parts.append(self.rotation.from_rotation(T[..., :3, :3]))
+        chi = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
+        chi = chi if self.rows is None else chi[..., self.rows]
+        if threshold is None:
+            return chi
+        for param, values in zip(self.parts, parts):
+            distances.append(np.asarray(param.singularity_distance(values), dtype=float))
+        distances = np.stack(distances, axis=-1)
+        if nan:
+            below = ~(distances >= threshold) | (distances == 0.0)
+            for k, rows in enumerate(self.part_rows):
+                chi[..., list(rows)] = np.where(below[..., k:k + 1], np.nan, chi[..., list(rows)])
+            return chi
+        if T.ndim == 2:
+            self.raise_if_singular(distances[None], threshold, lambda row: T, None if J is None else
+                                   (lambda row: J(None)), single=True)
+        else:
+            self.raise_if_singular(distances, threshold, lambda row: T[row], J)
+        return chi
+
+    def jacobian(self, T: np.ndarray, J: np.ndarray, threshold: float, nan: bool = False) -> np.ndarray:
         """J_A = E(χ) · J_e0 for one pose T_IF (4, 4) and J_e0 (6, dof) in "local_world_aligned" -> (m, dof).
 
-        Raises RepresentationSingularityError when χ is within ``threshold`` of its singular set.
+        Raises RepresentationSingularityError when χ is within ``threshold`` of its singular set
+        (``nan``: NaN in that parameterization's rows instead).
         Batches: :func:`kinengine.batch.analytic_jacobian` (with :meth:`fill_columns`).
         """
         (c0, c1, c2, px), (c3, c4, c5, py), (c6, c7, c8, pz), _ = T.tolist()
-        return self.jacobian_single(((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J, threshold)
+        return self.jacobian_single(((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J, threshold,
+                                    nan=nan)
 
     def jacobian_single(self, C: Sequence[Sequence[float]], p: Sequence[float], J: np.ndarray,
-                        threshold: float, row: int | None = None) -> np.ndarray:
+                        threshold: float, row: int | None = None, nan: bool = False) -> np.ndarray:
         """J_A for C_IF and p [m] given as Python floats (the fast path of one configuration).
 
         Scalar math gives E's entries, packed straight into an (m, 6) array (zeros and the identity
         of Cartesian rows come from a template); J_A = E·J_e0 is one product. ``row`` (a batch row)
-        only goes into the error message.
+        only goes into the error message. ``nan``: a part within ``threshold`` of its singular set gets NaN
+        entries in E, hence NaN rows in J_A (no error). The error message states J_e0's rank.
         """
         position_formula, position, rotation, template, pack_into, offset, shape = self.layout.fast
         entries: tuple[float, ...] = ()
@@ -93,19 +157,27 @@ class PoseMap:
             if position_formula:
                 chi = param._from_position(math, *p)
                 distance = param._distance(math, *chi)
-                if distance < threshold:
-                    raise _singularity_error(param, distance, threshold, _pose(C, p), row)
-                entries = param._E(math, *chi)
+                if not distance >= threshold or distance == 0.0:
+                    if not nan:
+                        raise _singularity_error(param, distance, threshold, _pose(C, p), row, J)
+                    entries = (math.nan,) * (3 * param.size)
+                else:
+                    entries = param._E(math, *chi)
             param = rotation
             if param is not None:
                 (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
                 chi = param._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)
                 distance = param._distance(math, *chi)
-                if distance < threshold:
-                    raise _singularity_error(param, distance, threshold, _pose(C, p), row)
-                entries += param._E(math, *chi)
-        except ZeroDivisionError:  # exactly on the singular set with threshold 0
-            raise _singularity_error(param, 0.0, threshold, _pose(C, p), row) from None
+                if not distance >= threshold or distance == 0.0:
+                    if not nan:
+                        raise _singularity_error(param, distance, threshold, _pose(C, p), row, J)
+                    entries += (math.nan,) * (3 * param.size)
+                else:
+                    entries += param._E(math, *chi)
+        except ZeroDivisionError:  # exactly on the singular set with threshold 0 (distance rounds above 0)
+            if nan:
+                return np.full((self.size, J.shape[1]), np.nan)
+            raise _singularity_error(param, 0.0, threshold, _pose(C, p), row, J) from None
         buffer = bytearray(template)
         pack_into(buffer, offset, *entries)
         JA = np.ndarray(shape, _F64, buffer).dot(J)
@@ -136,17 +208,28 @@ class PoseMap:
         return distances
 
     def raise_if_singular(self, distances: np.ndarray, threshold: float,
-                          pose: Callable[[int], np.ndarray]) -> None:
+                          pose: Callable[[int], np.ndarray],
+                          jacobian: Callable[[int], np.ndarray] | None = None, single: bool = False) -> None:
         """RepresentationSingularityError for the first batch row closer than ``threshold`` to a singular set.
 
-        distances: (N, len(parts)) from :meth:`fill_columns`; pose(row) gives that row's T_IF (4, 4).
-        The error is the one a single call at that row raises (position checked before rotation).
+        distances: (N, len(parts)) from :meth:`fill_columns`; pose(row) gives that row's T_IF (4, 4) and
+        jacobian(row) its J_e0 (6, dof) (for the robot's rank in the message). The error is the one a
+        single call at that row raises (position checked before rotation).
         """
         below = ~(distances >= threshold) | (distances == 0.0)  # NaN and exact zero: E had no finite value
         if below.any():
             row = int(np.argmax(below.any(axis=1)))
             part = int(np.argmax(below[row]))
-            raise _singularity_error(self.parts[part], float(distances[row, part]), threshold, pose(row), row)
+            raise _singularity_error(self.parts[part], float(distances[row, part]), threshold, pose(row),
+                                     None if single else row, None if jacobian is None else jacobian(row))
+
+    def nan_where_singular(self, distances: np.ndarray, threshold: float, out: np.ndarray) -> None:
+        """NaN in out (N, m, dof)'s rows of every part within ``threshold`` of its singular set, per batch row."""
+        below = ~(distances >= threshold) | (distances == 0.0)
+        for k, rows in enumerate(self.part_rows):
+            hit = np.flatnonzero(below[:, k])
+            if hit.size and rows:
+                out[np.ix_(hit, rows)] = np.nan
 
 
 class _Layout:
@@ -187,8 +270,9 @@ def _combine(entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.n
 
 
 def _singularity_error(param: object, distance: float, threshold: float, T: np.ndarray,
-                       row: int | None = None) -> RepresentationSingularityError:
-    """The error at pose T (4, 4), with the parameterizations that are regular at the same pose."""
+                       row: int | None = None, J: np.ndarray | None = None) -> RepresentationSingularityError:
+    """The error at pose T (4, 4), with the parameterizations that are regular at the same pose and
+    (given the geometric Jacobian J (6, dof)) whether the robot itself is singular there."""
     with warnings.catch_warnings():  # "on the z axis" from the other position parameterizations
         warnings.simplefilter("ignore", UserWarning)
         if param.kind == "position":
@@ -201,8 +285,13 @@ def _singularity_error(param: object, distance: float, threshold: float, T: np.n
                  if n in regular]
     alternatives = preferred + [n for n in regular if n not in preferred]
     where = "" if row is None else f"row {row} of the batch: "
+    rank, full = (None, None) if J is None else robot_rank(J)
     return RepresentationSingularityError(param.name, float(distance), threshold, alternatives[:4],
-                                          where + param.singular_set)
+                                          where + param.singular_set, rank, full)
+
+
+singularity_error = _singularity_error
+"""Public name of the error builder, for the control layer's Task."""
 
 
 _F64 = np.dtype(np.float64)

@@ -4,20 +4,35 @@
 >>> task.update(q, qdot)                       # one pass over the chain, no numpy allocation
 >>> task.chi, task.analytic_jacobian, task.jacobian_dot, task.analytic_jacobian_dot
 
-Frames: ``pose`` is T_IF in the root frame I; ``jacobian`` is J_e0 in "local_world_aligned"
-(origin velocity and angular velocity in I, rows [linear; angular]); ``twist`` = J_e0·q̇;
-``jacobian_dot`` = dJ_e0/dt; ``analytic_jacobian`` = E(χ)·J_e0 and
-``analytic_jacobian_dot`` = Ė·J_e0 + E·J̇_e0 with Ė = dE/dt along (v, ω); ``chi_dot`` = J_A·q̇.
-With several frames the per-frame blocks are stacked: ``chi`` (k·m,), ``jacobian`` (6k, dof),
-``analytic_jacobian`` (k·m, dof), ``pose`` (k, 4, 4).
+A task stack: several :class:`~kinengine.FrameTask` entries, each with its own parameterizations,
+rows, reference frame and weight, stacked in the given order:
 
-How: one ``computeForwardKinematicsDerivatives`` fills Pinocchio's world-frame joint Jacobians
-J_w and J̇_w (no array is returned, so nothing is allocated; ``computeJointJacobians`` would be
-0.38 µs faster without q̇ on the ABB IRB 120 but returns a copy of J_w). Pinocchio's model has plain
-joints only; with mimic joints q_pin = M q + b and q̇_pin = M q̇ are written into preallocated arrays
-and J_w, J̇_w are folded, J_w·M, in place (see :mod:`kinengine.model.coordinates`); per frame,
-J_e0 = X(p)·J_w with X = [[I, −[p]x], [0, I]] (the spatial velocity moved from I's origin to the
-frame origin p) and J̇_e0 = X·J̇_w + Ẋ·J_w with Ẋ = [[0, −[ṗ]x], [0, 0]], ṗ = v.
+>>> task = robot.task([kinengine.FrameTask("tool0", rotation="euler_zyz"),
+...                    kinengine.FrameTask("link_4", rotation=None, rows=("x", "y"))])
+
+Frames: per entry, ``pose`` is T_IA in the root frame I (T_BA with ``relative_to`` B); ``jacobian`` is J_e0
+in "local_world_aligned" (origin velocity and angular velocity in I, rows [linear; angular]; with
+``relative_to`` the relative Jacobian expressed in B, see :mod:`kinengine.kinematics.relative`);
+``twist`` = J·q̇; ``jacobian_dot`` = dJ/dt; ``analytic_jacobian`` = E(χ)·J and
+``analytic_jacobian_dot`` = Ė·J + E·J̇ with Ė = dE/dt along (v, ω); ``chi_dot`` = J_A·q̇. Stacked over
+the k entries: ``chi`` (M,), ``analytic_jacobian`` (M, dof) with M the total of the entries' selected
+rows, ``jacobian`` (6k, dof), ``pose`` (k, 4, 4) ((4, 4) for a single frame given as a name or a FrameTask),
+``weights`` (M,) each entry's weight repeated over its rows, ``row_labels`` ("frame:label", ...).
+
+Singularities: ``singularity_distances`` (P,) is, per entry and per parameterization in
+``singularity_labels`` order ("frame:parameterization"), the distance of the current χ to that
+parameterization's singular set (|cos χ2| for Tait–Bryan angles, ρ for cylindrical, inf if never
+singular), updated every update, so a controller can switch parameterization before reaching it. A
+parameterization closer than ``singularity_threshold`` gets NaN in its rows of ``analytic_jacobian``,
+``analytic_jacobian_dot`` and ``chi_dot`` (its χ rows keep the finite angles; every other row is exact);
+with ``on_singularity="raise"`` (default) the update then raises RepresentationSingularityError *after*
+writing every attribute: a failed update leaves the Task consistent, holding all the new configuration's
+values (so the next update continues from it), never a mix of old and new.
+
+How: one ``computeForwardKinematicsDerivatives`` fills Pinocchio's world-frame joint Jacobians J_w and
+J̇_w (no array is returned, so nothing is allocated); per frame :mod:`kinengine.control.task_frame` does
+the rest. Pinocchio's model has plain joints only; with mimic joints q_pin = M q + b and q̇_pin = M q̇
+are written into preallocated arrays and J_w, J̇_w are folded, J_w·M (see :mod:`kinengine.model.coordinates`).
 
 A Task owns its own Pinocchio Data: use one Task per thread. The attributes are read-only
 views that the next update overwrites; copy what you keep.
@@ -26,52 +41,15 @@ views that the next update overwrites; copy what you keep.
 from __future__ import annotations
 
 from collections.abc import Sequence
-import math
-import struct
 
 import numpy as np
 import pinocchio as pin
 
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
-from ..errors import OptionError, RepresentationSingularityError
-from .continuity import continuity_rule
-
-
-class _Part:
-    """One parameterization (position or rotation) of one frame: its rows in χ."""
-
-    def __init__(self, param, rows: slice) -> None:
-        self.param = param
-        self.position = param.kind == "position"
-        self.constant = param.name == "cartesian"   # E_P = I (in E's template), Ė_P = 0
-        self.rule = continuity_rule(param.name)
-        self.rows = rows
-
-
-class _Frame:
-    """Pinocchio views and buffers of one frame of a task."""
-
-    def __init__(self, model: pin.Model, data: pin.Data, fid: int, dof: int) -> None:
-        self.fid = fid
-        placement = data.oMf[fid]  # a reference into data: these views follow every update
-        self.R, self.p = placement.rotation, placement.translation
-        mask = np.zeros(model.nv)  # Pinocchio's columns of the joints that move this frame
-        for j in model.supports[model.frames[fid].parentJoint][1:]:
-            joint = model.joints[j]
-            mask[joint.idx_v:joint.idx_v + joint.nv] = 1.0
-        self.mask = None if mask.all() else mask
-        self.X = np.eye(6)
-        self.Xdot_lin = np.zeros((3, 3))   # −[ṗ]x
-        self.masked, self.masked_dot = np.empty((6, model.nv)), np.empty((6, model.nv))
-        self.folded, self.folded_dot = np.empty((6, dof)), np.empty((6, dof))
-        self.tmp = np.empty((3, dof))
-        self.previous: list[float] | None = None
-
-
-def _pose_writer(frame_index: int):
-    """Writes C_IF row by row with p into rows 0-2 of pose[frame_index] (k, 4, 4): 12 doubles, one call."""
-    pack_into, offset = struct.Struct("12d").pack_into, 128 * frame_index
-    return lambda pose, *entries: pack_into(pose, offset, *entries)
+from ..analytic.pose_map import check_on_singularity
+from ..errors import OptionError
+from .frame_task import FrameTask, as_frame_tasks
+from .task_frame import FrameBlock, FrameKinematics
 
 
 class Task:
@@ -81,19 +59,27 @@ class Task:
     validate upstream: then pass float64 arrays of shape (dof,)). ``continuous=True`` keeps χ
     continuous between updates (no 2π jumps, no quaternion sign flips, rotation vectors across
     θ = π); :meth:`reset` returns to the canonical ranges. ``singularity_threshold``: as in
-    :meth:`Robot.analytic_jacobian` (RepresentationSingularityError below it).
+    :meth:`Robot.analytic_jacobian` (below it: NaN rows, and with ``on_singularity="raise"`` the error
+    after the update). ``relative_to`` (for frames given by name): χ of T_BA and the relative Jacobian in B.
     """
 
-    def __init__(self, robot, frames: str | Sequence[str], position: str | None = "cartesian",
-                 rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
-                 check_inputs: bool = True, continuous: bool = True,
-                 singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD) -> None:
-        names = (frames,) if isinstance(frames, str) else tuple(frames)
-        if not names:
+    def __init__(self, robot, frames: str | FrameTask | Sequence[str | FrameTask],
+                 position: str | None = "cartesian", rotation: str | None = "euler_zyx", *,
+                 rows: Sequence[str | int] | None = None, check_inputs: bool = True, continuous: bool = True,
+                 singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD, relative_to: str | None = None,
+                 on_singularity: str = "raise") -> None:
+        specs = as_frame_tasks(frames, position, rotation, rows, relative_to)
+        if not specs:
             raise OptionError("a task needs at least one frame: pass a frame name or a list of them")
-        fids = [robot.frame_id(f) for f in names]
-        pmap = pose_map(position, rotation, as_rows(rows))
-        self.frames, self.labels = names, pmap.labels
+        self._nan = check_on_singularity(on_singularity)
+        self.on_singularity = on_singularity
+        pmaps = [pose_map(f.position, f.rotation, as_rows(f.rows)) for f in specs]
+        self.frame_tasks, self.frames = specs, tuple(f.frame for f in specs)
+        uniform = all(not isinstance(f, FrameTask) for f in ((frames,) if isinstance(frames, (str, FrameTask))
+                                                             else frames))
+        self.labels = pmaps[0].labels if uniform else tuple(lab for pm in pmaps for lab in pm.labels)
+        self.row_labels = tuple(f"{f.frame}:{lab}" for f, pm in zip(specs, pmaps) for lab in pm.labels)
+        self.singularity_labels = tuple(f"{f.frame}:{part.name}" for f, pm in zip(specs, pmaps) for part in pm.parts)
         self.check_inputs, self.continuous = check_inputs, continuous
         self.singularity_threshold = singularity_threshold
         kin = robot.engine
@@ -101,10 +87,7 @@ class Task:
         self._model = model = kin.model
         self._data = data = model.createData()
         self.dof = n = robot.dof
-        k = len(fids)
-        params = [p for p in (pmap.position, pmap.rotation) if p is not None]
-        m = sum(p.size for p in params)
-        self._m = m
+        k, M = len(specs), sum(pm.size for pm in pmaps)
         # views of Pinocchio's world-frame joint Jacobians (eigenpy hands a (6, 1) matrix over as (6,))
         self._Jw, self._dJw = data.J.reshape(6, model.nv), data.dJ.reshape(6, model.nv)
         self._zero = np.zeros(model.nv)
@@ -113,43 +96,42 @@ class Task:
         self._pose[:, 3, 3] = 1.0
         self._J, self._Jdot = np.zeros((k, 6, n)), np.zeros((k, 6, n))
         self._twist = np.zeros((k, 6))
-        self._chi, self._chi_dot = np.zeros((k, m)), np.zeros((k, m))
-        self._JA, self._JAdot = np.zeros((k, m, n)), np.zeros((k, m, n))
-        self._frames = []
-        layout = pmap.layout  # E = blockdiag(E_P, E_R) as one (m, 6) matrix: J_A = E·J_e0 in one product
-        self._write_E = layout.pack_into, layout.offset
-        for f, fid in enumerate(fids):
-            frame = _Frame(model, data, fid, n)
-            frame.write_pose = _pose_writer(f)
-            frame.J, frame.Jdot, frame.twist = self._J[f], self._Jdot[f], self._twist[f]
-            frame.chi, frame.JA, frame.JAdot, frame.chi_dot = self._chi[f], self._JA[f], self._JAdot[f], self._chi_dot[f]
-            frame.E = np.frombuffer(bytearray(layout.template)).reshape(layout.shape)
-            frame.Edot = np.zeros(layout.shape)
-            frame.tmpA = np.zeros((m, n))
-            frame.parts, start = [], 0
-            for param in params:
-                frame.parts.append(_Part(param, slice(start, start + param.size)))
-                start += param.size
-            frame.write_chi = struct.Struct(f"{m}d").pack_into
-            self._frames.append(frame)
-        # Public read-only views: selected rows, stacked over frames.
-        self._rows = None if pmap.rows is None else np.asarray(pmap.rows, dtype=np.intp)
-        if self._rows is None:
-            sel = (self._chi, self._JA, self._JAdot, self._chi_dot)
-        else:
-            ms = len(self._rows)
-            sel = (np.zeros((k, ms)), np.zeros((k, ms, n)), np.zeros((k, ms, n)), np.zeros((k, ms)))
-        self._sel = sel
-        ms = sel[0].shape[1]
-        self.pose = _readonly(self._pose[0] if isinstance(frames, str) else self._pose)
+        self._chi, self._chi_dot = np.zeros(M), np.zeros(M)
+        self._JA, self._JAdot = np.zeros((M, n)), np.zeros((M, n))
+        self._weights = np.concatenate([np.full(pm.size, f.weight) for f, pm in zip(specs, pmaps)])
+        self._distances = np.full(len(self.singularity_labels), np.inf)
+        kinematics: dict[int, FrameKinematics] = {}
+
+        def frame_kinematics(name: str) -> FrameKinematics:
+            fid = robot.frame_id(name)
+            if fid not in kinematics:
+                kinematics[fid] = FrameKinematics(model, data, fid, n, coords)
+            return kinematics[fid]
+
+        self._blocks, row, part = [], 0, 0
+        for i, (spec, pm) in enumerate(zip(specs, pmaps)):
+            a = frame_kinematics(spec.frame)
+            b = None if spec.relative_to is None else frame_kinematics(spec.relative_to)
+            rows_i = slice(row, row + pm.size)
+            out = {"pose": self._pose[i], "J": self._J[i], "Jdot": self._Jdot[i], "twist": self._twist[i],
+                   "JA": self._JA[rows_i], "JAdot": self._JAdot[rows_i], "chi_dot": self._chi_dot[rows_i]}
+            block = FrameBlock(spec, pm, a, b, n, out, row)
+            block.distance_offset = part
+            self._blocks.append(block)
+            row, part = row + pm.size, part + len(pm.parts)
+        self._kinematics = tuple(kinematics.values())
+        single = isinstance(frames, (str, FrameTask))
+        self.pose = _readonly(self._pose[0] if single else self._pose)
         self.jacobian = _readonly(self._J.reshape(6 * k, n))
         self.jacobian_dot = _readonly(self._Jdot.reshape(6 * k, n))
         self.twist = _readonly(self._twist.reshape(6 * k))
-        self.chi = _readonly(sel[0].reshape(k * ms))
-        self.analytic_jacobian = _readonly(sel[1].reshape(k * ms, n))
-        self.analytic_jacobian_dot = _readonly(sel[2].reshape(k * ms, n))
-        self.chi_dot = _readonly(sel[3].reshape(k * ms))
-        self._rates = (self._twist, self._Jdot, self._JAdot, self._chi_dot) + (sel[2], sel[3])
+        self.chi = _readonly(self._chi)
+        self.analytic_jacobian = _readonly(self._JA)
+        self.analytic_jacobian_dot = _readonly(self._JAdot)
+        self.chi_dot = _readonly(self._chi_dot)
+        self.weights = _readonly(self._weights)
+        self.singularity_distances = _readonly(self._distances)
+        self._rates = (self._twist, self._Jdot, self._JAdot, self._chi_dot)
         self._invalidate_rates()
 
     def __repr__(self) -> str:
@@ -157,14 +139,16 @@ class Task:
 
     def reset(self) -> None:
         """Forget the previous χ: the next update returns χ in the canonical ranges."""
-        for frame in self._frames:
-            frame.previous = None
+        for block in self._blocks:
+            block.previous = None
 
     def update(self, q: np.ndarray, qdot: np.ndarray | None = None) -> None:
         """Evaluate at q [rad | m] (and q̇ [rad/s | m/s]); overwrites every attribute in place.
 
         Without q̇, ``twist``, ``chi_dot``, ``jacobian_dot`` and ``analytic_jacobian_dot`` are NaN
-        (never the rates of an earlier q).
+        (never the rates of an earlier q). Within ``singularity_threshold`` of a parameterization's singular
+        set: NaN rows (``on_singularity="nan"``) or, after every attribute is written,
+        RepresentationSingularityError (see the module doc).
         """
         coords = self._coords
         if self.check_inputs:
@@ -188,94 +172,24 @@ class Task:
                 self._invalidate_rates()
         else:
             self._rates_valid = True
-        for frame in self._frames:
-            self._update_frame(frame, qdot)
-        if self._rows is not None:
-            chi, JA, JAdot, chi_dot = self._sel
-            np.take(self._chi, self._rows, axis=1, out=chi)
-            np.take(self._JA, self._rows, axis=1, out=JA)
-            if qdot is not None:
-                np.take(self._JAdot, self._rows, axis=1, out=JAdot)
-                np.take(self._chi_dot, self._rows, axis=1, out=chi_dot)
+        Jw, dJw = self._Jw, self._dJw
+        for frame in self._kinematics:
+            frame.update(Jw, dJw, qdot)
+        error = None
+        threshold, continuous, chi, distances = self.singularity_threshold, self.continuous, self._chi, \
+            self._distances
+        for block in self._blocks:
+            found = block.update(qdot, threshold, continuous, chi, distances, block.distance_offset)
+            if found is not None and error is None:
+                error = found
+        if error is not None and not self._nan:
+            raise error
 
     def _invalidate_rates(self) -> None:
         """NaN in every rate attribute (until an update with q̇ fills them)."""
         for array in self._rates:
             array.fill(np.nan)
         self._rates_valid = False
-
-    def _update_frame(self, frame: _Frame, qdot: np.ndarray | None) -> None:
-        model, data = self._model, self._data
-        pin.updateFramePlacement(model, data, frame.fid)
-        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = frame.R.tolist()
-        px, py, pz = frame.p.tolist()
-        frame.write_pose(self._pose, c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
-        X = frame.X
-        X[0, 4], X[0, 5], X[1, 3], X[1, 5], X[2, 3], X[2, 4] = pz, -py, -pz, px, py, -px
-        J = frame.J
-        Jw = self._Jw
-        if frame.mask is not None:
-            np.multiply(Jw, frame.mask, out=frame.masked)
-            Jw = frame.masked
-        if not self._coords.identity:
-            np.dot(Jw, self._coords.matrix, out=frame.folded)
-            Jw = frame.folded
-        np.dot(X, Jw, out=J)
-        values: list[float] = []
-        entries: tuple[float, ...] = ()
-        previous = frame.previous
-        for part in frame.parts:
-            param = part.param
-            if part.position:
-                chi = list(param._from_position(math, px, py, pz))
-            else:
-                chi = list(param._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22))
-            if previous is not None:
-                chi = part.rule(chi, previous[part.rows])
-            distance = param._distance(math, *chi)
-            if distance < self.singularity_threshold:
-                raise RepresentationSingularityError(param.name, float(distance), self.singularity_threshold,
-                                                     param.alternatives, param.singular_set)
-            values += chi
-            if not part.constant:
-                entries += param._E(math, *chi)
-        pack_into, offset = self._write_E
-        pack_into(frame.E, offset, *entries)
-        np.dot(frame.E, J, out=frame.JA)
-        frame.write_chi(frame.chi, 0, *values)
-        if self.continuous:
-            frame.previous = values
-        if qdot is not None:
-            self._update_rates(frame, qdot, values, Jw)
-
-    def _update_rates(self, frame: _Frame, qdot: np.ndarray, values: list[float], Jw: np.ndarray) -> None:
-        """twist, J̇_e0 = X·J̇w + Ẋ·Jw, J̇_A = Ė·J_e0 + E·J̇_e0, χ̇ = J_A·q̇."""
-        twist, J, Jdot = frame.twist, frame.J, frame.Jdot
-        np.dot(J, qdot, out=twist)
-        dJw = self._dJw
-        if frame.mask is not None:
-            np.multiply(dJw, frame.mask, out=frame.masked_dot)
-            dJw = frame.masked_dot
-        if not self._coords.identity:
-            np.dot(dJw, self._coords.matrix, out=frame.folded_dot)
-            dJw = frame.folded_dot
-        np.dot(frame.X, dJw, out=Jdot)
-        vx, vy, vz, wx, wy, wz = twist.tolist()
-        S = frame.Xdot_lin
-        S[0, 1], S[0, 2], S[1, 0], S[1, 2], S[2, 0], S[2, 1] = vz, -vy, -vz, vx, vy, -vx
-        np.dot(S, Jw[3:], out=frame.tmp)
-        np.add(Jdot[:3], frame.tmp, out=Jdot[:3])
-        entries: tuple[float, ...] = ()
-        for part in frame.parts:
-            if not part.constant:
-                u = (vx, vy, vz) if part.position else (wx, wy, wz)
-                entries += part.param._E_dot(math, values[part.rows], u)
-        pack_into, offset = self._write_E  # Ė's constant entries are all zero
-        pack_into(frame.Edot, offset, *entries)
-        np.dot(frame.Edot, J, out=frame.tmpA)
-        np.dot(frame.E, Jdot, out=frame.JAdot)
-        np.add(frame.JAdot, frame.tmpA, out=frame.JAdot)
-        np.dot(frame.JA, qdot, out=frame.chi_dot)
 
 
 def _readonly(array: np.ndarray) -> np.ndarray:

@@ -1,0 +1,82 @@
+"""Relative kinematics of a frame A with respect to a frame B of the same robot (both moving).
+
+Pose: T_BA = T_IB⁻¹ · T_IA (4, 4) [m]: A's origin and axes seen from B.
+
+Velocity of A relative to B, as seen by an observer fixed in B (Robot Dynamics lecture notes, ETH Zurich,
+section 2.8, with the relative-motion rules of rigid bodies). With p_A, p_B the origins in I, C_IB the
+rotation of B in I, and J_A, J_B the geometric Jacobians in "local_world_aligned" (rows [v; ω] in I):
+
+    ω_rel = ω_A − ω_B                                    (in I)
+    v_rel = d/dt(p_A − p_B) − ω_B × (p_A − p_B)          (in I; = C_IB · d/dt(B_p_BA))
+          = (J_A,v − J_B,v + [p_A − p_B]× J_B,ω) q̇
+
+and expressed in a frame E's axes ("expressed_in", default B): blockdiag(C_IEᵀ, C_IEᵀ) · [v_rel; ω_rel].
+So J_rel (6, dof) with E = B satisfies d/dt(B_p_BA) = J_rel[:3] q̇ and Ċ_BA = [J_rel[3:] q̇]× C_BA.
+
+Every function takes the Kinematics engine, a checked q (dof,) or Q (N, dof) and Pinocchio frame ids.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from . import batch
+from .engine import Kinematics
+
+_LWA = pin.LOCAL_WORLD_ALIGNED
+
+
+def _inverse_times(TB: np.ndarray, TA: np.ndarray) -> np.ndarray:
+    """T_IB⁻¹ · T_IA for (4, 4) or (N, 4, 4) rigid transforms."""
+    CBt = np.swapaxes(TB[..., :3, :3], -1, -2)
+    out = np.zeros(np.broadcast_shapes(TA.shape, TB.shape))
+    out[..., :3, :3] = CBt @ TA[..., :3, :3]
+    out[..., :3, 3] = (CBt @ (TA[..., :3, 3] - TB[..., :3, 3])[..., None])[..., 0]
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def _poses(kin: Kinematics, q: np.ndarray, fid: int, jacobian: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    if q.ndim == 2:
+        T, J = batch.evaluate(kin, q, fid, _LWA, jacobian=jacobian)
+        return T, J
+    if not jacobian:
+        return kin.pose(q, fid), None
+    return kin.pose(q, fid).copy(), kin.jacobian(q, fid, _LWA).copy()
+
+
+def relative_pose(kin: Kinematics, q: np.ndarray, fa: int, fb: int) -> np.ndarray:
+    """T_BA = T_IB⁻¹ T_IA: q (dof,) -> (4, 4), q (N, dof) -> (N, 4, 4); translation [m]."""
+    TA = _poses(kin, q, fa, False)[0].copy()
+    TB = _poses(kin, q, fb, False)[0]
+    return _inverse_times(TB, TA)
+
+
+def relative_terms(TA: np.ndarray, JA: np.ndarray, TB: np.ndarray, JB: np.ndarray) -> np.ndarray:
+    """[v_rel; ω_rel] Jacobian (6, dof) or (N, 6, dof) in I's axes from the frames' poses and
+    "local_world_aligned" Jacobians (see the module doc)."""
+    d = TA[..., :3, 3] - TB[..., :3, 3]
+    out = np.empty(np.broadcast_shapes(JA.shape, JB.shape))
+    Jw_B = JB[..., 3:, :]
+    # [d]× J_B,ω column by column: d × (J_B,ω e_k)
+    cross = np.cross(d[..., None, :], np.swapaxes(Jw_B, -1, -2))
+    out[..., :3, :] = JA[..., :3, :] - JB[..., :3, :] + np.swapaxes(cross, -1, -2)
+    out[..., 3:, :] = JA[..., 3:, :] - Jw_B
+    return out
+
+
+def relative_jacobian(kin: Kinematics, q: np.ndarray, fa: int, fb: int, fe: int | None = None) -> np.ndarray:
+    """J_rel (6, dof) or (N, 6, dof): rows [v; ω] of A relative to B (module doc), in the axes of frame
+    ``fe`` (default ``fb``). Units: [m/s] and [rad/s] per unit joint speed."""
+    TA, JA = _poses(kin, q, fa, True)
+    TB, JB = _poses(kin, q, fb, True)
+    inner = relative_terms(TA, JA, TB, JB)
+    C = TB[..., :3, :3] if fe is None or fe == fb else _poses(kin, q, fe, False)[0][..., :3, :3]
+    Ct = np.swapaxes(C, -1, -2)
+    inner[..., :3, :] = Ct @ inner[..., :3, :]
+    inner[..., 3:, :] = Ct @ inner[..., 3:, :]
+    return inner
+
+
+__all__ = ["relative_jacobian", "relative_pose", "relative_terms"]
