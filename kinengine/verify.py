@@ -170,6 +170,14 @@ def _yourdfpy_check(robot, q: np.ndarray) -> CheckResult:
     for joint in urdf.robot.joints:  # yourdfpy translates by q·axis without normalizing the axis
         if joint.type == "prismatic":
             joint.axis = joint.axis / np.linalg.norm(joint.axis)
+    mimics = {j.name: j.mimic for j in urdf.robot.joints if j.mimic is not None}
+    for joint in urdf.robot.joints:  # yourdfpy follows one level of mimic: compose chains to their root leader
+        m = joint.mimic
+        while m is not None and m.joint in mimics:
+            inner = mimics[m.joint]
+            a, b = _or(m.multiplier, 1.0), _or(m.offset, 0.0)
+            m = type(m)(inner.joint, a * _or(inner.multiplier, 1.0), a * _or(inner.offset, 0.0) + b)
+        joint.mimic = m
     columns = [robot.joint_names.index(name) for name in urdf.actuated_joint_names]
     links = [name for name in urdf.link_map if name in robot.frame_names]
     poses = {link: robot.frame_pose(q, link) for link in links}
@@ -179,6 +187,10 @@ def _yourdfpy_check(robot, q: np.ndarray) -> CheckResult:
         for link in links:
             err = max(err, _max_abs(poses[link][i] - urdf.get_transform(link, urdf.base_link)))
     return CheckResult("link poses vs yourdfpy", err, YOURDFPY_ATOL, len(links) * len(q))
+
+
+def _or(value: float | None, default: float) -> float:
+    return default if value is None else float(value)
 
 
 def _parameterizations(robot) -> list[tuple[str, str, object]] | None:

@@ -82,8 +82,10 @@ class CoordinateMap:
                           index: dict[str, int], lower: np.ndarray, upper: np.ndarray) -> None:
         """A coordinate's limits also keep each mimic joint that follows it within that joint's own limits:
         lower ≤ m·q + o ≤ upper of the follower, i.e. q within [(lower − o)/m, (upper − o)/m] (swapped if m < 0).
-        Narrowing that would leave the leader an empty or zero-width range (sloppy gripper URDFs, e.g. a
-        vendor's Robotiq 2F-85) is warned about once and not enforced: the leader keeps its own limits."""
+        A follower whose limits would leave the leader an empty or zero-width range (sloppy gripper URDFs,
+        e.g. a vendor's Robotiq 2F-85) is not enforced; one warning per leader names every such follower,
+        and the leader keeps its own limits (narrowed by its other followers only)."""
+        ignored: dict[int, list[tuple[str, str]]] = {}
         for joint in description.joints:
             if joint.name not in roots or joint.lower is None or joint.upper is None:
                 continue
@@ -95,12 +97,15 @@ class CoordinateMap:
             lo, hi = max(lower[i], min(a, b)), min(upper[i], max(a, b))
             follows = f"{joint.name!r} = {m:g}·q + {o:g} within [{joint.lower:g}, {joint.upper:g}]"
             if not lo < hi:
-                what = "no value" if lo > hi else "only one value"
-                warnings.warn(f"{description.source}: {what} of joint {root!r} keeps it within its limits and "
-                              f"mimic joint {follows}; the mimic joint's limits are not enforced", stacklevel=3)
+                ignored.setdefault(i, []).append(("no value" if lo > hi else "only one value", follows))
             elif lo > lower[i] or hi < upper[i]:
                 lower[i], upper[i] = lo, hi
                 self._narrowed_by.setdefault(i, []).append(follows)
+        for i, ((what, follows), *more) in ignored.items():
+            likewise = "".join(f"; likewise mimic joint {f} ({w})" for w, f in more)
+            warnings.warn(f"{description.source}: {what} of joint {self.names[i]!r} keeps it within its limits and "
+                          f"mimic joint {follows}; the mimic joint's limits are not enforced{likewise}; "
+                          f"{self.names[i]!r} keeps [{lower[i]:g}, {upper[i]:g}]", UserWarning, stacklevel=3)
 
     # -- the map ------------------------------------------------------------------------------
     def to_pinocchio(self, q: np.ndarray) -> np.ndarray:
