@@ -1,7 +1,7 @@
 """Strict URDF reading with yourdfpy, and the kinematic tree the reference walks.
 
-Nothing here touches Pinocchio or :mod:`kinengine.urdf`: the URDF text is parsed
-by lxml (strict, no recovery) and then by yourdfpy, whose joint origins
+Nothing here touches Pinocchio or :mod:`kinengine.urdf`: the URDF text is read
+by expat as urdfdom reads it (strict, no namespaces, no DTD) and then by yourdfpy, whose joint origins
 T_{parent,joint} = Trans(xyz) · Rz(yaw) · Ry(pitch) · Rx(roll) are used as given.
 """
 
@@ -10,6 +10,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 import io
+import re
+from xml.parsers import expat
 
 from lxml import etree
 import numpy as np
@@ -21,27 +23,67 @@ SUPPORTED_TYPES = ("revolute", "continuous", "prismatic", "fixed")
 
 
 def read_urdf(text: str | bytes, *, source: str = "<string>", scene_graph: bool = False) -> yourdfpy.URDF:
-    """Parse URDF text with yourdfpy, refusing anything lxml cannot parse strictly.
+    """Parse URDF text with yourdfpy, refusing anything that is not well-formed XML.
 
     ``yourdfpy.URDF.load`` silently re-parses malformed XML in lxml's recover
-    mode (dropping what it cannot read); we parse strictly first with the very
-    parser settings yourdfpy uses, so that fallback is never reached. Meshes are
+    mode (dropping what it cannot read), and it knows no namespace-free reading. So the
+    text is first read strictly as urdfdom's TinyXML reads it (:func:`plain_urdf`) and
+    yourdfpy gets that clean document, whose parse never needs recovering. Meshes are
     never loaded; ``scene_graph=True`` builds yourdfpy's own forward kinematics.
     """
-    data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
-    try:
-        root = etree.fromstring(data, parser=etree.XMLParser(remove_blank_text=True))
-    except etree.XMLSyntaxError as exc:
-        raise URDFError(f"not well-formed XML: {exc.msg}", source=source, line=exc.lineno) from None
-    if root.tag != "robot":
-        raise URDFError(f"the root element is <{root.tag}>, expected <robot>", source=source,
-                        line=root.sourceline)
+    data = plain_urdf(text, source=source)
     try:
         return yourdfpy.URDF.load(io.BytesIO(data), build_scene_graph=scene_graph,
                                   build_collision_scene_graph=False, load_meshes=False,
                                   load_collision_meshes=False)
     except Exception as exc:  # yourdfpy signals bad attributes with assorted builtin errors
         raise URDFError(f"yourdfpy could not read it: {type(exc).__name__}: {exc}", source=source) from None
+
+
+def plain_urdf(text: str | bytes, *, source: str = "<string>") -> bytes:
+    """The document as urdfdom (TinyXML, which knows no namespaces) reads it, re-serialized as plain XML.
+
+    Read by expat without namespace processing, so a name is just its text: an element or attribute
+    whose name has a prefix (``<sensor:camera>`` in a ``<gazebo>`` block, declared or not) is no URDF and
+    is left out with its contents, as are ``xmlns`` declarations (so ``<robot xmlns="...">`` is
+    ``<robot>``), comments and processing instructions. A DOCTYPE (and so any entity declaration) and
+    malformed XML are refused with a URDFError; the root must be ``<robot>``.
+    """
+    data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
+    if isinstance(text, str):  # the bytes are UTF-8 whatever the declaration says
+        data = re.sub(rb"\A(<\?xml[^>]*?encoding\s*=\s*)([\"'])[^\"']*\2", rb"\1\2UTF-8\2", data, count=1)
+    builder, skipping = etree.TreeBuilder(), [0]  # depth inside a left-out element
+
+    def start(name: str, attributes: dict[str, str]) -> None:
+        if skipping[0] or ":" in name:
+            skipping[0] += 1
+        else:
+            builder.start(name, {k: v for k, v in attributes.items() if ":" not in k and k != "xmlns"})
+
+    def end(name: str) -> None:
+        if skipping[0]:
+            skipping[0] -= 1
+        else:
+            builder.end(name)
+
+    def refuse_dtd(*_: object) -> None:
+        raise URDFError("a <!DOCTYPE> is not read: no DTD, no entity declarations", source=source,
+                        line=parser.CurrentLineNumber)
+
+    parser = expat.ParserCreate()  # no namespace_separator: no namespace processing, as TinyXML
+    parser.StartElementHandler, parser.EndElementHandler = start, end
+    parser.CharacterDataHandler = lambda chars: None if skipping[0] else builder.data(chars)
+    parser.StartDoctypeDeclHandler = refuse_dtd
+    parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        raise URDFError(f"not well-formed XML: {expat.errors.messages[exc.code]}", source=source,
+                        line=exc.lineno) from None
+    root = builder.close()
+    if root.tag != "robot":
+        raise URDFError(f"the root element is <{root.tag}>, expected <robot>", source=source)
+    return etree.tostring(root, encoding="utf-8")
 
 
 @dataclass(frozen=True, eq=False)
