@@ -56,11 +56,16 @@ def check_on_singularity(on_singularity: object) -> bool:
 
 def robot_rank(J: np.ndarray) -> tuple[int, int]:
     """(rank, generic rank) of a geometric Jacobian J (6, dof): rank counts σ_i > RANK_TOLERANCE·σ_max,
-    the generic rank is min(6, dof). The robot is kinematically singular when rank < generic rank."""
+    the generic rank is min(6, number of columns that are not zero). The robot is kinematically singular
+    when rank < generic rank. (Columns of a relative Jacobian vanish identically for the joints that move
+    both frames alike; an absolute J_e0 has no zero column: a joint always moves its frame.)"""
     J = np.asarray(J, dtype=float)
-    full = min(J.shape[0], J.shape[1])
-    if full == 0 or not np.isfinite(J).all():
-        return 0, full
+    if J.size == 0 or not np.isfinite(J).all():
+        return 0, min(J.shape)
+    norms = np.linalg.norm(J, axis=0)
+    full = min(J.shape[0], int(np.count_nonzero(norms > 1e-12 * norms.max())))
+    if full == 0:
+        return 0, 0
     s = np.linalg.svd(J, compute_uv=False)
     return int(np.count_nonzero(s > RANK_TOLERANCE * s[0])) if s[0] > 0 else 0, full
 

@@ -31,6 +31,23 @@ def _angles(indices: tuple[int, ...]) -> Rule:
     return rule
 
 
+def _euler(proper: bool) -> Rule:
+    """Euler angles: every χ equivalent to a canonical one is one of the two solutions
+    (χ1, χ2, χ3) and (χ1 + π, s − χ2, χ3 + π) — s = 0 for proper sequences (a = c), π for Tait–Bryan — with
+    2π shifts of each angle. Picks the candidate nearest (Euclidean) the previous χ, so χ2 may leave its
+    canonical range ([−π/2, π/2] or [0, π]) and χ1, χ3 do not jump by π where the canonical χ2 turns back."""
+    shift = 0.0 if proper else math.pi
+
+    def rule(chi: list[float], previous: list[float]) -> list[float]:
+        p1, p2, p3 = previous
+        a1, a2, a3 = _unwrap(chi[0], p1), _unwrap(chi[1], p2), _unwrap(chi[2], p3)
+        b1, b2, b3 = _unwrap(chi[0] + math.pi, p1), _unwrap(shift - chi[1], p2), _unwrap(chi[2] + math.pi, p3)
+        if (b1 - p1) ** 2 + (b2 - p2) ** 2 + (b3 - p3) ** 2 < (a1 - p1) ** 2 + (a2 - p2) ** 2 + (a3 - p3) ** 2:
+            return [b1, b2, b3]
+        return [a1, a2, a3]
+    return rule
+
+
 def _quaternion(chi: list[float], previous: list[float]) -> list[float]:
     """q and −q are the same rotation: keep the sign of the previous quaternion."""
     if sum(a * b for a, b in zip(chi, previous)) < 0.0:
@@ -70,7 +87,7 @@ def _identity(chi: list[float], previous: list[float]) -> list[float]:
 def continuity_rule(name: str) -> Rule:
     """The rule for a parameterization name (identity where χ is unique: cartesian, rotation_matrix)."""
     if name.startswith("euler_"):
-        return _angles((0, 1, 2))
+        return _euler(name[6] == name[8])
     return {
         "cylindrical": _angles((1,)),
         "spherical": _angles((1,)),
