@@ -1,8 +1,15 @@
-"""The README stays true: its Python examples run, and CI runs its test command verbatim."""
+"""The README and the documentation site stay true: their Python examples run, and CI runs the
+README's test command verbatim.
+
+README blocks run one by one, each in a fresh namespace. A docs page's blocks run top to bottom in one
+namespace (a later block may use an earlier block's names), in a temporary working directory. In both,
+statement by statement: a statement may raise only if its own lines name the exception it raises.
+"""
 
 from __future__ import annotations
 
 import ast
+import importlib.util
 from pathlib import Path
 import re
 
@@ -11,10 +18,14 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
+DOCS = ROOT / "docs"
+
+# Pages whose examples need an optional extra: skipped, saying which, when it is not installed.
+PAGE_NEEDS = {"viewer.md": ("viser", "kinengine[view]")}
 
 
-def _python_blocks() -> list[str]:
-    return re.findall(r"```python\n(.*?)```", README, flags=re.S)
+def _python_blocks(text: str) -> list[str]:
+    return re.findall(r"^```python\n(.*?)^```", text, flags=re.S | re.M)
 
 
 def _runnable(block: str) -> bool:
@@ -22,20 +33,43 @@ def _runnable(block: str) -> bool:
     return "import kinengine" in block or "kinengine.load" in block
 
 
-@pytest.mark.parametrize("block", [b for b in _python_blocks() if _runnable(b)],
-                         ids=lambda b: b.strip().splitlines()[0][:40])
-def test_readme_python_examples_run(block, recwarn):
-    """Statement by statement; a statement may raise only if its line's comment names the exception."""
-    import kinengine
-
-    namespace = {"np": np, "kinengine": kinengine}
+def _run_block(block: str, namespace: dict, where: str) -> None:
     lines = block.splitlines()
     for statement in ast.parse(block).body:
         source = "\n".join(lines[statement.lineno - 1:statement.end_lineno])
         try:
-            exec(compile(ast.Module([statement], []), "README.md", "exec"), namespace)
+            exec(compile(ast.Module([statement], []), where, "exec"), namespace)
         except Exception as exc:
-            assert type(exc).__name__ in source, f"README line {source!r} raised {type(exc).__name__}: {exc}"
+            assert type(exc).__name__ in source, f"{where} line {source!r} raised {type(exc).__name__}: {exc}"
+
+
+@pytest.mark.parametrize("block", [b for b in _python_blocks(README) if _runnable(b)],
+                         ids=lambda b: b.strip().splitlines()[0][:40])
+def test_readme_python_examples_run(block, recwarn, tmp_path, monkeypatch):
+    """Statement by statement; a statement may raise only if its line's comment names the exception."""
+    import kinengine
+
+    monkeypatch.chdir(tmp_path)
+    _run_block(block, {"np": np, "kinengine": kinengine}, "README.md")
+
+
+def _pages_with_examples() -> list[str]:
+    return sorted(p.name for p in DOCS.glob("*.md") if _python_blocks(p.read_text(encoding="utf-8")))
+
+
+@pytest.mark.parametrize("page", _pages_with_examples())
+def test_docs_python_examples_run(page, recwarn, tmp_path, monkeypatch):
+    """Every ```python block of a docs page, top to bottom in one namespace, as a reader would paste them."""
+    if page in PAGE_NEEDS and importlib.util.find_spec(PAGE_NEEDS[page][0]) is None:
+        module, extra = PAGE_NEEDS[page]
+        pytest.skip(f"{page} needs {module}, from the optional extra: pip install '{extra}'")
+    import matplotlib
+
+    matplotlib.use("Agg")  # pages that draw do so headless here
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    for block in _python_blocks((DOCS / page).read_text(encoding="utf-8")):
+        _run_block(block, namespace, f"docs/{page}")
 
 
 def test_ci_runs_the_readme_test_command_verbatim():
@@ -45,3 +79,8 @@ def test_ci_runs_the_readme_test_command_verbatim():
     assert "kinengine" in install_and_run and "pip install ." in install_and_run
     assert install_and_test in (ROOT / ".ci" / "run").read_text(encoding="utf-8")
     assert README.index("```bash") < 200, "the two commands must be the README's first lines"
+
+
+def test_readme_is_short():
+    """The README is what a newcomer reads first; the reference lives on the documentation site."""
+    assert len(README.encode("utf-8")) < 12 * 1024, f"README.md is {len(README.encode())} bytes; move detail to docs/"
