@@ -1,51 +1,117 @@
-"""Entry points that turn a robot name, a URDF file or URDF text into a :class:`Robot`.
+"""Entry points that turn a robot name, a URDF or xacro file or URDF text into a :class:`Robot`.
 
 Every path goes through kinengine's own strict parser and validator first
 (:mod:`kinengine.urdf`); Pinocchio only ever parses the canonical XML regenerated
-from the validated description.
+from the validated description. A .xacro file is expanded in-process first
+(:func:`kinengine.urdf.xacro.expand_xacro`, no ROS needed). Each load issues at most one
+warning: what the parser corrected or ignored (all of it in ``description.warnings``) and,
+for a floating-base robot, that its root link is held fixed
+(:func:`kinengine.model.floating_base.floating_base_note`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 import os
 from pathlib import Path
+import warnings
 
 from .model import available_robots, catalog_entry
+from .model.floating_base import floating_base_note
 from .errors import URDFError
 from .robot import Robot
 from .urdf import LIMITS, Limits, RobotDescription, parse_urdf, read_urdf_file
+from .urdf.xacro import expand_xacro
 
 
 def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
-         limits: Limits = LIMITS) -> Robot:
-    """A robot by short name (see :func:`available_robots`) or by path to a .urdf file.
+         limits: Limits = LIMITS, xacro_args: Mapping[str, object] | None = None,
+         packages: Mapping[str, str | os.PathLike[str]] | None = None) -> Robot:
+    """A robot by short name (see :func:`available_robots`) or by path to a .urdf or .xacro file.
 
     ``limits``: the size limits the file must respect (:class:`kinengine.urdf.Limits`; pass a bigger
     one to load a bigger model, e.g. ``Limits(max_movable_joints=256)``).
+    ``xacro_args``: xacro arguments (name -> value) of a .xacro / .urdf.xacro file, which is expanded
+    in-process (no ROS needed) and then parsed as strictly as a URDF.
+    ``packages``: ROS package name -> folder, for ``$(find pkg)`` and ``package://`` URIs; packages not
+    named are looked up in ``ROS_PACKAGE_PATH``, then in the folders above the file. Kept on the robot
+    as ``robot.packages`` (meshes are resolved with it).
     """
     if not isinstance(target, (str, os.PathLike)):
         raise URDFError(f"load() takes a robot name or a path to a .urdf file, got {type(target).__name__}")
     text_target = os.fspath(target)
+    packages = _packages(packages, text_target)
+    is_xacro = text_target.lower().endswith(".xacro")
+    if xacro_args is not None and not is_xacro:
+        raise URDFError(f"xacro_args= is for .xacro files; {text_target!r} is not one (drop xacro_args=)")
     if isinstance(target, str) and text_target in available_robots():
         entry = catalog_entry(text_target)
-        description, text = _read(entry.path, limits)
-        return Robot(description, text, name=entry.name, end_effector=end_effector or entry.end_effector)
+        description, text = _warn_once(lambda: _read(entry.path, limits))
+        robot = Robot(description, text, name=entry.name, end_effector=end_effector or entry.end_effector,
+                      packages=packages)
+        return robot.locked(dict(entry.locked)) if entry.locked else robot
     path = Path(text_target)
-    if not isinstance(target, os.PathLike) and path.suffix.lower() != ".urdf" and not path.exists():
+    if not isinstance(target, os.PathLike) and path.suffix.lower() not in (".urdf", ".xacro") and \
+            not path.exists():
         catalog_entry(text_target)  # raises: unknown robot, listing the names
-    description, text = _read(path, limits)
-    return Robot(description, text, end_effector=end_effector)
+    if is_xacro:
+        text = expand_xacro(path, args=xacro_args, packages=packages)
+        description, _ = _warn_once(lambda: (parse_urdf(text, source=text_target, limits=limits), None))
+    else:
+        description, text = _warn_once(lambda: _read(path, limits))
+    return Robot(description, text, end_effector=end_effector, packages=packages)
 
 
 def load_urdf_string(text: str | bytes, *, end_effector: str | None = None, source: str = "<string>",
-                     limits: Limits = LIMITS) -> Robot:
-    """A robot from URDF XML held in memory (e.g. a ROS robot_description); ``limits`` as in :func:`load`."""
+                     limits: Limits = LIMITS,
+                     packages: Mapping[str, str | os.PathLike[str]] | None = None) -> Robot:
+    """A robot from URDF XML held in memory (e.g. a ROS robot_description); ``limits`` and ``packages``
+    as in :func:`load`."""
     if not isinstance(text, (str, bytes)):
         raise URDFError(f"load_urdf_string() takes URDF text (str or bytes), got {type(text).__name__}")
-    description = parse_urdf(text, source=source, limits=limits)
+    packages = _packages(packages, source)
+    description, _ = _warn_once(lambda: (parse_urdf(text, source=source, limits=limits), None))
     if isinstance(text, bytes):
         text = text.decode("utf-8", errors="replace")
-    return Robot(description, text, end_effector=end_effector)
+    return Robot(description, text, end_effector=end_effector, packages=packages)
+
+
+def extra_coordinates(name: str) -> tuple[str, ...]:
+    """The coordinates of catalog robot ``name`` that move a gripper rather than the arm (e.g. the Panda's
+    ``panda_finger_joint1``); lock them with ``robot.locked({joint: value})``. Empty for other robots."""
+    return catalog_entry(name).extra_coordinates if name in available_robots() else ()
+
+
+def _packages(packages: object, source: str) -> dict[str, str]:
+    """``packages=`` checked: a mapping of package name (str) to folder (str or path), as plain strings."""
+    if packages is None:
+        return {}
+    if not isinstance(packages, Mapping) or not all(isinstance(k, str) and k and isinstance(v, (str, os.PathLike))
+                                                    for k, v in packages.items()):
+        raise URDFError(f"packages= takes a mapping of ROS package name to folder, e.g. "
+                        f"{{'my_robot_description': '/path/to/my_robot_description'}}, got {packages!r:.80}",
+                        source=source)
+    return {k: os.fspath(v) for k, v in packages.items()}
+
+
+def _warn_once(read: Callable[[], tuple[RobotDescription, object]]) -> tuple[RobotDescription, object]:
+    """``read()`` with the parser's warnings (one per corrected element) held back, then one warning for the
+    load: the floating-base note and a summary of ``description.warnings``. Other warnings pass through."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        description, other = read()
+    notes = description.warnings
+    for w in caught:
+        if not any(str(w.message).endswith(note) for note in notes):
+            warnings.warn(w.message, w.category, stacklevel=3)
+    parts = [floating_base_note(description)]
+    if notes:
+        parts.append(notes[0] if len(notes) == 1 else
+                     f"{len(notes)} notes on the description, e.g. {notes[0]} (robot.description.warnings "
+                     f"lists them all)")
+    if any(parts):
+        warnings.warn(f"{description.source}: " + "; ".join(p for p in parts if p), UserWarning, stacklevel=3)
+    return description, other
 
 
 def _read(path: Path, limits: Limits) -> tuple["RobotDescription", str]:

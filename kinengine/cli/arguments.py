@@ -1,10 +1,17 @@
-"""argparse value types shared by the sub-commands: bad values stop before any work is done."""
+"""argparse value types shared by the sub-commands: bad values stop before any work is done.
+
+Also the robot options every robot-taking command shares (:func:`add_robot_arguments`,
+:func:`load_robot`): ``--xacro-arg NAME=VALUE`` and ``--package NAME=PATH``, both repeatable.
+"""
 
 from __future__ import annotations
 
 import argparse
 import os
 from pathlib import Path
+
+from ..loading import load
+from ..robot import Robot
 
 
 def parse_vector(text: str) -> list[float]:
@@ -37,6 +44,31 @@ def output_path(text: str) -> Path:
     if not os.access(folder, os.W_OK):
         raise argparse.ArgumentTypeError(f"cannot write {text!r}: folder {str(folder)!r} is not writable")
     return path
+
+
+def name_value(text: str) -> tuple[str, str]:
+    """'ur_type=ur5e' -> ('ur_type', 'ur5e') (argparse type for --xacro-arg and --package)."""
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE, e.g. ur_type=ur5e, got {text!r}")
+    return name.strip(), value
+
+
+def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options of a robot given as a .xacro file or with package:// paths (repeatable)."""
+    parser.add_argument("--xacro-arg", dest="xacro_args", type=name_value, action="append", default=None,
+                        metavar="NAME=VALUE", help="argument of a .xacro robot file, e.g. ur_type=ur5e "
+                        "(repeatable)")
+    parser.add_argument("--package", dest="packages", type=name_value, action="append", default=None,
+                        metavar="NAME=PATH", help="folder of ROS package NAME for $(find NAME) and "
+                        "package://NAME/... (repeatable; default: ROS_PACKAGE_PATH, then the file's folders)")
+
+
+def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
+    """The Robot named by ``target`` (default ``args.robot``) with the options of :func:`add_robot_arguments`."""
+    return load(args.robot if target is None else target,
+                xacro_args=None if args.xacro_args is None else dict(args.xacro_args),
+                packages=None if args.packages is None else dict(args.packages))
 
 
 def summary(doc: str | None) -> str:

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import argparse
 
-from .. import load
+from ..loading import extra_coordinates
+from .arguments import add_robot_arguments, load_robot
 
 
 def _run(args: argparse.Namespace) -> int:
-    robot = load(args.robot)
+    robot = load_robot(args)
     print(f"{robot.name}: {robot.dof} dof, source {robot.source}")
     print(f"end effector: {robot.end_effector}")
     print(f"root link (the frame poses are given in): {robot.description.root}")
@@ -21,10 +22,16 @@ def _run(args: argparse.Namespace) -> int:
             m = joint.mimic
             print(f"  - {joint.name} (mimic, {joint.type}) = {m.multiplier:g}·{m.joint} + {m.offset:g}")
     print("frames: " + ", ".join(robot.frame_names))
+    extra = [name for name in extra_coordinates(args.robot) if name in robot.joint_names]
+    if extra:
+        values = ", ".join(f"{name!r}: {robot.neutral()[robot.joint_names.index(name)]:g}" for name in extra)
+        print(f"gripper coordinates: {', '.join(extra)}; an arm without them: robot.locked({{{values}}})"
+              + (" or kinengine.load('panda_arm')" if args.robot == "panda" else ""))
     return 0
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("info", help="joints, limits and frames of a robot")
-    p.add_argument("robot", help="robot name or path to a .urdf file")
+    p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
+    add_robot_arguments(p)
     p.set_defaults(handler=_run)

@@ -6,14 +6,13 @@ import argparse
 
 import numpy as np
 
-from .. import load
 from ..parameterizations import parameter_labels
-from .arguments import parse_vector
+from .arguments import add_robot_arguments, load_robot, parse_vector
 
 
 def _run(args: argparse.Namespace) -> int:
     """Compute everything first, then print: an error leaves nothing half-printed."""
-    robot = load(args.robot)
+    robot = load_robot(args)
     q = robot.neutral() if args.q is None else robot.check_configuration(args.q, check_limits=False, batch=False)
     frame = args.frame or robot.end_effector
     T, J = robot.frame_pose(q, frame), robot.jacobian(q, frame, args.reference)
@@ -39,7 +38,8 @@ def _run(args: argparse.Namespace) -> int:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("pose", help="frame pose and geometric Jacobian at a configuration")
-    p.add_argument("robot", help="robot name or path to a .urdf file")
+    p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
+    add_robot_arguments(p)
     p.add_argument("--q", type=parse_vector, default=None,
                    help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
     p.add_argument("--frame", default=None, help="frame name (default: the end effector)")

@@ -12,9 +12,8 @@ import argparse
 from pathlib import Path
 import re
 
-from .arguments import parse_vector, summary
+from .arguments import add_robot_arguments, load_robot, parse_vector, summary
 from ..errors import KinematicsError
-from ..loading import load
 from ..presentation.plotting import plot_robot
 
 
@@ -27,7 +26,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     """Register ``show`` on the kinengine command line."""
     p = subparsers.add_parser("show", help="draw the robot at q into a PNG",
                               description=summary(__doc__))
-    p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf file")
+    p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf or .xacro file")
+    add_robot_arguments(p)
     p.add_argument("--q", type=parse_vector, default=None,
                    help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
     p.add_argument("--frames", type=_names, default=None,
@@ -56,7 +56,7 @@ def handle(args: argparse.Namespace) -> int:
     if args.dpi <= 0:
         raise KinematicsError(f"--dpi must be a positive number of dots per inch, e.g. --dpi 100; "
                               f"got {args.dpi}")
-    robot = load(args.robot)
+    robot = load_robot(args)
     frames = [robot.end_effector] if args.frames is None else args.frames
     output = args.output or Path(re.sub(r"[^\w.-]", "_", robot.name) + ".png")
     ax = plot_robot(robot, args.q, frames=frames, ellipsoid=args.ellipsoid)

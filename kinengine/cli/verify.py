@@ -5,15 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 
-from ..loading import load
 from ..verify import verify
-from .arguments import output_path, positive_int
+from .arguments import add_robot_arguments, load_robot, output_path, positive_int
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``verify TARGET [--samples N] [--seed S] [--json PATH]`` on the kinengine CLI."""
     p = subparsers.add_parser("verify", help="cross-check poses and Jacobians against independent references")
-    p.add_argument("target", metavar="TARGET", help="robot name or path to a .urdf file")
+    p.add_argument("target", metavar="TARGET", help="robot name or path to a .urdf or .xacro file")
+    add_robot_arguments(p)
     p.add_argument("--samples", type=positive_int, default=20, help="random configurations (default 20)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random configurations (default 0)")
     p.add_argument("--json", type=output_path, metavar="PATH", default=None,
@@ -24,7 +24,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 def _cmd_verify(args: argparse.Namespace) -> int:
     """Print the table; exit code 0 when every check passed, 1 otherwise."""
-    report = verify(load(args.target), samples=args.samples, seed=args.seed, progress=True)
+    report = verify(load_robot(args, args.target), samples=args.samples, seed=args.seed, progress=True)
     print(report.table())
     if args.json:
         with open(args.json, "w", encoding="utf-8") as fh:

@@ -5,6 +5,11 @@ installed inside the wheel as ``kinengine/robots``) and the fixed-base arms of t
 ``example-robot-data`` distribution, located through its installed files (the PyPI
 package ships URDFs but no Python loader). Meshes are never needed: only kinematics
 is read.
+
+Some entries are another entry with joints locked (``panda_arm``: the Panda with its finger
+held at 0, 7 coordinates): :func:`kinengine.load` applies :meth:`Robot.locked` with
+``CatalogEntry.locked``. ``CatalogEntry.extra_coordinates`` names the coordinates of a robot
+that are not arm joints (gripper fingers), which a user usually wants to lock.
 """
 
 from __future__ import annotations
@@ -21,12 +26,15 @@ _ERD_PREFIX = "cmeel.prefix/share/example-robot-data/robots"
 
 @dataclass(frozen=True)
 class CatalogEntry:
-    """A loadable robot: its short name, URDF path, default end-effector frame and origin."""
+    """A loadable robot: its short name, URDF path, default end-effector frame and origin; the joints
+    held fixed when it is loaded (joint name, value [rad or m]) and its gripper coordinates."""
 
     name: str
     path: Path
     end_effector: str | None
     origin: str  # "kinengine" or "example-robot-data"
+    locked: tuple[tuple[str, float], ...] = ()
+    extra_coordinates: tuple[str, ...] = ()
 
 
 # Short name -> (path below the example-robot-data robots folder, default end-effector frame).
@@ -41,6 +49,7 @@ _ERD_ROBOTS: dict[str, tuple[str, str | None]] = {
     "ur10": ("ur_description/urdf/ur10_robot.urdf", "tool0"),
     "ur10_limited": ("ur_description/urdf/ur10_joint_limited_robot.urdf", "tool0"),
     "panda": ("panda_description/urdf/panda.urdf", "panda_hand"),
+    "panda_arm": ("panda_description/urdf/panda.urdf", "panda_hand_tcp"),
     "kinova": ("kinova_description/robots/kinova.urdf", None),
     "xarm7": ("xarm_description/urdf/xarm7.urdf", None),
     "z1": ("z1_description/urdf/z1.urdf", None),
@@ -58,6 +67,22 @@ _ERD_ROBOTS: dict[str, tuple[str, str | None]] = {
 }
 
 _SHIPPED_END_EFFECTORS = {"abb_irb120": "tool0"}
+
+# Short name -> joints locked on load (joint name, value).
+_LOCKED: dict[str, tuple[tuple[str, float], ...]] = {"panda_arm": (("panda_finger_joint1", 0.0),)}
+
+# Short name -> coordinates that move a gripper, not the arm (lock them with Robot.locked).
+_EXTRA_COORDINATES: dict[str, tuple[str, ...]] = {
+    "panda": ("panda_finger_joint1",),
+    "baxter": ("l_gripper_l_finger_joint", "r_gripper_l_finger_joint"),
+    "so100": ("gripper",),
+    "so101": ("gripper",),
+    "talos_left_arm": ("gripper_left_joint",),
+    "z1": ("jointGripper",),
+}
+
+# End effectors that older releases of a file may lack: (wanted, used instead).
+_FALLBACK_END_EFFECTORS = {"panda_hand_tcp": "panda_hand"}
 
 
 def shipped_robots_dir() -> Path:
@@ -82,7 +107,10 @@ def _entries() -> dict[str, CatalogEntry]:
     for name, (rel, ee) in _ERD_ROBOTS.items():
         path = root / rel
         if path.is_file():
-            entries[name] = CatalogEntry(name, path, ee, "example-robot-data")
+            if ee in _FALLBACK_END_EFFECTORS and f'"{ee}"'.encode() not in path.read_bytes():
+                ee = _FALLBACK_END_EFFECTORS[ee]
+            entries[name] = CatalogEntry(name, path, ee, "example-robot-data", _LOCKED.get(name, ()),
+                                         _EXTRA_COORDINATES.get(name, ()))
     return entries
 
 

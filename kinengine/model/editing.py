@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 import dataclasses
 import math
+import warnings
 
 import numpy as np
 
@@ -73,7 +74,9 @@ def lock_joints(description: RobotDescription, values: Mapping[str, float]) -> R
     followers' limits), for a mimic joint (lock its leader) or a non-number; FrameNotFoundError for an
     unknown joint.
     """
-    coords = CoordinateMap(description)
+    with warnings.catch_warnings():  # the robot being edited has already said what its mimic limits imply
+        warnings.simplefilter("ignore")
+        coords = CoordinateMap(description)
     if not isinstance(values, Mapping):
         raise ConfigurationError(f"locked() takes a mapping of joint name to value, e.g. "
                                  f"{{{coords.names[-1]!r}: 0.0}}, got {type(values).__name__}")

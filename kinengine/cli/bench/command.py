@@ -18,7 +18,7 @@ import json
 from pathlib import Path
 import sys
 
-from ..arguments import output_path, summary
+from ..arguments import add_robot_arguments, load_robot, output_path, summary
 from .run import DEFAULT_ROBOTS, FULL, QUICK, run
 
 PEER_WIDTH = 20
@@ -28,7 +28,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Register ``bench`` on the kinengine command line."""
     p = subparsers.add_parser("bench", help="time kinengine against raw Pinocchio (and other libraries)",
                               description=summary(__doc__))
-    p.add_argument("robots", nargs="*", metavar="ROBOT", help=f"robot names or .urdf paths "
+    p.add_argument("robots", nargs="*", metavar="ROBOT", help=f"robot names or .urdf / .xacro paths "
                    f"(default: {' '.join(DEFAULT_ROBOTS)})")
     p.add_argument("--quick", action="store_true", help="few repeats and small batches (tests, CI)")
     p.add_argument("--peers", action="store_true",
@@ -38,11 +38,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--json", type=output_path, default=None, metavar="PATH", help="write the results as JSON")
     p.add_argument("--plot", type=output_path, default=None, metavar="PATH",
                    help="write a PNG bar chart (log scale)")
+    add_robot_arguments(p)
     p.set_defaults(handler=handle)
 
 
 def handle(args: argparse.Namespace) -> int:
-    report = run(list(args.robots) or list(DEFAULT_ROBOTS), QUICK if args.quick else FULL, args.peers,
+    report = run([load_robot(args, name) for name in args.robots or DEFAULT_ROBOTS], QUICK if args.quick else FULL, args.peers,
                  args.peer_atol)
     print(format_table(report))
     if args.json is not None:

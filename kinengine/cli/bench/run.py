@@ -160,7 +160,7 @@ def run(robots: list[str], settings: Settings, peers: bool = False, peer_atol: f
     rotations = list(ROTATION_PARAMETERIZATIONS)
     plans = []
     for name in robots:
-        robot = load(name)
+        robot = load(name) if isinstance(name, str) else name  # a name, or a Robot loaded by the command
         frame = robot.end_effector
         cases = latency_cases(robot, frame, rotations) + throughput_cases(robot, frame, list(settings.sizes))
         plans.append((robot, frame, load_peers(robot, frame) if peers else None, cases))
