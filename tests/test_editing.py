@@ -234,3 +234,19 @@ def test_edited_robot_pickles(mixed_robot):
     copy = pickle.loads(pickle.dumps(edited))
     q = edited.random_configuration(0)
     np.testing.assert_allclose(copy.frame_pose(q, "tcp"), edited.frame_pose(q, "tcp"), atol=0)
+
+
+def test_new_frame_is_drawn(abb):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    T = _transform((0.0, 0.0, 0.1), (0.0, 0.0, 0.0))
+    tcp = abb.with_frame("tcp", "tool0", T)
+    ax = tcp.plot(frames=["tcp"])
+    try:
+        drawing = ax.kinengine_drawing
+        np.testing.assert_allclose(drawing.frames["tcp"], abb.frame_pose(abb.neutral(), "tool0") @ T, atol=1e-15)
+        assert "tcp_joint" in drawing.skeleton_joints
+    finally:
+        plt.close(ax.figure)
