@@ -41,7 +41,7 @@ from .kinematics import REFERENCES, Kinematics, resolve_reference
 from .kinematics import batch as _batch
 from .kinematics import derivatives as _derivatives
 from .kinematics import relative as _relative
-from .model.editing import add_frame, lock_joints
+from .model.editing import add_frame, edited_urdf_text, lock_joints
 from .urdf import RobotDescription
 
 if TYPE_CHECKING:
@@ -339,7 +339,7 @@ class Robot:
     def with_frame(self, name: str, parent: str, placement: object) -> Robot:
         """A new Robot with frame ``name`` fixed to frame ``parent`` (a link or joint) at ``placement``:
         T_parent,name as a (4, 4) homogeneous transform [m], or a pair (xyz [m], rpy [rad]). The frame is a
-        new link on a fixed joint ``<name>_joint``; it is in ``frame_names``, ``urdf_text`` (regenerated)
+        new link on a fixed joint ``<name>_joint``; it is in ``frame_names``, ``urdf_text`` (edited alike)
         and everything else. See :func:`kinengine.model.editing.add_frame`."""
         return self._edited(add_frame(self._description, name, parent, placement))
 
@@ -351,9 +351,9 @@ class Robot:
         return self._edited(lock_joints(self._description, values))
 
     def _edited(self, description: RobotDescription) -> Robot:
-        """The Robot of an edited description: same name, end effector and packages; URDF text regenerated."""
-        return Robot(description, description.to_xml(), name=self._name, end_effector=self._end_effector,
-                     packages=self._packages)
+        """The Robot of an edited description: same name, end effector and packages; URDF text edited alike."""
+        return Robot(description, edited_urdf_text(self._urdf_text, description), name=self._name,
+                     end_effector=self._end_effector, packages=self._packages)
 
     # -- presentation ---------------------------------------------------------------------------
     def plot(self, q: object = None, ax: object = None, *, frames: Sequence[str] = (),

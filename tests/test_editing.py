@@ -95,7 +95,7 @@ def test_joint_frame_parent_equals_its_child_link(panda):
 
 def test_new_frame_is_in_urdf_text_and_checked_by_the_reference(mixed_robot):
     tcp = mixed_robot.with_frame("tcp", "finger_b_joint", ((0.01, 0.0, 0.03), (0.0, 0.5, 0.0)))
-    assert '<link name="tcp">' in tcp.urdf_text
+    assert "<link name=\"tcp\"/>" in tcp.urdf_text
     ref = _reference(tcp)
     Q = tcp.random_configuration(4, size=16)
     np.testing.assert_allclose(tcp.frame_pose(Q, "tcp"), ref.frame_pose(Q, "tcp"), atol=1e-12)
@@ -250,3 +250,13 @@ def test_new_frame_is_drawn(abb):
         assert "tcp_joint" in drawing.skeleton_joints
     finally:
         plt.close(ax.figure)
+
+
+def test_edited_urdf_text_keeps_the_visuals_and_describes_the_edited_robot(panda):
+    arm = panda.locked({"panda_finger_joint1": 0.02}).with_frame("tcp", "panda_hand", ((0, 0, 0.1), (0, 0, 0)))
+    assert arm.urdf_text.count("<mesh") == panda.urdf_text.count("<mesh") > 0
+    again = kinengine.load_urdf_string(arm.urdf_text)
+    assert again.joint_names == arm.joint_names and sorted(again.frame_names) == sorted(arm.frame_names)
+    Q = arm.random_configuration(0, size=5)
+    for frame in ("tcp", "panda_leftfinger", "panda_rightfinger"):
+        np.testing.assert_allclose(again.frame_pose(Q, frame), arm.frame_pose(Q, frame), atol=1e-15)

@@ -2,9 +2,10 @@
 
 Owns :func:`add_frame` (a tool frame: a new link on a new fixed joint) and :func:`lock_joints`
 (movable joints turned into fixed joints at a value). Both return a new description assembled
-and validated by :func:`kinengine.urdf.tree.assemble`; :meth:`RobotDescription.to_xml` of the
-result is the URDF that Pinocchio and the independent reference then read, so an edited robot
-is checked like any other. Units: metres, radians. Rotations follow the URDF convention
+and validated by :func:`kinengine.urdf.tree.assemble`. :func:`edited_urdf_text` makes the robot's
+URDF text say the same (new links and joints appended, locked joints rewritten as fixed ones, every
+visual, collision and mesh kept): that text is what the independent reference and the viewer read,
+so an edited robot is checked and drawn like any other. Units: metres, radians. Rotations follow the URDF convention
 ``rpy = (roll, pitch, yaw)``: C = Rz(yaw) · Ry(pitch) · Rx(roll), about the fixed parent axes.
 """
 
@@ -14,11 +15,15 @@ from collections.abc import Mapping
 import dataclasses
 import math
 import warnings
+from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from lxml import etree
+
 from ..errors import ConfigurationError, FrameNotFoundError, OptionError, URDFError
 from ..urdf import Joint, Link, RobotDescription
+from ..urdf.safe_xml import parse_xml
 from ..urdf.tree import assemble
 from .coordinates import CoordinateMap
 
@@ -101,6 +106,36 @@ def lock_joints(description: RobotDescription, values: Mapping[str, float]) -> R
     return _reassemble(description, description.links, joints)
 
 
+def edited_urdf_text(text: str, description: RobotDescription) -> str:
+    """``text`` (the URDF the unedited robot was read from) made to describe ``description``, an edit of it:
+    each joint that is fixed in ``description`` but movable in ``text`` becomes a fixed joint at the
+    description's origin (its axis, limits and mimic dropped); links and joints missing from ``text`` are
+    appended. Everything else (visuals, meshes, materials) is kept as written. Falls back to
+    :meth:`RobotDescription.to_xml` if ``text`` cannot be read again (e.g. a model over the default limits).
+    """
+    try:
+        root = parse_xml(text, source=description.source)
+    except URDFError:
+        return description.to_xml()
+    joints = {element.get("name"): element for element in root.findall("joint")}
+    links = {element.get("name") for element in root.findall("link")}
+    for joint in description.joints:
+        element = joints.get(joint.name)
+        if element is None:
+            root.append(etree.fromstring(_joint_xml(joint)))
+        elif joint.type == "fixed" and element.get("type") != "fixed":
+            for child in list(element):
+                if child.tag in ("origin", "axis", "limit", "mimic", "dynamics", "calibration",
+                                 "safety_controller"):
+                    element.remove(child)
+            element.set("type", "fixed")
+            element.insert(0, etree.fromstring(f'<origin xyz="{_v(joint.xyz)}" rpy="{_v(joint.rpy)}"/>'))
+    for link in description.links:
+        if link.name not in links:
+            root.append(etree.fromstring(f"<link name={quoteattr(link.name)}/>"))
+    return etree.tostring(root, encoding="unicode") + "\n"
+
+
 def placement_xyz_rpy(placement: object) -> tuple[Vector3, Vector3]:
     """(xyz [m], rpy [rad]) of a (4, 4) homogeneous transform or of an (xyz, rpy) pair; OptionError otherwise."""
     if isinstance(placement, (tuple, list)) and len(placement) == 2:
@@ -168,6 +203,16 @@ def _reassemble(description: RobotDescription, links: tuple[Link, ...], joints: 
     return assemble(description.name, links, joints, source=description.source, warnings=description.warnings)
 
 
+def _joint_xml(joint: Joint) -> str:
+    """A fixed joint's URDF element."""
+    return (f"<joint name={quoteattr(joint.name)} type=\"fixed\"><parent link={quoteattr(joint.parent)}/>"
+            f"<child link={quoteattr(joint.child)}/><origin xyz=\"{_v(joint.xyz)}\" rpy=\"{_v(joint.rpy)}\"/></joint>")
+
+
+def _v(v: Vector3) -> str:
+    return " ".join(repr(float(x)) for x in v)
+
+
 def _vector(v: np.ndarray) -> Vector3:
     return (float(v[0]), float(v[1]), float(v[2]))
 
@@ -177,4 +222,4 @@ def _describe(value: object) -> str:
     return f"an array of shape {shape}" if shape is not None else f"{type(value).__name__} {value!r:.60}"
 
 
-__all__ = ["add_frame", "frame_names", "lock_joints", "matrix_from_rpy", "placement_xyz_rpy", "rpy_from_matrix"]
+__all__ = ["add_frame", "edited_urdf_text", "frame_names", "lock_joints", "matrix_from_rpy", "placement_xyz_rpy", "rpy_from_matrix"]
