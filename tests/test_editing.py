@@ -260,3 +260,18 @@ def test_edited_urdf_text_keeps_the_visuals_and_describes_the_edited_robot(panda
     Q = arm.random_configuration(0, size=5)
     for frame in ("tcp", "panda_leftfinger", "panda_rightfinger"):
         np.testing.assert_allclose(again.frame_pose(Q, frame), arm.frame_pose(Q, frame), atol=1e-15)
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.data())
+def test_any_parent_any_placement_matches_composition_and_reference(mixed_robot, data):
+    parent = data.draw(st.sampled_from(mixed_robot.frame_names))
+    xyz = data.draw(st.tuples(*[st.floats(-1, 1)] * 3))
+    rpy = data.draw(st.tuples(*[st.floats(-np.pi, np.pi)] * 3))
+    tcp = mixed_robot.with_frame("tcp", parent, (xyz, rpy))
+    Q = tcp.random_configuration(data.draw(st.integers(0, 2**32 - 1)), size=3)
+    np.testing.assert_allclose(tcp.frame_pose(Q, "tcp"), mixed_robot.frame_pose(Q, parent) @ _transform(xyz, rpy),
+                               atol=1e-13)
+    ref = _reference(tcp)
+    for reference in REFERENCES:
+        np.testing.assert_allclose(tcp.jacobian(Q, "tcp", reference), ref.jacobian(Q, "tcp", reference), atol=1e-12)
