@@ -130,3 +130,8 @@ class RepresentationSingularityError(KinematicsError, ValueError):
 
 class KinematicSingularityError(KinematicsError, ValueError):
     """The geometric Jacobian J_e0(q) loses rank: the robot cannot move its frame in some direction."""
+
+
+class ResourceLimitError(KinematicsError, MemoryError):
+    """kinengine would need more memory than the process may use (e.g. one more thread's Pinocchio Data
+    of a large model under a memory cap); the message gives the size, the memory left and the fix."""

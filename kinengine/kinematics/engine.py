@@ -29,6 +29,7 @@ import pinocchio as pin
 from ..errors import FrameNotFoundError, OptionError
 from ..model import CoordinateMap, build_pinocchio_model
 from ..urdf import RobotDescription
+from .memory import create_data
 
 T = TypeVar("T")
 
@@ -69,8 +70,23 @@ class Kinematics:
         try:
             return self._tls.data
         except AttributeError:
-            data = self._tls.data = self.model.createData()
+            data = self._tls.data = create_data(self.model, f"robot {self.description.name!r}")
             return data
+
+    def pinocchio_q(self, q: np.ndarray) -> np.ndarray:
+        """Pinocchio's configuration (nq,) for a checked q (dof,): q itself without mimic joints, else
+        M q + b written into this thread's scratch buffer (valid until this thread's next call)."""
+        coords = self.coordinates
+        if coords.identity:
+            return q
+        try:
+            buffer = self._tls.q_pin
+        except AttributeError:
+            buffer = self._tls.q_pin = np.empty(coords.nq)
+        _dot(coords.matrix, q, out=buffer)
+        if coords.has_offset:
+            _add(buffer, coords.offset, out=buffer)
+        return buffer
 
     def memoized(self, key: object, make: Callable[[], T]) -> T:
         """A constant derived from the model (a compiled chain, an IK seed table), made once per key.
