@@ -1,8 +1,9 @@
-"""MkDocs hook (mkdocs.yml `hooks:`): the CLI reference page is generated from the real parser.
+"""MkDocs hook (mkdocs.yml `hooks:`): pages generated from the code at build time, so they cannot drift.
 
-In docs/cli.md the line ``<!-- cli-reference -->`` is replaced by the ``--help`` text of ``kinengine`` and of
-every sub-command, taken from ``kinengine.cli.main.build_parser()`` at build time, so the page cannot drift
-from the command line.
+* ``<!-- cli-reference -->`` (docs/cli.md) becomes the ``--help`` text of ``kinengine`` and of every
+  sub-command, from ``kinengine.cli.main.build_parser()``;
+* ``<!-- robot-catalog -->`` (docs/robots.md) becomes a table of every name ``kinengine.load()`` accepts,
+  each robot loaded to read its dof, default end effector and frames.
 """
 
 from __future__ import annotations
@@ -11,7 +12,8 @@ import argparse
 import os
 from typing import Any
 
-MARKER = "<!-- cli-reference -->"
+CLI_MARKER = "<!-- cli-reference -->"
+CATALOG_MARKER = "<!-- robot-catalog -->"
 
 
 def cli_reference() -> str:
@@ -29,5 +31,31 @@ def cli_reference() -> str:
     return "\n".join(parts)
 
 
+def robot_catalog() -> str:
+    """Markdown table: name, dof, default end effector, frames, gripper coordinates, where it comes from."""
+    import warnings
+
+    import kinengine
+    from kinengine.model.catalog import catalog_entry
+
+    rows = ["| name | dof | end effector | frames | gripper coordinates | from |", "|---|--:|---|--:|---|---|"]
+    for name in kinengine.available_robots():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # vendor files' own quirks are reported by `kinengine info`
+            robot = kinengine.load(name)
+        entry = catalog_entry(name)
+        extra = ", ".join(f"`{c}`" for c in entry.extra_coordinates) or "–"
+        origin = "shipped (`robots/`)" if entry.origin == "kinengine" else entry.origin
+        if entry.locked:
+            origin += " (" + ", ".join(f"`{j}` locked at {v:g}" for j, v in entry.locked) + ")"
+        rows.append(f"| `{name}` | {robot.dof} | `{robot.end_effector}` | {len(robot.frame_names)} | "
+                    f"{extra} | {origin} |")
+    return "\n".join(rows) + "\n"
+
+
 def on_page_markdown(markdown: str, **kwargs: Any) -> str:
-    return markdown.replace(MARKER, cli_reference()) if MARKER in markdown else markdown
+    if CLI_MARKER in markdown:
+        markdown = markdown.replace(CLI_MARKER, cli_reference())
+    if CATALOG_MARKER in markdown:
+        markdown = markdown.replace(CATALOG_MARKER, robot_catalog())
+    return markdown
