@@ -257,7 +257,12 @@ def run_chain(chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None,
                       None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]))
 
     per = pieces // workers
-    futures = [_pool().submit(work, chunks[i:i + per]) for i in range(per, pieces, per)]
+    futures = []
+    for i in range(per, pieces, per):
+        try:
+            futures.append(_pool().submit(work, chunks[i:i + per]))
+        except RuntimeError:  # no new work after interpreter shutdown (an atexit handler): do it here
+            work(chunks[i:i + per])
     work(chunks[:per])  # the calling thread takes the first share
     for future in futures:
         future.result()
