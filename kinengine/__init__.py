@@ -19,6 +19,9 @@ from .errors import (
 from .control.ik import IKResult
 from .control.manipulability import SingularityReport
 from .control.frame_task import FrameTask
+from .control.frame_task import FrameTask
+from .control.pose_error import pose_error
+from .control.qp import DifferentialIK, PoseTarget, PostureTarget
 from .control.task import Task
 from .loading import load, load_urdf_string
 from .model import available_robots
@@ -28,13 +31,17 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ConfigurationError",
+    "DifferentialIK",
     "FrameNotFoundError",
+    "FrameTask",
     "FrameTask",
     "IKResult",
     "KinematicSingularityError",
     "KinematicsError",
     "OptionError",
     "ParameterizationError",
+    "PoseTarget",
+    "PostureTarget",
     "RepresentationSingularityError",
     "Robot",
     "SingularityReport",
@@ -44,4 +51,5 @@ __all__ = [
     "available_robots",
     "load",
     "load_urdf_string",
+    "pose_error",
 ]

@@ -1,0 +1,60 @@
+"""The pose error on SE(3): the twist that carries a frame's pose T onto a target pose T_target in unit time.
+
+ξ = log6(T⁻¹ · T_target) (Pinocchio's ``pin.log6``), rows [v; ω], is the *body* twist: expressed in the
+frame's own axes ("local"), constant over the unit time, and T · exp(ξ) = T_target exactly. The same
+motion in other axes:
+
+* "local": ξ itself (v and ω in the frame F's axes; v is the velocity of F's origin).
+* "local_world_aligned" (default): (C_IF v, C_IF ω): the velocity of F's origin and the angular velocity,
+  in the root frame I's axes, at the start of the motion (matches ``robot.jacobian(q)``'s rows).
+* "world": Ad_T ξ, the spatial twist in I (linear part: velocity of the body point at I's origin).
+
+Units: [m] for the linear rows and [rad] for the angular rows (a displacement: a twist times one unit of
+time). ‖ω‖ is the rotation angle between C and C_target (in [0, π]).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import OptionError
+
+FRAMES = ("local", "local_world_aligned", "world")
+
+
+def _as_pose(T: object, name: str) -> np.ndarray:
+    array = np.asarray(T, dtype=float)
+    if array.shape[-2:] != (4, 4) or array.ndim not in (2, 3) or not np.isfinite(array).all():
+        raise OptionError(f"`{name}` must be a finite homogeneous transform (4, 4) or a batch (N, 4, 4), "
+                          f"got shape {array.shape}")
+    return array
+
+
+def pose_error(T: object, T_target: object, frame: str = "local_world_aligned") -> np.ndarray:
+    """ξ with T · exp(ξ_local) = T_target, (6,) rows [v; ω] [m, rad], in ``frame``'s axes (module doc).
+
+    T, T_target: (4, 4) poses in a common frame (e.g. T_IF from ``robot.frame_pose``), or batches
+    (N, 4, 4) (either may be a single pose) -> (N, 6).
+    """
+    if frame not in FRAMES:
+        raise OptionError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
+    A, B = _as_pose(T, "T"), _as_pose(T_target, "T_target")
+    if A.ndim == 2 and B.ndim == 2:
+        return _single(A, B, frame)
+    A, B = np.broadcast_arrays(A if A.ndim == 3 else A[None], B if B.ndim == 3 else B[None])
+    return np.array([_single(a, b, frame) for a, b in zip(A, B)]).reshape(-1, 6)
+
+
+def _single(T: np.ndarray, T_target: np.ndarray, frame: str) -> np.ndarray:
+    M, M_target = pin.SE3(T[:3, :3], T[:3, 3]), pin.SE3(T_target[:3, :3], T_target[:3, 3])
+    xi = pin.log6(M.actInv(M_target))
+    if frame == "local":
+        return np.array(xi.vector)
+    if frame == "world":
+        return np.array(M.act(xi).vector)
+    C = T[:3, :3]
+    return np.concatenate([C @ xi.linear, C @ xi.angular])
+
+
+__all__ = ["FRAMES", "pose_error"]
