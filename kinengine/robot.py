@@ -34,12 +34,14 @@ from .analytic.hessian import analytic_hessian as _analytic_hessian
 from .control import ik as _ik
 from .control import manipulability as _manipulability
 from .control.ik import IKResult
+from .control.ik_batch import IKBatchResult
 from .control.manipulability import DEFAULT_TOLERANCE, Rows, SingularityReport, VelocityEllipsoid
 from .control.task import Task
-from .errors import FrameNotFoundError
+from .errors import FrameNotFoundError, OptionError
 from .kinematics import REFERENCES, Kinematics, resolve_reference
 from .kinematics import batch as _batch
 from .kinematics import derivatives as _derivatives
+from .kinematics.handle import FrameHandle
 from .kinematics import relative as _relative
 from .model.editing import add_frame, edited_urdf_text, lock_joints
 from .urdf import RobotDescription
@@ -142,8 +144,19 @@ class Robot:
         """Pinocchio's frame index of a frame name (FrameNotFoundError with suggestions otherwise)."""
         return self._kin.frame_id(frame)
 
+    def frame(self, name: str | None = None, *, check_inputs: bool = True) -> FrameHandle:
+        """A handle on one frame (default: end_effector) for hot loops: ``fk.pose(q)``,
+        ``fk.jacobian(q, reference=...)``, ``fk.kinematics(q, reference=...)`` at single q (dof,), with
+        the frame and Pinocchio's functions looked up once. ``check_inputs=False`` skips the input check:
+        the caller promises a C-contiguous float64 array of shape (dof,) with finite entries. See
+        :mod:`kinengine.kinematics.handle`."""
+        return FrameHandle(self._kin, self._end_effector if name is None else name, check_inputs=check_inputs)
+
     def _fid(self, frame: str | None) -> int:
-        return self._kin.frame_id(self._end_effector if frame is None else frame)
+        fid = self._kin.frame_ids.get(self._end_effector if frame is None else frame) \
+            if type(frame) is str or frame is None else None
+        return self._kin.frame_id(frame) if fid is None else fid
+
 
     def frame_pose(self, q: object, frame: str | None = None, *, check_limits: bool = False) -> np.ndarray:
         """T_IF: pose of ``frame`` (default: end_effector) in the root link frame.
@@ -171,15 +184,22 @@ class Robot:
         return self._kin.jacobian(q, fid, ref)
 
     def kinematics(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
-                   check_limits: bool = False) -> tuple[np.ndarray, np.ndarray]:
-        """(T_IF, J) in one pass: (4, 4) and (6, dof) for q (dof,); (N, 4, 4) and (N, 6, dof) for q (N, dof).
-        Equal to :meth:`frame_pose` and :meth:`jacobian` called separately."""
+                   check_limits: bool = False, out: tuple[np.ndarray, np.ndarray] | None = None,
+                   workers: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(T_IF, J) in one pass: (4, 4) and (6, dof) for q (dof,); (N, 4, 4) and (N, 6, dof) for q (N, dof),
+        equal bit for bit to :meth:`frame_pose` and :meth:`jacobian` called separately. Batches only:
+        ``out=(T, J)`` preallocated C-contiguous float64 arrays of those shapes, filled and returned;
+        ``workers``: threads to use (default: the cores this process may use)."""
         fid = self._fid(frame)
         ref = resolve_reference(reference)
         q = self._coords.check(q, check_limits=check_limits)
         if q.ndim == 2:
-            T, J = _batch.evaluate(self._kin, q, fid, ref)
+            T, J = _batch.evaluate(self._kin, q, fid, ref, out=_batch.checked_out(out, len(q), self.dof),
+                                   workers=_batch.checked_workers(workers))
             return T, J  # type: ignore[return-value]
+        if out is not None:
+            raise OptionError("`out=` is for batches q (N, dof); a single q returns fresh arrays")
+        _batch.checked_workers(workers)
         return self._kin.pose_and_jacobian(q, fid, ref)
 
     # -- analytic Jacobians --------------------------------------------------------------------
@@ -323,13 +343,16 @@ class Robot:
 
     def inverse_kinematics(self, target: object, frame: str | None = None, q0: object = None, *,
                            position: str | None = None, rotation: str | None = None,
+                           rows: Sequence[str | int] | None = None, weights: Sequence[float] | None = None,
                            tol_position: float = 1e-6, tol_rotation: float = 1e-6, max_iterations: int = 100,
                            restarts: int = 3, rng: np.random.Generator | int | None = None,
                            nullspace_target: object = None, nullspace_gain: float = 0.1,
-                           min_damping: float = 1e-6) -> IKResult:
-        """Differential IK (damped least squares) to a 4x4 pose or a parameter target χ. See
+                           min_damping: float = 1e-6) -> IKResult | IKBatchResult:
+        """Differential IK (damped least squares) to a 4x4 pose, a batch of poses (N, 4, 4) (an IKBatchResult
+        of N results, solved vectorized) or a parameter target χ. See
         :func:`kinengine.control.ik.inverse_kinematics` for the options."""
         return _ik.inverse_kinematics(self, target, frame, q0, position=position, rotation=rotation,
+                                      rows=rows, weights=weights,
                                       tol_position=tol_position, tol_rotation=tol_rotation,
                                       max_iterations=max_iterations, restarts=restarts, rng=rng,
                                       nullspace_target=nullspace_target, nullspace_gain=nullspace_gain,

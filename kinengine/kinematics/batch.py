@@ -30,6 +30,7 @@ import threading
 import numpy as np
 import pinocchio as pin
 
+from ..errors import OptionError
 from .engine import Kinematics
 
 CHUNK = 8192
@@ -66,6 +67,7 @@ class _Chain:
     rotation: Terms             # Q_lastᵀ · C_f (frame placement): C_IF = S_last · this
     translation: tuple[tuple[int, float], ...]
     dof: int
+    full: bool                  # every coordinate drives a joint of the chain (no zero Jacobian column)
     pose_calls: int             # numpy calls per chunk for the pose, and more for the Jacobian
     jacobian_calls: int
 
@@ -117,7 +119,8 @@ def _compile(kin: Kinematics, fid: int) -> _Chain:
     pose_calls = 12 + _compose_calls(rotation) + 2 * len(translation) + sum(
         _compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 8) for s in steps)
     jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
-    return _Chain(tuple(steps), rotation, translation, kin.dof, pose_calls, jacobian_calls)
+    full = len({s.coordinate for s in steps}) == kin.dof
+    return _Chain(tuple(steps), rotation, translation, kin.dof, full, pose_calls, jacobian_calls)
 
 
 def _compose(columns: list, terms: Terms) -> list:
@@ -179,8 +182,9 @@ def _evaluate(chain: _Chain, qT: np.ndarray, pose: np.ndarray | None, jac: np.nd
         pose[:, 3, :] = (0.0, 0.0, 0.0, 1.0)
     if jac is None and analytic is None:
         return
-    buf = np.zeros((6, chain.dof, n))
-    col = np.empty((6, n))
+    buf, col = _scratch(chain.dof, n)
+    if not chain.full:
+        buf.fill(0.0)
     for step, z, p_i in joints:
         if step.prismatic:
             col[:3] = z
@@ -216,9 +220,26 @@ def _evaluate(chain: _Chain, qT: np.ndarray, pose: np.ndarray | None, jac: np.nd
         out[...] = JA.transpose(2, 0, 1)
 
 
-# -- compilation cache, thread pool, Pinocchio loop -----------------------------------------------
+# -- scratch buffers, compilation cache, thread pool, Pinocchio loop -----------------------------
+_LOCAL = threading.local()
+
+
+def _scratch(dof: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """This thread's reusable (6, dof, n) Jacobian buffer and (6, n) column: one allocation per thread
+    (grown when needed), not one per chunk (which page-faults through large batches)."""
+    size = 6 * dof * n + 6 * n
+    try:
+        memory = _LOCAL.memory
+        if memory.size < size:
+            raise AttributeError
+    except AttributeError:
+        memory = _LOCAL.memory = np.empty(max(size, 6 * 8 * CHUNK))
+    return memory[:6 * dof * n].reshape(6, dof, n), memory[6 * dof * n:size].reshape(6, n)
+
+
 _LOCK = threading.Lock()
 _POOL: ThreadPoolExecutor | None = None
+_POOL_SIZE = 0
 
 
 def compiled_chain(kin: Kinematics, fid: int) -> _Chain:
@@ -226,18 +247,22 @@ def compiled_chain(kin: Kinematics, fid: int) -> _Chain:
     return kin.memoized(("batch chain", fid), lambda: _compile(kin, fid))
 
 
-def _pool() -> ThreadPoolExecutor:
-    global _POOL
+def _pool(threads: int) -> ThreadPoolExecutor:
+    """The shared pool, with at least ``threads`` threads (WORKERS − 1 unless asked for more)."""
+    global _POOL, _POOL_SIZE
     with _LOCK:
-        if _POOL is None:
-            _POOL = ThreadPoolExecutor(max(1, WORKERS - 1), thread_name_prefix="kinengine-batch")
+        if _POOL is None or _POOL_SIZE < threads:
+            old, _POOL_SIZE = _POOL, max(threads, WORKERS - 1, 1)
+            _POOL = ThreadPoolExecutor(_POOL_SIZE, thread_name_prefix="kinengine-batch")
+            if old is not None:
+                old.shutdown(wait=False)
         return _POOL
 
 
 def _forget_pool() -> None:
     """In a forked child: the parent's pool threads do not exist here, so start a new pool on demand."""
-    global _POOL, _LOCK
-    _POOL, _LOCK = None, threading.Lock()
+    global _POOL, _LOCK, _POOL_SIZE
+    _POOL, _LOCK, _POOL_SIZE = None, threading.Lock(), 0
 
 
 if hasattr(os, "register_at_fork"):
@@ -257,10 +282,11 @@ def run_chain(chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None,
                       None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]))
 
     per = pieces // workers
+    pool = _pool(workers - 1) if workers > 1 else None
     futures = []
     for i in range(per, pieces, per):
         try:
-            futures.append(_pool().submit(work, chunks[i:i + per]))
+            futures.append(pool.submit(work, chunks[i:i + per]))  # type: ignore[union-attr]
         except RuntimeError:  # no new work after interpreter shutdown (an atexit handler): do it here
             work(chunks[i:i + per])
     work(chunks[:per])  # the calling thread takes the first share
@@ -277,16 +303,14 @@ def _pinocchio_loop(kin: Kinematics, Q: np.ndarray, fid: int, pose, jac, referen
             jac = None  # nothing to fill (and Pinocchio 4.1's getFrameJacobian crashes when nv = 0)
     if pose is None and jac is None:
         return
-    for i, qi in enumerate(coords.to_pinocchio(Q)):
-        if jac is None:
+    place_first = jac is None or (pose is not None and reference == pin.LOCAL)
+    for i, qi in enumerate(coords.to_pinocchio(Q)):  # the single-q calls' algorithms: equal bit for bit
+        if place_first:  # computeFrameJacobian leaves data.oMi stale in LOCAL: place the joints first
             pin.forwardKinematics(model, data, qi)
-        elif pose is None:
+        if jac is not None:
             jac[i] = coords.fold(pin.computeFrameJacobian(model, data, qi, fid, reference).reshape(6, -1))
-            continue
-        else:  # computeFrameJacobian leaves data.oMi stale in LOCAL: place every joint first
-            pin.computeJointJacobians(model, data, qi)
-            jac[i] = coords.fold(pin.getFrameJacobian(model, data, fid, reference).reshape(6, -1))
-        pose[i] = pin.updateFramePlacement(model, data, fid).homogeneous
+        if pose is not None:
+            pose[i] = pin.updateFramePlacement(model, data, fid).homogeneous
 
 
 def evaluate(kin: Kinematics, Q: np.ndarray, fid: int, reference: pin.ReferenceFrame | None, *,
@@ -303,12 +327,36 @@ def evaluate(kin: Kinematics, Q: np.ndarray, fid: int, reference: pin.ReferenceF
         T = np.empty((n, 4, 4))
     if jacobian and J is None:
         J = np.empty((n, 6, kin.dof))
-    chain = numpy_chain(kin, fid, n, jacobian)
+    chain = numpy_chain(kin, fid, n, True)  # one choice for poses, Jacobians or both: equal bit for bit
     if chain is None:
         _pinocchio_loop(kin, Q, fid, T if pose else None, J if jacobian else None, reference)
     else:
         run_chain(chain, Q, T if pose else None, J if jacobian else None, reference, workers=workers)
     return (T if pose else None), (J if jacobian else None)
+
+
+def checked_workers(workers: object) -> int | None:
+    """``workers`` as a thread count >= 1 (None: WORKERS); OptionError otherwise."""
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or not 1 <= workers <= 1024:
+        raise OptionError(f"`workers` must be None or a number of threads from 1 to 1024, got {workers!r}")
+    return int(workers)
+
+
+def checked_out(out: object, n: int, dof: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """``out`` as (T (n, 4, 4), J (n, 6, dof)) writable C-contiguous float64 arrays; OptionError otherwise."""
+    if out is None:
+        return None
+    shapes = ((n, 4, 4), (n, 6, dof))
+    if not isinstance(out, tuple) or len(out) != 2 or not all(
+            type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape and a.flags.c_contiguous
+            and a.flags.writeable for a, shape in zip(out, shapes)):
+        raise OptionError(f"`out` must be a tuple (T, J) of writable C-contiguous float64 arrays of shapes "
+                          f"{shapes[0]} and {shapes[1]}")
+    if np.shares_memory(out[0], out[1]):
+        raise OptionError("`out`'s T and J must not share memory")
+    return out  # type: ignore[return-value]
 
 
 def numpy_chain(kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 0,
@@ -325,5 +373,6 @@ def numpy_chain(kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 
     return chain if budget >= chain.pose_calls + (chain.jacobian_calls if jacobian else 0) + extra else None
 
 
-__all__ = ["CALLS_PER_CONFIGURATION", "CHUNK", "WORKERS", "compiled_chain", "evaluate", "numpy_chain",
+__all__ = ["CALLS_PER_CONFIGURATION", "CHUNK", "WORKERS", "checked_out", "checked_workers", "compiled_chain",
+           "evaluate", "numpy_chain",
            "run_chain"]

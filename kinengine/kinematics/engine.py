@@ -39,6 +39,8 @@ REFERENCES: dict[object, pin.ReferenceFrame] = {
     "local_world_aligned": pin.LOCAL_WORLD_ALIGNED,
 }
 _ENUMS = (pin.WORLD, pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
+_forward, _place, _frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
+_dot, _add = np.dot, np.add
 
 
 def resolve_reference(reference: object) -> pin.ReferenceFrame:
@@ -117,28 +119,40 @@ class Kinematics:
     # -- single configurations (q checked by the caller) ----------------------------------------
     def pose(self, q: np.ndarray, fid: int) -> np.ndarray:
         """T_IF (4, 4) at a checked q (dof,)."""
-        data = self.data()
-        pin.forwardKinematics(self.model, data, self.coordinates.to_pinocchio(q))
-        return pin.updateFramePlacement(self.model, data, fid).homogeneous
+        try:
+            data = self._tls.data
+        except AttributeError:
+            data = self.data()
+        _forward(self.model, data, q if self.coordinates.identity else self.pinocchio_q(q))
+        return _place(self.model, data, fid).homogeneous
 
     def jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> np.ndarray:
         """J (6, dof) in ``ref`` at a checked q (dof,)."""
         if self.dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
             return np.zeros((6, 0))
-        J = pin.computeFrameJacobian(self.model, self.data(), self.coordinates.to_pinocchio(q), fid, ref)
+        try:
+            data = self._tls.data
+        except AttributeError:
+            data = self.data()
+        coords = self.coordinates
+        if coords.identity:
+            J = _frame_jacobian(self.model, data, q, fid, ref)
+            return J if self.dof > 1 else J.reshape(6, 1)
+        J = _frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref)
         if J.ndim == 1:  # eigenpy returns a (6, 1) matrix as (6,)
             J = J.reshape(6, 1)
         return self.coordinates.fold(J)
 
     def pose_and_jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
-        """(T_IF (4, 4), J (6, dof) in ``ref``) from one pass of Pinocchio's joint Jacobians."""
-        model, data = self.model, self.data()
+        """(T_IF (4, 4), J (6, dof) in ``ref``), bit for bit :meth:`pose` and :meth:`jacobian`: for
+        "local_world_aligned" and "world" one pass (Pinocchio's frame Jacobian places the joints the
+        pose needs), for "local" a placement pass and the Jacobian."""
         if self.dof == 0:
             return self.pose(q, fid), np.zeros((6, 0))
-        pin.computeJointJacobians(model, data, self.coordinates.to_pinocchio(q))
-        T = pin.updateFramePlacement(model, data, fid).homogeneous
-        J = pin.getFrameJacobian(model, data, fid, ref)
-        return T, self.coordinates.fold(J.reshape(6, -1))
+        if ref == pin.LOCAL:
+            return self.pose(q, fid), self.jacobian(q, fid, ref)
+        J = self.jacobian(q, fid, ref)
+        return _place(self.model, self._tls.data, fid).homogeneous, J
 
 
 def _frame_ids(model: pin.Model) -> dict[str, int]:

@@ -123,7 +123,7 @@ def environment(peers: list | None = None) -> dict:
             versions[dist] = importlib.metadata.version(dist)
         except importlib.metadata.PackageNotFoundError:
             versions[dist] = None
-    from . import __version__
+    from ... import __version__
     versions["kinengine"] = versions["kinengine"] or __version__
     for peer in peers or ():
         versions[peer.distribution] = peer.version

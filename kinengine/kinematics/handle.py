@@ -1,0 +1,176 @@
+"""A frame handle for hot loops: one frame's pose and Jacobian with everything looked up once.
+
+>>> fk = robot.frame("tool0")                  # FrameHandle; robot.frame(name, check_inputs=False) skips the check
+>>> T = fk.pose(q)                             # T_IF (4, 4) [m] in the root link frame I
+>>> J = fk.jacobian(q, reference="local")      # (6, dof), rows [linear; angular]
+>>> T, J = fk.kinematics(q)                    # both from one pass, equal to the two calls above
+
+Same frames, units and references as :mod:`kinengine.kinematics.engine`. The handle binds
+Pinocchio's model, the frame index and Pinocchio's functions once; each thread gets its own
+Pinocchio Data (and, for robots with mimic joints, its own buffer for q_pin = M q + b), so one
+handle serves several threads. With ``check_inputs=True`` every call runs the one input check,
+:meth:`CoordinateMap.check` (single configurations only: q of shape (dof,)). With
+``check_inputs=False`` the caller promises a C-contiguous float64 array of shape (dof,) with finite
+entries; anything else is undefined behaviour of Pinocchio (wrong numbers or an exception),
+never checked.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+import threading
+
+import numpy as np
+import pinocchio as pin
+
+from .engine import REFERENCES, Kinematics, resolve_reference
+
+
+class FrameHandle:
+    """Pose and Jacobian of one frame at single configurations q (dof,); see the module doc."""
+
+    __slots__ = ("name", "frame_id", "dof", "check_inputs", "pose", "jacobian", "kinematics")
+
+    pose: Callable[[np.ndarray], np.ndarray]
+    jacobian: Callable[..., np.ndarray]
+    kinematics: Callable[..., tuple[np.ndarray, np.ndarray]]
+
+    def __init__(self, kin: Kinematics, frame: str, *, check_inputs: bool = True) -> None:
+        if type(check_inputs) is not bool:
+            from ..errors import OptionError
+            raise OptionError(f"`check_inputs` must be True or False, got {check_inputs!r}")
+        self.name, self.frame_id, self.dof = frame, kin.frame_id(frame), kin.dof
+        self.check_inputs = check_inputs
+        self.pose, self.jacobian, self.kinematics = _bind(kin, self.frame_id, check_inputs)
+
+    def __repr__(self) -> str:
+        return f"<FrameHandle {self.name!r}: {self.dof} dof, check_inputs={self.check_inputs}>"
+
+
+def _bind(kin: Kinematics, fid: int, checking: bool):
+    """The three closures: ``pose(q)``, ``jacobian(q, reference="local_world_aligned")``,
+    ``kinematics(q, reference="local_world_aligned")``."""
+    model, coords, dof = kin.model, kin.coordinates, kin.dof
+    check, identity = coords.check, coords.identity
+    M, b, offset = coords.matrix, coords.offset, coords.has_offset
+    forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
+    local_frame = pin.LOCAL
+    dot, add = np.dot, np.add
+    references = dict(REFERENCES)
+    local = threading.local()
+
+    def state():
+        """This thread's (Data, q_pin buffer): the engine's Data of this thread, a buffer of our own."""
+        local.data, local.buffer = kin.data(), np.empty(coords.nq)
+        return local.data
+
+    def pinocchio_q(q):
+        buffer = local.buffer
+        dot(M, q, out=buffer)
+        if offset:
+            add(buffer, b, out=buffer)
+        return buffer
+
+    def resolve(reference):
+        try:
+            return references[reference]
+        except (KeyError, TypeError):
+            return resolve_reference(reference)
+
+    if identity:
+        def pose(q):
+            if checking:
+                q = check(q, allow_batch=False)
+            try:
+                data = local.data
+            except AttributeError:
+                data = state()
+            forward(model, data, q)
+            return place(model, data, fid).homogeneous
+    else:
+        def pose(q):
+            if checking:
+                q = check(q, allow_batch=False)
+            try:
+                data = local.data
+            except AttributeError:
+                data = state()
+            forward(model, data, pinocchio_q(q))
+            return place(model, data, fid).homogeneous
+
+    if dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
+        def jacobian(q, reference="local_world_aligned"):
+            resolve(reference)
+            if checking:
+                check(q, allow_batch=False)
+            return np.zeros((6, 0))
+
+        def kinematics(q, reference="local_world_aligned"):
+            resolve(reference)
+            return pose(q), np.zeros((6, 0))
+        return pose, jacobian, kinematics
+
+    if identity and dof > 1:
+        def jacobian(q, reference="local_world_aligned"):
+            try:
+                ref = references[reference]
+            except (KeyError, TypeError):
+                ref = resolve_reference(reference)
+            if checking:
+                q = check(q, allow_batch=False)
+            try:
+                data = local.data
+            except AttributeError:
+                data = state()
+            return frame_jacobian(model, data, q, fid, ref)
+
+        def kinematics(q, reference="local_world_aligned"):
+            try:
+                ref = references[reference]
+            except (KeyError, TypeError):
+                ref = resolve_reference(reference)
+            if checking:
+                q = check(q, allow_batch=False)
+            try:
+                data = local.data
+            except AttributeError:
+                data = state()
+            if ref == local_frame:  # Pinocchio's LOCAL frame Jacobian does not place the joints
+                forward(model, data, q)
+                return place(model, data, fid).homogeneous, frame_jacobian(model, data, q, fid, ref)
+            J = frame_jacobian(model, data, q, fid, ref)
+            return place(model, data, fid).homogeneous, J
+        return pose, jacobian, kinematics
+
+    fold = coords.fold  # J_pin · M (and (6,) → (6, 1) for one column)
+
+    def jacobian(q, reference="local_world_aligned"):
+        ref = resolve(reference)
+        if checking:
+            q = check(q, allow_batch=False)
+        try:
+            data = local.data
+        except AttributeError:
+            data = state()
+        J = frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, ref)
+        return fold(J.reshape(6, -1))
+
+    def kinematics(q, reference="local_world_aligned"):
+        ref = resolve(reference)
+        if checking:
+            q = check(q, allow_batch=False)
+        try:
+            data = local.data
+        except AttributeError:
+            data = state()
+        if not identity:
+            q = pinocchio_q(q)
+        if ref == local_frame:  # Pinocchio's LOCAL frame Jacobian does not place the joints
+            forward(model, data, q)
+            return place(model, data, fid).homogeneous, fold(frame_jacobian(model, data, q, fid, ref).reshape(6, -1))
+        J = fold(frame_jacobian(model, data, q, fid, ref).reshape(6, -1))
+        return place(model, data, fid).homogeneous, J
+    return pose, jacobian, kinematics
+
+
+__all__ = ["FrameHandle"]
