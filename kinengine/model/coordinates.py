@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 import math
+import numbers
 import warnings
 
 import numpy as np
@@ -22,6 +23,11 @@ from ..errors import ConfigurationError, FrameNotFoundError, OptionError
 from ..urdf import RobotDescription
 
 _F64 = np.dtype(np.float64)
+MAX_MAGNITUDE = 1e9
+"""[m or rad] the largest |q_i| accepted: beyond it a prismatic coordinate (or a mimic multiplier times
+one) could overflow a pose; an angle of 1e9 rad is 1.6e8 turns. Limits beyond it are sampled within it."""
+MAX_SAMPLES = 2**28
+"""The most numbers one random_configuration call makes (2 GiB of float64)."""
 _STRIDES = (_F64.itemsize,)  # a C-contiguous float64 vector
 
 
@@ -142,13 +148,13 @@ class CoordinateMap:
         # Hot path: a contiguous float64 vector of the right shape costs one float sum to check; a
         # non-finite sum (NaN, inf or overflow) is confirmed element-wise.
         if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._shape and q.strides == _STRIDES:
-            if not math.isfinite(sum(q.tolist())) and not np.isfinite(q).all():
-                self._raise_nonfinite(q, name)
+            if not -MAX_MAGNITUDE <= sum(q.tolist()) <= MAX_MAGNITUDE:  # NaN, inf, overflow or large
+                self._check_values(q, name)
         elif (allow_batch and type(q) is np.ndarray and q.dtype is _F64 and q.ndim == 2 and q.shape[0]
               and q.shape[1] == self.dof and q.flags.c_contiguous):  # a ready batch: one sum as well
             total = sum(q.ravel().tolist()) if q.size <= 256 else float(q.sum())
-            if not math.isfinite(total) and not np.isfinite(q).all():
-                self._raise_nonfinite(q, name)
+            if not -MAX_MAGNITUDE <= total <= MAX_MAGNITUDE:
+                self._check_values(q, name)
         else:
             q = self._convert(q, name, allow_batch)
         if check_limits:
@@ -181,8 +187,7 @@ class CoordinateMap:
             raise ConfigurationError(f"Expected `{name}` to hold at least one configuration, "
                                      f"got an empty batch {arr.shape}")
         arr = np.ascontiguousarray(arr, dtype=np.float64)
-        if not np.isfinite(arr).all():
-            self._raise_nonfinite(arr, name)
+        self._check_values(arr, name)
         return arr
 
     @staticmethod
@@ -200,6 +205,17 @@ class CoordinateMap:
         except (TypeError, ValueError):
             raise ConfigurationError(f"Expected `{name}` to hold real numbers with shape {expected}, "
                                      f"got {what} with non-numeric entries") from None
+
+    def _check_values(self, q: np.ndarray, name: str) -> None:
+        """ConfigurationError for a NaN/inf entry or one beyond ±MAX_MAGNITUDE (the slow path of check)."""
+        if not np.isfinite(q).all():
+            self._raise_nonfinite(q, name)
+        if (np.abs(q) > MAX_MAGNITUDE).any():
+            bad = np.argwhere(np.abs(q) > MAX_MAGNITUDE)[0]
+            where = f"[{', '.join(map(str, bad))}]"
+            raise ConfigurationError(f"`{name}`{where} (joint {self.names[bad[-1]]!r}) is {float(q[tuple(bad)])!r}: "
+                                     f"coordinates beyond ±{MAX_MAGNITUDE:g} (m or rad) are refused, so that poses and "
+                                     "Jacobians cannot overflow; wrap angles into [-π, π)")
 
     def _raise_nonfinite(self, q: np.ndarray, name: str) -> None:
         bad = np.argwhere(~np.isfinite(q))[0]
@@ -237,12 +253,17 @@ class CoordinateMap:
                         f"joint {joint!r} is a mimic joint that follows {self._mimics[joint]!r} and takes no "
                         "coordinate; set the leader instead (or pass strict=False to ignore it)")
                 raise FrameNotFoundError(joint, self.names, kind="joint")
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.floating, np.integer)):
+                raise ConfigurationError(f"joint {joint!r}: expected a real number, got {type(value).__name__} "
+                                         f"{_short(value)}")
             try:
                 v = float(value)
-            except (TypeError, ValueError):
-                raise ConfigurationError(f"joint {joint!r}: expected a number, got {value!r}") from None
-            if not math.isfinite(v):
-                raise ConfigurationError(f"joint {joint!r}: expected a finite number, got {v}")
+            except (TypeError, ValueError, OverflowError):
+                raise ConfigurationError(f"joint {joint!r}: expected a number that fits a float64, got "
+                                         f"{_short(value)}") from None
+            if not math.isfinite(v) or abs(v) > MAX_MAGNITUDE:
+                raise ConfigurationError(f"joint {joint!r}: expected a finite number within ±{MAX_MAGNITUDE:g}, "
+                                         f"got {v}")
             q[i] = v
         return q
 
@@ -250,10 +271,18 @@ class CoordinateMap:
         """Uniform samples within limits; unbounded (continuous) joints in [-π, π)."""
         if size is not None and (isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0):
             raise OptionError(f"`size` must be None or a number of configurations >= 0, got {size!r}")
-        lo = np.where(np.isfinite(self.lower), self.lower, -np.pi)
-        hi = np.where(np.isfinite(self.upper), self.upper, np.pi)
+        lo = np.clip(np.where(np.isfinite(self.lower), self.lower, -np.pi), -MAX_MAGNITUDE, MAX_MAGNITUDE)
+        hi = np.clip(np.where(np.isfinite(self.upper), self.upper, np.pi), -MAX_MAGNITUDE, MAX_MAGNITUDE)
+        if size is not None and size * max(self.dof, 1) > MAX_SAMPLES:
+            raise OptionError(f"`size` = {size} asks for {size * self.dof} numbers, more than {MAX_SAMPLES:g}; "
+                              "sample in smaller batches")
         shape = (self.dof,) if size is None else (size, self.dof)
         return rng.uniform(lo, hi, size=shape)
+
+
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _or(value: float | None, default: float) -> float:
