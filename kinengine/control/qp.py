@@ -225,7 +225,8 @@ class DifferentialIK:
             step = qpsolvers.solve_qp(H, c, lb=np.clip(lb, -_BIG, _BIG), ub=np.clip(ub, -_BIG, _BIG),
                                       solver=self.solver)
             if step is None:  # cannot happen for a box QP with H > 0; a safe answer anyway
-                step = np.clip(np.zeros(self.dof), lb, ub)
+                step = np.zeros(self.dof)
+            np.clip(step, lb, ub, out=step)   # the solver's tolerance (~1e-14) off a bound: onto it
         return step / dt
 
     def _pose_rows(self, term: _PoseTerm, model, data) -> tuple[np.ndarray, np.ndarray]:
