@@ -14,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 import os
 from pathlib import Path
+import threading
 import warnings
 
 from .model import available_robots, catalog_entry
@@ -22,6 +23,8 @@ from .errors import URDFError
 from .robot import Robot
 from .urdf import LIMITS, Limits, RobotDescription, parse_urdf, read_urdf_file
 from .urdf.xacro import expand_xacro
+
+_WARNINGS_LOCK = threading.Lock()  # catch_warnings swaps process-wide state: two loads must not interleave it
 
 
 def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
@@ -97,7 +100,7 @@ def _packages(packages: object, source: str) -> dict[str, str]:
 def _warn_once(read: Callable[[], tuple[RobotDescription, object]]) -> tuple[RobotDescription, object]:
     """``read()`` with the parser's warnings (one per corrected element) held back, then one warning for the
     load: the floating-base note and a summary of ``description.warnings``. Other warnings pass through."""
-    with warnings.catch_warnings(record=True) as caught:
+    with _WARNINGS_LOCK, warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         description, other = read()
     notes = description.warnings
