@@ -304,3 +304,20 @@ def _erd(relative: str) -> Path:
     if not path.is_file():
         pytest.skip(f"example-robot-data has no {relative}")
     return path
+
+
+def test_concurrent_loads_each_warn_once_and_leave_warnings_working():
+    import threading
+
+    text = LEGGED.format(extra=IGNORED_MIMICS)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        threads = [threading.Thread(target=kinengine.load_urdf_string, args=(text,)) for _ in range(4)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        warnings.warn("after the loads", UserWarning)
+    messages = [str(w.message) for w in caught]
+    assert sum("held fixed" in m for m in messages) == 4 and messages.count("after the loads") == 1, messages
+    assert len(messages) == 5, messages
