@@ -123,6 +123,12 @@ def test_dtds_entities_and_malformed_documents_are_still_refused(prolog, body, m
         kinengine.load_urdf_string(text)
 
 
+def test_hundreds_of_undeclared_prefixes_are_refused_with_the_fix():
+    body = "<gazebo>" + "".join(f"<p{i}:x/>" for i in range(257)) + "</gazebo>"
+    with pytest.raises(URDFError, match="257 namespace prefixes that <robot> does not declare .* declare them"):
+        kinengine.load_urdf_string(f'<robot name="r">\n<link name="a"/>\n{body}\n</robot>')
+
+
 def test_an_undeclared_xacro_prefix_is_still_a_xacro_macro():
     with pytest.raises(URDFError, match="<xacro:include> is a xacro macro"):
         kinengine.load_urdf_string('<robot name="r">\n<link name="a"/>\n<xacro:include filename="x.xacro"/>\n</robot>')

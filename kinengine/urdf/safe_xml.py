@@ -39,6 +39,8 @@ _ROOT_TAG = re.compile(r"<([^\s/>]+)((?:\s+[^\s=/>]+\s*=\s*(?:\"[^\"]*\"|'[^']*'
 _USED_PREFIX = re.compile(r"</?([A-Za-z_][\w.-]*):[A-Za-z_]|\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=", re.ASCII)
 _DECLARED_PREFIX = re.compile(r"xmlns:([A-Za-z_][\w.-]*)\s*=", re.ASCII)
 _PLACEHOLDER_URI = "urn:kinengine:undeclared-prefix:"
+_UNDECLARED_PREFIX = re.compile(r"Namespace prefix \S+ (for \S+ )?on \S+ is not defined")
+_MAX_UNDECLARED = 256  # real files use a handful (sensor, gz, ...); each one adds an attribute to the root
 _NO_DTD = ("is not allowed: kinengine reads no DTD and no entity declaration (they can read local "
            "files or expand without bound); remove it and write the values out")
 
@@ -55,12 +57,16 @@ def parse_xml(document: str | bytes, *, source: str = "<string>", limits: Limits
     if tags > limits.max_tags:
         raise URDFError(f"the document has {tags} markup tags, more than Limits.max_tags = {limits.max_tags}",
                         source=source)
-    data = _declare_prefixes(data)
-    parser = etree.XMLParser(**_PARSER_OPTIONS)  # one parser per call: lxml parsers are not thread-safe
     try:
-        root = etree.fromstring(data, parser)
+        root = _parse(data)
     except etree.XMLSyntaxError as exc:
-        raise URDFError(f"not well-formed XML: {exc.msg}", source=source, line=exc.lineno or None) from None
+        declared = _declare_prefixes(data, source) if _UNDECLARED_PREFIX.search(exc.msg) else data
+        if declared is data:
+            raise URDFError(f"not well-formed XML: {exc.msg}", source=source, line=exc.lineno or None) from None
+        try:
+            root = _parse(declared)
+        except etree.XMLSyntaxError as again:
+            raise URDFError(f"not well-formed XML: {again.msg}", source=source, line=again.lineno or None) from None
     docinfo = root.getroottree().docinfo
     if docinfo.doctype or docinfo.internalDTD is not None or docinfo.externalDTD is not None:
         raise URDFError(f"a <!DOCTYPE> {_NO_DTD}", source=source)
@@ -70,8 +76,15 @@ def parse_xml(document: str | bytes, *, source: str = "<string>", limits: Limits
     return root
 
 
-def _declare_prefixes(data: bytes) -> bytes:
-    """``data`` with each namespace prefix used in it but not declared on the root element declared there
+def _parse(data: bytes) -> etree._Element:
+    parser = etree.XMLParser(**_PARSER_OPTIONS)  # one parser per call: lxml parsers are not thread-safe
+    return etree.fromstring(data, parser)
+
+
+def _declare_prefixes(data: bytes, source: str) -> bytes:
+    """Called only when libxml2 met an undeclared prefix (a valid document pays nothing).
+
+    ``data`` with each namespace prefix used in it but not declared on the root element declared there
     (xmlns:p="urn:kinengine:undeclared-prefix:p"); ``data`` itself if none is missing or the root start
     tag cannot be found. Only attributes are added to the root start tag, on its own line: no entity,
     DTD or markup is introduced and line numbers stay as they were."""
@@ -89,6 +102,10 @@ def _declare_prefixes(data: bytes) -> bytes:
     missing = sorted(used - set(_DECLARED_PREFIX.findall(root.group(2))))
     if not missing:
         return data
+    if len(missing) > _MAX_UNDECLARED:
+        raise URDFError(f"the document uses {len(missing)} namespace prefixes that <{root.group(1)}> does not declare "
+                        f"(e.g. {missing[0]!r}), more than the {_MAX_UNDECLARED} kinengine declares for you; "
+                        "declare them with xmlns:prefix=\"...\"", source=source)
     declarations = "".join(f' xmlns:{p}="{_PLACEHOLDER_URI}{p}"' for p in missing)
     return (text[:root.end(1)] + declarations + text[root.end(1):]).encode(codec)
 
