@@ -79,8 +79,10 @@ def test_with_frame_accepts_xyz_rpy_and_equals_the_matrix(abb):
     xyz, rpy = (0.0, 0.05, 0.2), (0.3, 0.2, -0.1)
     a = abb.with_frame("tcp", "tool0", (xyz, rpy))
     b = abb.with_frame("tcp", "tool0", _transform(xyz, rpy))
+    c = abb.with_frame("tcp", "tool0", np.array([xyz, rpy]))
     q = abb.random_configuration(3)
     np.testing.assert_allclose(a.frame_pose(q, "tcp"), b.frame_pose(q, "tcp"), atol=1e-15)
+    np.testing.assert_array_equal(a.frame_pose(q, "tcp"), c.frame_pose(q, "tcp"))
 
 
 def test_joint_frame_parent_equals_its_child_link(panda):

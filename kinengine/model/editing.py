@@ -138,7 +138,7 @@ def edited_urdf_text(text: str, description: RobotDescription) -> str:
 
 def placement_xyz_rpy(placement: object) -> tuple[Vector3, Vector3]:
     """(xyz [m], rpy [rad]) of a (4, 4) homogeneous transform or of an (xyz, rpy) pair; OptionError otherwise."""
-    if isinstance(placement, (tuple, list)) and len(placement) == 2:
+    if (isinstance(placement, (tuple, list)) and len(placement) == 2) or np.shape(placement) == (2, 3):
         try:
             xyz, rpy = (np.asarray(p, dtype=float) for p in placement)
         except (TypeError, ValueError):
