@@ -52,3 +52,12 @@ def test_theory_is_cited_by_its_name():
              for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
              if _FORBIDDEN.search(line)]
     assert not found, "user-facing text names the theory by an internal name:\n" + "\n".join(found)
+
+
+def test_api_reference_covers_the_public_api():
+    """Every name `from kinengine import *` gives has its entry on the API reference page."""
+    import kinengine
+
+    page = (ROOT / "docs" / "api.md").read_text(encoding="utf-8")
+    missing = [name for name in kinengine.__all__ if name != "__version__" and f"::: kinengine.{name}\n" not in page]
+    assert not missing, f"docs/api.md lacks `::: kinengine.NAME` for {missing}"
