@@ -7,6 +7,8 @@ lower and upper 0, mimic multiplier 1 and offset 0. The numbers of
 ``<axis>``, ``<limit>`` and ``<mimic>``, are checked too (urdfdom and yourdfpy refuse a
 file whose numbers they cannot read) but not kept. Link and joint
 names may not be "universe", Pinocchio's name for the world frame and joint 0.
+A child element that URDF allows once (``<origin>``, ``<axis>``, ``<limit>``, ...) but that appears
+more often is read from its first occurrence, as urdfdom and yourdfpy read it, with a warning.
 Cross-element rules (names that must exist, the tree) live in :mod:`kinengine.urdf.tree`.
 """
 
