@@ -17,7 +17,7 @@ import pinocchio as pin
 
 from ..errors import URDFError
 from ..urdf import RobotDescription
-from .stack import call_with_big_stack
+from .stack import call_with_big_stack, stack_for_depth
 
 _UNBOUNDED = float(np.finfo(np.float64).max)
 
@@ -40,7 +40,7 @@ def build_pinocchio_model(description: RobotDescription) -> pin.Model:
     """Pinocchio's Model of ``description`` (see the module doc), checked by :func:`check_pinocchio_model`.
     URDFError (naming the file) if Pinocchio fails or disagrees."""
     try:
-        model = _build(pinocchio_xml(description))
+        model = _build(pinocchio_xml(description), _depth(description))
     except Exception as exc:  # Pinocchio signals everything with ValueError/RuntimeError text
         raise _pinocchio_error(description, exc) from None
     check_pinocchio_model(description, model)
@@ -81,7 +81,7 @@ def _pinocchio_error(description: RobotDescription, exc: Exception) -> URDFError
         mid = (lo + hi) // 2
         sub = dataclasses.replace(description, joints=description.joints[:mid], links=description.links[:mid + 1])
         try:
-            _build(pinocchio_xml(sub))
+            _build(pinocchio_xml(sub), _depth(sub))
             lo = mid
         except Exception:
             hi = mid
@@ -91,10 +91,19 @@ def _pinocchio_error(description: RobotDescription, exc: Exception) -> URDFError
     return URDFError(reason, source=description.source, element=f"joint {joint.name!r}", line=joint.line)
 
 
-def _build(xml: str) -> pin.Model:
-    """``pin.buildModelFromXML(xml)`` on a thread with a known, big stack: Pinocchio's parser recurses once
-    per tree level and a small thread stack would overflow (see :mod:`kinengine.model.stack`)."""
-    return call_with_big_stack(lambda: pin.buildModelFromXML(xml))
+def _build(xml: str, depth: int) -> pin.Model:
+    """``pin.buildModelFromXML(xml)`` on a thread with a known stack, big enough for a tree ``depth`` levels
+    deep: Pinocchio's parser recurses once per level and a small thread stack would overflow (see
+    :mod:`kinengine.model.stack`)."""
+    return call_with_big_stack(lambda: pin.buildModelFromXML(xml), stack_for_depth(depth))
+
+
+def _depth(description: RobotDescription) -> int:
+    """The most joints (fixed ones included) between the root and any link."""
+    depth = {description.root: 0}
+    for joint in description.joints:  # depth-first order: a parent is seen before its children
+        depth[joint.child] = depth.get(joint.parent, 0) + 1
+    return max(depth.values())
 
 
 def _nonnegative(value: float | None) -> float | None:

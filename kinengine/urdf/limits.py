@@ -9,7 +9,11 @@ to load a bigger model.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
+import math
+import numbers
+
+from ..errors import OptionError
 
 
 @dataclass(frozen=True)
@@ -30,7 +34,15 @@ class Limits:
     - ``max_tree_depth``: joints (fixed ones included) between the root and any link. Pinocchio's
       C++ URDF parser recurses once per level, ~2 KiB of stack each: measured on pin 4.1, a chain
       of ~3,800 levels overflows the 8 MiB main-thread stack, ~470 a 1 MiB thread stack, ~220 a
-      512 KiB one. 128 levels need ~300 KiB, less than any platform's default thread stack.
+      512 KiB one. 128 levels need ~300 KiB, less than any platform's default thread stack. Pinocchio's
+      build runs on a thread with a 16 MiB stack whatever thread loads the robot (see
+      :mod:`kinengine.model.stack`; deeper trees get ~4 KiB per level), so the limit may be raised.
+    - ``max_offset`` [m]: |x| of every joint and inertial origin coordinate and mimic offset, and
+      ``max_multiplier``: |m| of every mimic multiplier (see :mod:`kinengine.urdf.magnitudes`): numbers
+      finite one by one must not overflow a pose together.
+
+    Each field is checked when a Limits is made (OptionError): a whole number (a finite real for the last
+    two) between 1 (0 for ``max_movable_joints``) and the bound in :data:`BOUNDS`.
     """
 
     max_bytes: int = 32 * 1024 * 1024
@@ -42,6 +54,30 @@ class Limits:
     max_joints: int = 4096
     max_movable_joints: int = 128
     max_tree_depth: int = 128
+    max_offset: float = 1e6
+    max_multiplier: float = 1e6
 
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value, (low, high) = getattr(self, f.name), BOUNDS[f.name]
+            real = f.type in ("float", float)
+            kinds = (numbers.Real,) if real else (numbers.Integral,)
+            if isinstance(value, bool) or not isinstance(value, kinds) or \
+                    not (math.isfinite(value) and low <= value <= high):
+                kind = "a finite real number" if real else "a whole number"
+                span = f"[{low:g}, {high:g}]" if real else f"[{low}, {high}]"
+                raise OptionError(f"Limits.{f.name} must be {kind} in {span}, got {value!r}")
+
+
+BOUNDS: dict[str, tuple[float, float]] = {
+    "max_bytes": (1, 2**31), "max_tags": (1, 2**31),
+    "max_depth": (1, 256),  # libxml2 itself refuses deeper nesting (lxml's huge_tree is off)
+    "max_attribute_length": (1, 10**7), "max_name_length": (1, 10**6),
+    "max_links": (1, 10**6), "max_joints": (1, 10**6),
+    "max_movable_joints": (0, 10**6),  # Data beyond the memory left is refused when it is made
+    "max_tree_depth": (1, 10**6),  # the build thread's stack grows with the depth
+    "max_offset": (1e-9, 1e100), "max_multiplier": (1e-9, 1e100),
+}
+"""(smallest, largest) value of each Limits field."""
 
 LIMITS = Limits()

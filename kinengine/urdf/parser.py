@@ -19,6 +19,7 @@ from ..errors import URDFError
 from .description import RobotDescription
 from .elements import Where, read_joint, read_link, read_name
 from .limits import LIMITS, Limits
+from .magnitudes import check_magnitudes
 from .safe_xml import parse_xml
 from .tree import assemble
 
@@ -52,6 +53,7 @@ def parse_urdf(document: str | bytes, source: str = "<string>", *,
     found: list[str] = []
     links = [read_link(e, source, limits, found) for e in link_elements]
     joints = [read_joint(e, source, limits, found) for e in joint_elements]
+    check_magnitudes(links, joints, source=source, limits=limits)
     description = assemble(name, links, joints, source=source, warnings=found, limits=limits)
     for message in found:
         warnings.warn(f"{source}: {message}", UserWarning, stacklevel=2)
