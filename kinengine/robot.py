@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from .analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_batch, analytic_single, as_rows, pose_map
+from .analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_batch, analytic_single, pose_map
 from .analytic.evaluate import analytic_relative
 from .analytic.pose_map import check_on_singularity
 from .control.frame_task import FrameTask
@@ -40,6 +40,7 @@ from .control.task import Task
 from .errors import FrameNotFoundError, OptionError
 from .kinematics import REFERENCES, Kinematics, resolve_reference
 from .kinematics import batch as _batch
+from .kinematics.options import checked_parameterization, checked_rng, checked_threshold
 from .kinematics import derivatives as _derivatives
 from .kinematics.handle import FrameHandle
 from .kinematics import relative as _relative
@@ -122,7 +123,7 @@ class Robot:
     def random_configuration(self, rng: np.random.Generator | int | None = None,
                              size: int | None = None) -> np.ndarray:
         """Uniform within limits, (dof,) or (size, dof); continuous joints in [-π, π)."""
-        return self._coords.sample(np.random.default_rng(rng), size)
+        return self._coords.sample(checked_rng(rng), size)
 
     def configuration(self, values: Mapping[str, float], *, base: object = None,
                       strict: bool = True) -> np.ndarray:
@@ -217,7 +218,8 @@ class Robot:
         warning is issued at gimbal lock); "raise": RepresentationSingularityError within
         ``singularity_threshold`` of the singular set; "nan": NaN in that parameterization's rows there.
         """
-        pmap = pose_map(position, rotation, as_rows(rows))
+        pmap = pose_map(*checked_parameterization(position, rotation, rows))
+        singularity_threshold = checked_threshold(singularity_threshold)
         if relative_to is None:
             T = self.frame_pose(q, frame, check_limits=check_limits)
         else:
@@ -247,7 +249,8 @@ class Robot:
         instead (in a batch, only in the rows of those configurations). ``relative_to``: the analytic
         Jacobian of χ(T_BA), E(χ)·J_rel with J_rel = :meth:`relative_jacobian` expressed in B.
         """
-        pmap = pose_map(position, rotation, as_rows(rows))
+        pmap = pose_map(*checked_parameterization(position, rotation, rows))
+        singularity_threshold = checked_threshold(singularity_threshold)
         fid = self._fid(frame)
         nan = on_singularity != "raise" and check_on_singularity(on_singularity)
         q = self._coords.check(q, check_limits=check_limits)
@@ -272,6 +275,8 @@ class Robot:
         ``on_singularity``: "raise" (default) or "nan"; ``task.singularity_distances`` tells how far each
         parameterization is from its singular set. See :mod:`kinengine.control.task`.
         """
+        position, rotation, rows = checked_parameterization(position, rotation, rows)
+        singularity_threshold = checked_threshold(singularity_threshold)
         return Task(self, self._end_effector if frames is None else frames, position, rotation, rows=rows,
                     check_inputs=check_inputs, continuous=continuous,
                     singularity_threshold=singularity_threshold, relative_to=relative_to,
@@ -319,7 +324,8 @@ class Robot:
                          rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
                          singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD) -> np.ndarray:
         """∂J_A/∂q, (m, dof, dof) with [:, :, k] = ∂J_A/∂q_k. See :mod:`kinengine.analytic.hessian`."""
-        pmap, fid = pose_map(position, rotation, as_rows(rows)), self._fid(frame)
+        pmap, fid = pose_map(*checked_parameterization(position, rotation, rows)), self._fid(frame)
+        singularity_threshold = checked_threshold(singularity_threshold)
         return _analytic_hessian(self._kin, self._coords.check(q, allow_batch=False), fid, pmap,
                                  singularity_threshold)
 

@@ -1,0 +1,86 @@
+"""Checks of the keyword options every public entry point shares: each bad value is one OptionError
+(or ParameterizationError for parameterization names and rows) naming the option and what it takes.
+
+* ``singularity_threshold``: a real number (not a bool), finite and >= 0 [distance to the
+  parameterization's singular set]; NaN or a negative value would switch the singularity check off.
+* ``tolerance``: a real number, finite and >= 0 [singular-value threshold].
+* ``rng``: None, a whole number >= 0 (a seed) or a ``numpy.random.Generator``.
+* ``position``/``rotation``: a parameterization name (str) or None; ``rows``: None, one label, or a
+  sequence of labels (str) and indices (int).
+The fast path of each is one ``type(...) is float`` test, so the checks cost nothing measurable.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+
+import numpy as np
+
+from ..errors import OptionError, ParameterizationError
+
+
+def checked_nonnegative(value: object, name: str) -> float:
+    """``value`` as a float if it is a finite real number >= 0; OptionError otherwise."""
+    if type(value) is float and 0.0 <= value < math.inf:
+        return value
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise OptionError(f"{name} must be a real number >= 0, got {type(value).__name__} {_short(value)}")
+    try:
+        number = float(value)
+    except (OverflowError, TypeError, ValueError):
+        raise OptionError(f"{name} must be a finite real number >= 0, got {_short(value)}") from None
+    if not 0.0 <= number < math.inf:
+        raise OptionError(f"{name} must be a finite real number >= 0, got {number!r}")
+    return number
+
+
+def checked_threshold(value: object) -> float:
+    """A valid ``singularity_threshold`` (see the module doc)."""
+    return checked_nonnegative(value, "singularity_threshold")
+
+
+def checked_tolerance(value: object) -> float:
+    """A valid ``tolerance`` (see the module doc)."""
+    return checked_nonnegative(value, "tolerance")
+
+
+def checked_rng(rng: object) -> np.random.Generator:
+    """A numpy Generator from ``rng`` (None: fresh entropy; an int >= 0: a seed; a Generator: itself)."""
+    if rng is None or isinstance(rng, np.random.Generator):
+        return np.random.default_rng(rng)
+    if isinstance(rng, (bool, np.bool_)) or not isinstance(rng, numbers.Integral) or rng < 0:
+        raise OptionError(f"rng must be None, a seed (a whole number >= 0) or a numpy.random.Generator, got "
+                          f"{type(rng).__name__} {_short(rng)}")
+    return np.random.default_rng(int(rng))
+
+
+def checked_parameterization(position: object, rotation: object, rows: object) -> tuple:
+    """(position, rotation, rows as a tuple or None), each of a valid type; ParameterizationError otherwise
+    (the names and labels themselves are checked by the pose map)."""
+    for option, value in (("position", position), ("rotation", rotation)):
+        if value is not None and type(value) is not str:
+            raise ParameterizationError(f"{option} must be a parameterization name (str) or None, got "
+                                        f"{type(value).__name__} {_short(value)}")
+    if rows is None:
+        return position, rotation, None
+    if isinstance(rows, str):
+        return position, rotation, (rows,)
+    if isinstance(rows, (bytes, dict)) or not hasattr(rows, "__iter__"):
+        raise ParameterizationError(f"rows must be None, a row label or a sequence of labels (str) and indices "
+                                    f"(int), got {type(rows).__name__} {_short(rows)}")
+    selected = tuple(rows)
+    for row in selected:
+        if not (type(row) is str or (isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_)))):
+            raise ParameterizationError(f"rows must hold labels (str) and indices (int), got {type(row).__name__} "
+                                        f"{_short(row)}")
+    return position, rotation, selected
+
+
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+__all__ = ["checked_nonnegative", "checked_parameterization", "checked_rng", "checked_threshold",
+           "checked_tolerance"]
