@@ -258,11 +258,52 @@ def test_mimic_joint_equals_its_expanded_model():
             np.testing.assert_allclose(J, expected, rtol=0, atol=1e-14, err_msg=f"{frame} {r}")
 
 
+# A chain of mimics of every type, the first one sorted before the independent joint that drives it:
+# cont = -1.5·lead + 0.2 (continuous follows revolute), slide = 0.5·cont - 0.1 (prismatic follows continuous).
+CHAIN = _robot(
+    "base a b c",
+    _joint("z_lead", "revolute", "base", "a", f'<origin xyz="0 0 0.3"/><axis xyz="0 1 0"/>{LIMIT}'),
+    _joint("a_cont", "continuous", "base", "b", '<origin xyz="0.1 0 0.2" rpy="0.3 0 0"/><axis xyz="0 0 1"/>'
+           '<mimic joint="z_lead" multiplier="-1.5" offset="0.2"/>'),
+    _joint("slide", "prismatic", "b", "c", f'<origin xyz="0 0.1 0"/><axis xyz="1 0 0"/>{LIMIT}'
+           '<mimic joint="a_cont" multiplier="0.5" offset="-0.1"/>'))
+
+
+def test_mimic_chain_equals_its_expanded_model():
+    ref = ReferenceKinematics.from_urdf_string(CHAIN)
+    assert ref.joint_names == ("z_lead",)
+    free = CHAIN.replace('<mimic joint="z_lead" multiplier="-1.5" offset="0.2"/>', "").replace(
+        '<mimic joint="a_cont" multiplier="0.5" offset="-0.1"/>', "")
+    expanded = ReferenceKinematics.from_urdf_string(free, joint_names=["z_lead", "a_cont", "slide"])
+    q = _samples(1, 6, seed=9)
+    cont = -1.5 * q + 0.2
+    q_exp = np.hstack([q, cont, 0.5 * cont - 0.1])
+    for frame in ref.frame_names:
+        np.testing.assert_allclose(ref.frame_pose(q, frame), expanded.frame_pose(q_exp, frame), rtol=0, atol=1e-15)
+        for r in REFERENCES:
+            J_exp = expanded.jacobian(q_exp, frame, r)  # chain rule: d(cont)/dq = -1.5, d(slide)/dq = -0.75
+            expected = J_exp[..., [0]] - 1.5 * J_exp[..., [1]] - 0.75 * J_exp[..., [2]]
+            np.testing.assert_allclose(ref.jacobian(q, frame, r), expected, rtol=0, atol=1e-14, err_msg=f"{frame} {r}")
+
+
+def test_the_reference_reads_non_urdf_namespaces_as_urdfdom_does():
+    extras = ('<gazebo reference="a"><sensor:camera name="c"><sensor:image w="1"/></sensor:camera>'
+              '<plugin gz:rate="1" name="p"/></gazebo>')
+    decorated = MIXED.replace('<robot name="t">', '<robot name="t" xmlns="http://www.ros.org">').replace(
+        "</robot>", extras + "</robot>")
+    q = _samples(4, 2, seed=10)
+    plain, read = ReferenceKinematics.from_urdf_string(MIXED), ReferenceKinematics.from_urdf_string(decorated)
+    for frame in plain.frame_names:
+        np.testing.assert_array_equal(read.frame_pose(q, frame), plain.frame_pose(q, frame))
+    with pytest.raises(URDFError, match="DOCTYPE"):
+        ReferenceKinematics.from_urdf_string('<!DOCTYPE robot [<!ENTITY x "1">]>' + MIXED.split("?>", 1)[1])
+
+
 # -- finite differences ---------------------------------------------------------------------------
 @pytest.mark.parametrize("reference", REFERENCES)
-@pytest.mark.parametrize("robot", ["planar", "mixed", *ERD])
+@pytest.mark.parametrize("robot", ["planar", "mixed", "chain", *ERD])
 def test_jacobian_matches_finite_differences(robot, reference):
-    text = {"planar": PLANAR, "mixed": MIXED}.get(robot) or ERD[robot].read_text()
+    text = {"planar": PLANAR, "mixed": MIXED, "chain": CHAIN}.get(robot) or ERD[robot].read_text()
     ref = ReferenceKinematics.from_urdf_string(text)
     frames = ref.frame_names[-12:]  # the deepest frames of the first branches stay covered below
     for q in _samples(ref.dof, 2, seed=4):
@@ -299,6 +340,10 @@ def test_poses_match_yourdfpy_forward_kinematics(robot):
 def test_poses_and_jacobians_match_pinocchio(robot):
     text = ERD[robot].read_text()
     _assert_matches_pinocchio(text, _samples(len(_pinocchio(text)[1]), 3, seed=6), atol=1e-10)
+
+
+def test_mimic_chain_matches_raw_pinocchio():
+    _assert_matches_pinocchio(CHAIN, _samples(1, 4, seed=11), atol=1e-12)
 
 
 def test_pinocchio_visits_sibling_joints_in_name_order_not_file_order():
