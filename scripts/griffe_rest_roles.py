@@ -28,7 +28,7 @@ def _code_span(match: re.Match[str]) -> str:
 def _escape_brackets(line: str) -> str:
     out, last = [], 0
     for span in _CODE_SPAN.finditer(line):
-        out.append(line[last:span.start()].replace("[", r"\[").replace("]", r"\]"))
+        out.append(line[last : span.start()].replace("[", r"\[").replace("]", r"\]"))
         out.append(span.group(0))
         last = span.end()
     out.append(line[last:].replace("[", r"\[").replace("]", r"\]"))

@@ -38,7 +38,10 @@ def robot_catalog() -> str:
     import kinengine
     from kinengine.model.catalog import catalog_entry
 
-    rows = ["| name | dof | end effector | frames | gripper coordinates | from |", "|---|--:|---|--:|---|---|"]
+    rows = [
+        "| name | dof | end effector | frames | gripper coordinates | from |",
+        "|---|--:|---|--:|---|---|",
+    ]
     for name in kinengine.available_robots():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # vendor files' own quirks are reported by `kinengine info`
@@ -48,8 +51,10 @@ def robot_catalog() -> str:
         origin = "shipped (`robots/`)" if entry.origin == "kinengine" else entry.origin
         if entry.locked:
             origin += " (" + ", ".join(f"`{j}` locked at {v:g}" for j, v in entry.locked) + ")"
-        rows.append(f"| `{name}` | {robot.dof} | `{robot.end_effector}` | {len(robot.frame_names)} | "
-                    f"{extra} | {origin} |")
+        rows.append(
+            f"| `{name}` | {robot.dof} | `{robot.end_effector}` | {len(robot.frame_names)} | "
+            f"{extra} | {origin} |"
+        )
     return "\n".join(rows) + "\n"
 
 
