@@ -23,52 +23,14 @@ import warnings
 
 import numpy as np
 
-from ..errors import OptionError, ParameterizationError, RepresentationSingularityError
-from ..parameterizations import (
-    POSITION_PARAMETERIZATIONS,
-    ROTATION_PARAMETERIZATIONS,
-    get_position,
-    get_rotation,
-)
+from ..errors import ParameterizationError
+from ..parameterizations import get_position, get_rotation
+from .singular import check_on_singularity, pose_of, singularity_error  # noqa: F401 (check_on_singularity: re-exported)
 
 DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 """analytic_jacobian raises RepresentationSingularityError when the distance to the singular set
 (e.g. |cos χ2| for Tait–Bryan angles, ρ for cylindrical) is below this; E's entries grow like
 1/distance, so 1e-6 admits entries up to about 1e6."""
-
-ON_SINGULARITY = ("raise", "nan")
-"""What a configuration closer than the threshold to a singular set gives: RepresentationSingularityError
-("raise", the default) or NaN in the rows of the singular parameterization ("nan"; other rows stay exact)."""
-
-RANK_TOLERANCE = 1e-6
-"""Relative tolerance of :func:`robot_rank`: σ_i > RANK_TOLERANCE·σ_max counts (the value of
-kinengine.control.manipulability.DEFAULT_TOLERANCE, taken relative to the largest singular value)."""
-
-
-def check_on_singularity(on_singularity: object) -> bool:
-    """True for "nan", False for "raise"; OptionError otherwise."""
-    if on_singularity == "nan":
-        return True
-    if on_singularity == "raise":
-        return False
-    raise OptionError(f"on_singularity must be 'raise' or 'nan', got {on_singularity!r}")
-
-
-def robot_rank(J: np.ndarray) -> tuple[int, int]:
-    """(rank, generic rank) of a geometric Jacobian J (6, dof): rank counts σ_i > RANK_TOLERANCE·σ_max,
-    the generic rank is min(6, number of columns that are not zero). The robot is kinematically singular
-    when rank < generic rank. (Columns of a relative Jacobian vanish identically for the joints that move
-    both frames alike; an absolute J_e0 has no zero column: a joint always moves its frame.)"""
-    J = np.asarray(J, dtype=float)
-    if J.size == 0 or not np.isfinite(J).all():
-        return 0, min(J.shape)
-    norms = np.linalg.norm(J, axis=0)
-    full = min(J.shape[0], int(np.count_nonzero(norms > 1e-12 * norms.max())))
-    if full == 0:
-        return 0, 0
-    s = np.linalg.svd(J, compute_uv=False)
-    return int(np.count_nonzero(s > RANK_TOLERANCE * s[0])) if s[0] > 0 else 0, full
-
 
 @dataclass(frozen=True)
 class PoseMap:
@@ -164,7 +126,7 @@ class PoseMap:
                 distance = param._distance(math, *chi)
                 if not distance >= threshold or distance == 0.0:
                     if not nan:
-                        raise _singularity_error(param, distance, threshold, _pose(C, p), row, J)
+                        raise singularity_error(param, distance, threshold, pose_of(C, p), row, J)
                     entries = (math.nan,) * (3 * param.size)
                 else:
                     entries = param._E(math, *chi)
@@ -175,14 +137,14 @@ class PoseMap:
                 distance = param._distance(math, *chi)
                 if not distance >= threshold or distance == 0.0:
                     if not nan:
-                        raise _singularity_error(param, distance, threshold, _pose(C, p), row, J)
+                        raise singularity_error(param, distance, threshold, pose_of(C, p), row, J)
                     entries += (math.nan,) * (3 * param.size)
                 else:
                     entries += param._E(math, *chi)
         except ZeroDivisionError:  # exactly on the singular set with threshold 0 (distance rounds above 0)
             if nan:
                 return np.full((self.size, J.shape[1]), np.nan)
-            raise _singularity_error(param, 0.0, threshold, _pose(C, p), row, J) from None
+            raise singularity_error(param, 0.0, threshold, pose_of(C, p), row, J) from None
         buffer = bytearray(template)
         pack_into(buffer, offset, *entries)
         JA = np.ndarray(shape, _F64, buffer).dot(J)
@@ -225,7 +187,7 @@ class PoseMap:
         if below.any():
             row = int(np.argmax(below.any(axis=1)))
             part = int(np.argmax(below[row]))
-            raise _singularity_error(self.parts[part], float(distances[row, part]), threshold, pose(row),
+            raise singularity_error(self.parts[part], float(distances[row, part]), threshold, pose(row),
                                      None if single else row, None if jacobian is None else jacobian(row))
 
     def nan_where_singular(self, distances: np.ndarray, threshold: float, out: np.ndarray) -> None:
@@ -274,38 +236,7 @@ def _combine(entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.n
             np.add(out, scratch, out=out)
 
 
-def _singularity_error(param: object, distance: float, threshold: float, T: np.ndarray,
-                       row: int | None = None, J: np.ndarray | None = None) -> RepresentationSingularityError:
-    """The error at pose T (4, 4), with the parameterizations that are regular at the same pose and
-    (given the geometric Jacobian J (6, dof)) whether the robot itself is singular there."""
-    with warnings.catch_warnings():  # "on the z axis" from the other position parameterizations
-        warnings.simplefilter("ignore", UserWarning)
-        if param.kind == "position":
-            regular = [name for name, other in POSITION_PARAMETERIZATIONS.items()
-                       if float(other.singularity_distance(other.from_position(T[:3, 3]))) > 0.1]
-        else:
-            regular = [name for name, other in ROTATION_PARAMETERIZATIONS.items()
-                       if float(other.singularity_distance(other.from_rotation(T[:3, :3], warn=False))) > 0.1]
-    preferred = [n for n in ("quaternion", "rotation_matrix", "euler_zyz", "euler_xyz", "cartesian")
-                 if n in regular]
-    alternatives = preferred + [n for n in regular if n not in preferred]
-    where = "" if row is None else f"row {row} of the batch: "
-    rank, full = (None, None) if J is None else robot_rank(J)
-    return RepresentationSingularityError(param.name, float(distance), threshold, alternatives[:4],
-                                          where + param.singular_set, rank, full)
-
-
-singularity_error = _singularity_error
-"""Public name of the error builder, for the control layer's Task."""
-
-
 _F64 = np.dtype(np.float64)
-
-
-def _pose(C: Sequence[Sequence[float]], p: Sequence[float]) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = C, p
-    return T
 
 
 @lru_cache(maxsize=256)

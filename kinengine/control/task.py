@@ -46,7 +46,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
-from ..analytic.pose_map import check_on_singularity
+from ..analytic.singular import check_on_singularity
 from ..errors import OptionError
 from .frame_task import FrameTask, as_frame_tasks
 from .task_frame import FrameBlock, FrameKinematics

@@ -21,7 +21,7 @@ import struct
 import numpy as np
 import pinocchio as pin
 
-from ..analytic.pose_map import singularity_error
+from ..analytic.singular import singularity_error
 from .continuity import continuity_rule
 
 
@@ -47,7 +47,7 @@ class FrameKinematics:
 
     def update(self, Jw: np.ndarray, dJw: np.ndarray, qdot: np.ndarray | None) -> None:
         pin.updateFramePlacement(self.model, self.data, self.fid)
-        self.C = C = self.R.tolist()
+        self.C = self.R.tolist()
         self.pos = px, py, pz = self.p.tolist()
         X = self.X
         X[0, 4], X[0, 5], X[1, 3], X[1, 5], X[2, 3], X[2, 4] = pz, -py, -pz, px, py, -px
