@@ -19,9 +19,10 @@ import warnings
 
 from .model import available_robots, catalog_entry
 from .model.floating_base import floating_base_note
-from .errors import URDFError
+from .errors import OptionError, URDFError
 from .robot import Robot
-from .urdf import LIMITS, Limits, RobotDescription, parse_urdf, read_urdf_file
+from .urdf import LIMITS, Limits, RobotDescription, parse_urdf
+from .urdf.source import decode_xml, read_bytes_once
 from .urdf.xacro import expand_xacro
 
 _WARNINGS_LOCK = threading.Lock()  # catch_warnings swaps process-wide state: two loads must not interleave it
@@ -42,6 +43,7 @@ def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
     """
     if not isinstance(target, (str, os.PathLike)):
         raise URDFError(f"load() takes a robot name or a path to a .urdf file, got {type(target).__name__}")
+    _check_limits(limits)
     text_target = os.fspath(target)
     packages = _packages(packages, text_target)
     is_xacro = text_target.lower().endswith(".xacro")
@@ -55,7 +57,7 @@ def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
         return robot.locked(dict(entry.locked)) if entry.locked else robot
     path = Path(text_target)
     if not isinstance(target, os.PathLike) and path.suffix.lower() not in (".urdf", ".xacro") and \
-            not path.exists():
+            not _exists(path):
         catalog_entry(text_target)  # raises: unknown robot, listing the names
     if is_xacro:
         text = expand_xacro(path, args=xacro_args, packages=packages)
@@ -72,10 +74,11 @@ def load_urdf_string(text: str | bytes, *, end_effector: str | None = None, sour
     as in :func:`load`."""
     if not isinstance(text, (str, bytes)):
         raise URDFError(f"load_urdf_string() takes URDF text (str or bytes), got {type(text).__name__}")
+    _check_limits(limits)
     packages = _packages(packages, source)
     description, _ = _warn_once(lambda: (parse_urdf(text, source=source, limits=limits), None))
     if isinstance(text, bytes):
-        text = text.decode("utf-8", errors="replace")
+        text = decode_xml(text)
     return Robot(description, text, end_effector=end_effector, packages=packages)
 
 
@@ -118,5 +121,21 @@ def _warn_once(read: Callable[[], tuple[RobotDescription, object]]) -> tuple[Rob
 
 
 def _read(path: Path, limits: Limits) -> tuple["RobotDescription", str]:
-    description = read_urdf_file(path, limits=limits)
-    return description, Path(path).read_text(encoding="utf-8", errors="replace")
+    """The description and the text of one read of the file: ``urdf_text`` is exactly what was parsed,
+    decoded as its XML declares (see :mod:`kinengine.urdf.source`)."""
+    source, data = read_bytes_once(path, limits)
+    return parse_urdf(data, source=source, limits=limits), decode_xml(data)
+
+
+def _check_limits(limits: object) -> None:
+    if not isinstance(limits, Limits):
+        raise OptionError(f"limits= takes a kinengine.urdf.Limits (e.g. Limits(max_movable_joints=256)), got "
+                          f"{type(limits).__name__}")
+
+
+def _exists(path: Path) -> bool:
+    """Whether ``path`` names something; False for a name the OS refuses (too long, NUL, no permission)."""
+    try:
+        return path.exists()
+    except (OSError, ValueError):
+        return False
