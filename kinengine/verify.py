@@ -25,6 +25,7 @@ import warnings
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .errors import OptionError
 from .reference import REFERENCES, ReferenceKinematics, read_urdf
 
 REFERENCE_ATOL = 1e-10
@@ -35,6 +36,10 @@ FD_RTOL = 1e-6
 FD_STEP = 1e-6
 SINGULARITY_MARGIN = 0.05
 MAX_CORNERS = 64
+MAX_SAMPLES = 100_000
+"""The most random configurations one verify run takes (each costs a finite-difference Jacobian per frame)."""
+BOX = 100.0
+"""[m or rad] joint limits beyond ±BOX are sampled within ±BOX (limits of ±1e308 would overflow the sampler)."""
 
 
 @dataclass(frozen=True)
@@ -84,7 +89,13 @@ class VerifyReport:
 
 
 def verify(robot, samples: int = 20, seed: int = 0, progress: bool = False) -> VerifyReport:
-    """Run every check on ``robot`` (a :class:`kinengine.Robot`) and return the report."""
+    """Run every check on ``robot`` (a :class:`kinengine.Robot`) and return the report.
+
+    ``samples``: random configurations, a whole number in [0, MAX_SAMPLES]; ``seed``: a whole number >= 0.
+    Joint limits beyond ±BOX (m or rad) are sampled within ±BOX.
+    """
+    _check_count(samples, "samples", MAX_SAMPLES)
+    _check_count(seed, "seed", 2**63 - 1)
     rng = np.random.default_rng(seed)
     ref = ReferenceKinematics.from_urdf_string(robot.urdf_text, joint_names=robot.joint_names,
                                                source=robot.source)
@@ -127,8 +138,14 @@ def verify(robot, samples: int = 20, seed: int = 0, progress: bool = False) -> V
 def _box(robot) -> tuple[np.ndarray, np.ndarray]:
     """The sampled joint box: the limits, or [-π, π] where they are infinite or empty (lower >= upper)."""
     lower, upper = np.asarray(robot.lower_limits, float), np.asarray(robot.upper_limits, float)
-    usable = np.isfinite(lower) & np.isfinite(upper) & (lower < upper)
+    lower, upper = np.clip(lower, -BOX, BOX), np.clip(upper, -BOX, BOX)
+    usable = lower < upper
     return np.where(usable, lower, -math.pi), np.where(usable, upper, math.pi)
+
+
+def _check_count(value: object, name: str, most: int) -> None:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or not 0 <= value <= most:
+        raise OptionError(f"{name} must be a whole number in [0, {most}], got {value!r:.40}")
 
 
 def _corners(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> np.ndarray:

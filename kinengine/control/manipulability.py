@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConfigurationError, KinematicSingularityError, ParameterizationError
+from ..kinematics.options import checked_tolerance
 
 ROW_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
 ROW_SETS = {"all": (0, 1, 2, 3, 4, 5), "linear": (0, 1, 2), "angular": (3, 4, 5)}
@@ -85,6 +86,7 @@ class VelocityEllipsoid:
 def analyze_jacobian(J: object, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE,
                      frame: str | None = None) -> SingularityReport:
     """The :class:`SingularityReport` of a geometric Jacobian J_e0 (6, dof) in "local_world_aligned"."""
+    tolerance = checked_tolerance(tolerance)
     index = _rows(rows)
     J = np.asarray(J, dtype=float)
     if J.ndim != 2 or J.shape[0] != 6:
