@@ -33,18 +33,21 @@ def converged(robot, frame, q, T_target, tol_p, tol_r) -> bool:
     T = robot.frame_pose(q, frame)
     if not (np.all(q >= robot.lower_limits - 1e-9) and np.all(q <= robot.upper_limits + 1e-9)):
         return False
-    return (np.linalg.norm(T_target[:3, 3] - T[:3, 3]) < tol_p
-            and np.linalg.norm(pin.log3(T[:3, :3].T @ T_target[:3, :3])) < tol_r)
+    return (
+        np.linalg.norm(T_target[:3, 3] - T[:3, 3]) < tol_p
+        and np.linalg.norm(pin.log3(T[:3, :3].T @ T_target[:3, :3])) < tol_r
+    )
 
 
 class KinengineRunner:
     name = "kinengine"
 
     def __init__(self, robot, frame, lm_damping, solver):
-        locked = {j: 0.0 for j in LOCKED.get(robot.name, ())}
+        locked = dict.fromkeys(LOCKED.get(robot.name, ()), 0.0)
         self.target = kinengine.PoseTarget(frame, np.eye(4))
-        self.ik = kinengine.DifferentialIK(robot, [self.target], lm_damping=lm_damping,
-                                           velocity_limits=locked or None, solver=solver)
+        self.ik = kinengine.DifferentialIK(
+            robot, [self.target], lm_damping=lm_damping, velocity_limits=locked or None, solver=solver
+        )
 
     def set_target(self, T):
         self.target.T_target = T
@@ -59,6 +62,7 @@ class PinkRunner:
     def __init__(self, robot, frame, lm_damping, solver):
         import pink
         from pink.tasks import FrameTask
+
         self.pink, self.solver = pink, solver
         model = robot.pinocchio_model()
         locked = LOCKED.get(robot.name, ())
@@ -85,8 +89,8 @@ def run(robot, runners, targets, starts, dt, iterations, tol_p, tol_r):
     """Per target, each runner in turn (so load changes on a shared machine hit both alike).
     Returns per runner (successes, steps per second, median steps of the successful attempt)."""
     frame = FRAMES[robot.name]
-    stats = {r.name: [0, 0, 0.0, []] for r in runners}   # successes, steps, seconds, steps used
-    for T, restarts in zip(targets, starts):
+    stats = {r.name: [0, 0, 0.0, []] for r in runners}  # successes, steps, seconds, steps used
+    for T, restarts in zip(targets, starts, strict=False):
         for runner in runners:
             st = stats[runner.name]
             runner.set_target(T)
@@ -105,12 +109,16 @@ def run(robot, runners, targets, starts, dt, iterations, tol_p, tol_r):
                 if done:
                     break
             st[0] += done
-    return {name: (ok, steps / seconds, float(np.median(used)) if used else float("nan"))
-            for name, (ok, steps, seconds, used) in stats.items()}
+    return {
+        name: (ok, steps / seconds, float(np.median(used)) if used else float("nan"))
+        for name, (ok, steps, seconds, used) in stats.items()
+    }
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--robots", nargs="+", default=["abb_irb120", "ur5", "panda"])
     parser.add_argument("--targets", type=int, default=1000)
     parser.add_argument("--iterations", type=int, default=100)
@@ -121,8 +129,11 @@ def main(argv=None):
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--only", choices=["kinengine", "pink"], default=None)
     args = parser.parse_args(argv)
-    print(f"targets {args.targets}, dt {args.dt} s, {args.iterations} steps per attempt, restarts {args.restarts}, "
-          f"lm_damping {args.lm_damping}, solver {args.solver}, tolerance 1e-6 m / 1e-6 rad")
+    print(
+        f"targets {args.targets}, dt {args.dt} s, {args.iterations} steps per attempt, "
+        f"restarts {args.restarts}, "
+        f"lm_damping {args.lm_damping}, solver {args.solver}, tolerance 1e-6 m / 1e-6 rad"
+    )
     for name in args.robots:
         robot = kinengine.load(name)
         rng = np.random.default_rng(args.seed)
@@ -136,12 +147,20 @@ def main(argv=None):
             for s in starts:
                 if len(s):
                     s[:, robot.joint_names.index(j)] = robot.neutral()[robot.joint_names.index(j)]
-        runners = [cls(robot, frame, args.lm_damping, args.solver) for cls in (KinengineRunner, PinkRunner)
-                   if not args.only or cls.name == args.only]
+        runners = [
+            cls(robot, frame, args.lm_damping, args.solver)
+            for cls in (KinengineRunner, PinkRunner)
+            if not args.only or cls.name == args.only
+        ]
         results = run(robot, runners, targets, starts, args.dt, args.iterations, 1e-6, 1e-6)
         for runner_name, (ok, rate, median) in results.items():
-            print(f"{name:12s} {runner_name:10s} success {ok}/{args.targets} = {100 * ok / args.targets:5.1f} %  "
-                  f"{rate:8.0f} steps/s  median steps to converge {median:g}", flush=True)
+            print(
+                f"{name:12s} {runner_name:10s} success {ok}/{args.targets} = "
+                f"{100 * ok / args.targets:5.1f} %  "
+                f"{rate:8.0f} steps/s  median steps to converge {median:g}",
+                flush=True,
+            )
+
 
 if __name__ == "__main__":
     main()

@@ -38,7 +38,7 @@ import kinengine
 from kinengine import FrameTask
 from kinengine.parameterizations import get_rotation
 
-Q_A = np.array([-0.6, 0.35, -0.25, 0.5, -0.45, 0.3])   # [rad]; the reference runs from Q_A to −Q_A through 0
+Q_A = np.array([-0.6, 0.35, -0.25, 0.5, -0.45, 0.3])  # [rad]; the reference runs from Q_A to −Q_A through 0
 OTHER = {"euler_zyx": "euler_zyz", "euler_zyz": "euler_zyx"}
 
 
@@ -60,25 +60,32 @@ class Run:
 
 def reference(t: float, duration: float) -> tuple[np.ndarray, np.ndarray]:
     """q_d(t) [rad] and q̇_d(t) [rad/s]: Q_A → −Q_A with a cosine profile, through q = 0 at t = duration/2."""
-    s = 0.5 - 0.5 * np.cos(np.pi * t / duration)          # 0 → 1
+    s = 0.5 - 0.5 * np.cos(np.pi * t / duration)  # 0 → 1
     ds = 0.5 * np.pi / duration * np.sin(np.pi * t / duration)
     return Q_A * (1 - 2 * s), -2 * Q_A * ds
 
 
 def make_task(robot: kinengine.Robot, rotation: str) -> kinengine.Task:
-    return robot.task([FrameTask("tool0", rotation=rotation, weight=1.0),
-                       FrameTask("link_4", rotation=None, weight=0.3)], on_singularity="nan")
+    return robot.task(
+        [FrameTask("tool0", rotation=rotation, weight=1.0), FrameTask("link_4", rotation=None, weight=0.3)],
+        on_singularity="nan",
+    )
 
 
-def simulate(duration: float = 4.0, dt: float = 2e-3, gain: float = 20.0, damping: float = 1e-4,
-             switch_below: float = 0.3) -> Run:
+def simulate(
+    duration: float = 4.0,
+    dt: float = 2e-3,
+    gain: float = 20.0,
+    damping: float = 1e-4,
+    switch_below: float = 0.3,
+) -> Run:
     robot = kinengine.load("abb_irb120")
     rotation = "euler_zyx"
     task = make_task(robot, rotation)
     vmax = np.array([j.velocity for j in robot.description.joints if j.name in robot.joint_names])
     lower, upper = robot.lower_limits, robot.upper_limits
     q = reference(0.0, duration)[0].copy()
-    n = int(round(duration / dt)) + 1
+    n = round(duration / dt) + 1
     out = {k: np.empty(n) for k in ("position", "rotation", "link4", "zyx", "sigma")}
     used, switches = [], []
     zyx = get_rotation("euler_zyx")
@@ -89,19 +96,21 @@ def simulate(duration: float = 4.0, dt: float = 2e-3, gain: float = 20.0, dampin
         T4_d, J4_d = robot.kinematics(q_d, "link_4")
         twist_d, v4_d = J_d @ qdot_d, (J4_d @ qdot_d)[:3]
         task.update(q)
-        if task.singularity_distances[1] < switch_below:   # tool0's rotation: switch before the singular set
+        if task.singularity_distances[1] < switch_below:  # tool0's rotation: switch before the singular set
             rotation = OTHER[rotation]
             switches.append(t)
             task = make_task(robot, rotation)
             task.update(q)
         T, T4 = task.pose[0], task.pose[1]
         e_p = T_d[:3, 3] - T[:3, 3]
-        e_R = pin.log3(T_d[:3, :3] @ T[:3, :3].T)            # rotation error in I [rad]
+        e_R = pin.log3(T_d[:3, :3] @ T[:3, :3].T)  # rotation error in I [rad]
         e_4 = T4_d[:3, 3] - T4[:3, 3]
         E_R = get_rotation(rotation).E(task.chi[3:6])
-        chi_dot = np.concatenate([twist_d[:3] + gain * e_p, E_R @ (twist_d[3:] + gain * e_R), v4_d + gain * e_4])
+        chi_dot = np.concatenate(
+            [twist_d[:3] + gain * e_p, E_R @ (twist_d[3:] + gain * e_R), v4_d + gain * e_4]
+        )
         JA = task.analytic_jacobian
-        ok = np.isfinite(JA).all(axis=1)                     # NaN rows (a singular parameterization): left out
+        ok = np.isfinite(JA).all(axis=1)  # NaN rows (a singular parameterization): left out
         W = task.weights * ok
         A = np.where(ok[:, None], JA, 0.0)
         b = np.where(ok, chi_dot, 0.0)
@@ -111,17 +120,29 @@ def simulate(duration: float = 4.0, dt: float = 2e-3, gain: float = 20.0, dampin
         ub = np.minimum(vmax, (upper - q) / dt)
         qdot = qpsolvers.solve_qp(H, c, lb=lb, ub=ub, solver="daqp")
         q = q + dt * qdot
-        out["position"][k], out["rotation"][k], out["link4"][k] = (np.linalg.norm(e_p), np.linalg.norm(e_R),
-                                                                   np.linalg.norm(e_4))
+        out["position"][k], out["rotation"][k], out["link4"][k] = (
+            np.linalg.norm(e_p),
+            np.linalg.norm(e_R),
+            np.linalg.norm(e_4),
+        )
         out["zyx"][k] = zyx.singularity_distance(zyx.from_rotation(T[:3, :3], warn=False))
         out["sigma"][k] = np.linalg.svd(task.jacobian[:6], compute_uv=False)[-1]
         used.append(rotation)
-    return Run(np.arange(n) * dt, out["position"], out["rotation"], out["link4"], out["zyx"], out["sigma"],
-               tuple(used), tuple(switches))
+    return Run(
+        np.arange(n) * dt,
+        out["position"],
+        out["rotation"],
+        out["link4"],
+        out["zyx"],
+        out["sigma"],
+        tuple(used),
+        tuple(switches),
+    )
 
 
 def plot(run: Run, path: str) -> None:
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -135,28 +156,38 @@ def plot(run: Run, path: str) -> None:
     bottom.plot(run.t, run.sigma_min, label="smallest singular value of J_e0 (0: wrist singular)")
     for i, s in enumerate(run.switches):
         for ax in (top, bottom):
-            ax.axvline(s, color="gray", ls=":", lw=1, label="parameterization switch" if i == 0 and ax is bottom
-                       else None)
+            ax.axvline(
+                s,
+                color="gray",
+                ls=":",
+                lw=1,
+                label="parameterization switch" if i == 0 and ax is bottom else None,
+            )
     bottom.set_xlabel("t [s]")
     bottom.legend(loc="upper right", fontsize=8)
-    top.set_title("ABB IRB 120: two-frame task stack through q = 0 (ZYX gimbal lock and wrist singularity)",
-                  fontsize=9)
+    top.set_title(
+        "ABB IRB 120: two-frame task stack through q = 0 (ZYX gimbal lock and wrist singularity)", fontsize=9
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
 def main(argv: Sequence[str] | None = None) -> Run:
-    parser = argparse.ArgumentParser(description="Two-frame tracking through singularities (see the module doc).")
+    parser = argparse.ArgumentParser(
+        description="Two-frame tracking through singularities (see the module doc)."
+    )
     parser.add_argument("--duration", type=float, default=4.0, help="seconds (the singularity is at half)")
     parser.add_argument("--output", default="two_frame_tracking.png", help="PNG path")
     args = parser.parse_args(argv)
     run = simulate(args.duration)
     plot(run, args.output)
-    print(f"max tool0 position error {run.position_error.max():.2e} m, rotation error "
-          f"{run.rotation_error.max():.2e} rad, link_4 error {run.link4_error.max():.2e} m; "
-          f"min |cos χ2| {run.zyx_distance.min():.1e}, min σ {run.sigma_min.min():.1e}; "
-          f"switches at {', '.join(f'{s:.3f}' for s in run.switches)} s; saved {args.output}")
+    print(
+        f"max tool0 position error {run.position_error.max():.2e} m, rotation error "
+        f"{run.rotation_error.max():.2e} rad, link_4 error {run.link4_error.max():.2e} m; "
+        f"min |cos χ2| {run.zyx_distance.min():.1e}, min σ {run.sigma_min.min():.1e}; "
+        f"switches at {', '.join(f'{s:.3f}' for s in run.switches)} s; saved {args.output}"
+    )
     return run
 
 

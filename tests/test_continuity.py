@@ -25,10 +25,13 @@ AXES = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}
 def wrist_urdf(seq: str) -> str:
     """Three revolute joints about seq's axes at one point, then a 'tool' frame 0.1 m out along z."""
     links = "".join(f'<link name="l{i}"/>' for i in range(4)) + '<link name="tool"/>'
-    joints = "".join(f"""
+    joints = "".join(
+        f"""
   <joint name="j{i + 1}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>
     <origin xyz="0 0 {0.2 if i == 0 else 0}"/><axis xyz="{AXES[axis]}"/>
-    <limit lower="-10" upper="10" effort="1" velocity="1"/></joint>""" for i, axis in enumerate(seq))
+    <limit lower="-10" upper="10" effort="1" velocity="1"/></joint>"""
+        for i, axis in enumerate(seq)
+    )
     return f"""<?xml version="1.0"?>
 <robot name="wrist_{seq}">{links}{joints}
   <joint name="tool_fixed" type="fixed"><parent link="l3"/><child link="tool"/><origin xyz="0 0 0.1"/></joint>
@@ -84,7 +87,7 @@ def test_near_the_singular_set_chi_is_continuous(seq, closest):
     """χ2 comes within ``closest`` of the singular value and turns back: no jump."""
     s = _singular_value(seq)
     t = np.linspace(-1.0, 1.0, 81)
-    path = s - closest - 0.3 * t ** 2
+    path = s - closest - 0.3 * t**2
     Q, chi, nan, distances = _run(seq, path)
     assert not nan.any()
     assert distances.min() == pytest.approx(abs(math.sin(closest)), rel=1e-6)
@@ -95,7 +98,7 @@ def test_near_the_singular_set_chi_is_continuous(seq, closest):
 @pytest.mark.parametrize("seq", ["zyx", "zyz", "xzx", "yxz"])
 def test_exactly_at_the_singular_set_nan_rows_or_raise_and_then_continuous_again(seq):
     s = _singular_value(seq)
-    path = s - 0.1 + 0.01 * np.arange(21)   # hits the singular value exactly at step 10
+    path = s - 0.1 + 0.01 * np.arange(21)  # hits the singular value exactly at step 10
     path[10] = s
     Q, chi, nan, distances = _run(seq, path)
     assert nan[10] and not nan[:10].any() and not nan[11:].any()

@@ -4,8 +4,8 @@ singularity of the ABB IRB 120 without an exception, writes its PNG and keeps th
 from __future__ import annotations
 
 import importlib.util
-from pathlib import Path
 import sys
+from pathlib import Path
 
 import matplotlib
 import numpy as np
@@ -20,7 +20,7 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "two_frame_tracking
 def example():
     spec = importlib.util.spec_from_file_location("two_frame_tracking", EXAMPLE)
     module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module   # dataclasses look their module up while the file executes
+    sys.modules[spec.name] = module  # dataclasses look their module up while the file executes
     try:
         spec.loader.exec_module(module)
         yield module
@@ -40,10 +40,12 @@ def test_tracks_through_both_singularities_and_writes_a_png(example, tmp_path, c
     assert 0.0 < run.switches[0] < 0.5
     # ... and the errors stay bounded (faster motion than the 4 s default: larger but small errors)
     assert np.isfinite(run.position_error).all()
-    assert run.position_error.max() < 2e-3 and run.rotation_error.max() < 2e-3 and run.link4_error.max() < 2e-3
+    assert (
+        run.position_error.max() < 2e-3 and run.rotation_error.max() < 2e-3 and run.link4_error.max() < 2e-3
+    )
 
 
 def test_without_switching_the_nan_rows_keep_the_loop_alive(example):
-    run = example.simulate(duration=1.0, switch_below=0.0)   # never switches: ZYX rows meet the gimbal lock
+    run = example.simulate(duration=1.0, switch_below=0.0)  # never switches: ZYX rows meet the gimbal lock
     assert run.switches == () and set(run.rotation) == {"euler_zyx"}
     assert np.isfinite(run.position_error).all() and run.position_error.max() < 1e-2

@@ -28,7 +28,10 @@ def _pose(rotvec, p):
 def test_pose_error_frames():
     rng = np.random.default_rng(1)
     for _ in range(10):
-        T, T_target = _pose(rng.normal(size=3), rng.normal(size=3)), _pose(rng.normal(size=3), rng.normal(size=3))
+        T, T_target = (
+            _pose(rng.normal(size=3), rng.normal(size=3)),
+            _pose(rng.normal(size=3), rng.normal(size=3)),
+        )
         xi = pose_error(T, T_target, "local")
         np.testing.assert_allclose(T @ pin.exp6(xi).homogeneous, T_target, atol=1e-12)
         C = T[:3, :3]
@@ -36,7 +39,8 @@ def test_pose_error_frames():
         world = pose_error(T, T_target, "world")
         np.testing.assert_allclose(pin.exp6(world).homogeneous @ T, T_target, atol=1e-12)
         assert np.linalg.norm(xi[3:]) == pytest.approx(
-            Rotation.from_matrix(C.T @ T_target[:3, :3]).magnitude(), abs=1e-12)
+            Rotation.from_matrix(C.T @ T_target[:3, :3]).magnitude(), abs=1e-12
+        )
     # pure translation: the world-aligned error is the displacement itself
     T = _pose([0.3, -0.2, 0.1], [1.0, 2.0, 3.0])
     T_target = T.copy()
@@ -86,7 +90,7 @@ def test_unconstrained_step_is_the_damped_least_squares_solution_and_bounded_ste
     slow = DifferentialIK(robot, [PoseTarget("tool0", robot.frame_pose(-REGULAR, "tool0"))], solver="proxqp")
     a, b = far.solve(REGULAR, 0.01), slow.solve(REGULAR, 0.01)
     assert far.qp_calls == 1 and np.any(np.isclose(np.abs(a), far.velocity_limits, rtol=1e-6))
-    np.testing.assert_allclose(a, b, atol=1e-3)   # ProxQP stops at its default tolerance (~1e-4 here)
+    np.testing.assert_allclose(a, b, atol=1e-3)  # ProxQP stops at its default tolerance (~1e-4 here)
 
 
 def test_velocity_limits_come_from_the_urdf_and_can_be_overridden(abb_robot):
@@ -94,8 +98,9 @@ def test_velocity_limits_come_from_the_urdf_and_can_be_overridden(abb_robot):
     urdf = {j.name: j.velocity for j in robot.description.joints}
     ik = DifferentialIK(robot, [PostureTarget(np.zeros(6), 1.0)])
     np.testing.assert_array_equal(ik.velocity_limits, [urdf[n] for n in robot.joint_names])
-    locked = DifferentialIK(robot, [PoseTarget("tool0", robot.frame_pose(-REGULAR, "tool0"))],
-                            velocity_limits={"joint_6": 0.0})
+    locked = DifferentialIK(
+        robot, [PoseTarget("tool0", robot.frame_pose(-REGULAR, "tool0"))], velocity_limits={"joint_6": 0.0}
+    )
     assert locked.solve(REGULAR, 0.01)[5] == 0.0
     with pytest.raises(kinengine.OptionError, match="unknown joint"):
         DifferentialIK(robot, [PostureTarget(np.zeros(6))], velocity_limits={"joint_9": 1.0})
@@ -106,34 +111,48 @@ def test_velocity_limits_come_from_the_urdf_and_can_be_overridden(abb_robot):
 def test_five_dimensional_target_leaves_rotation_about_the_tool_axis_free(abb_robot):
     robot = abb_robot
     T_target = robot.frame_pose(REGULAR, "tool0")
-    ik = DifferentialIK(robot, [PoseTarget("tool0", T_target, rows=("x", "y", "z", "rx", "ry")),
-                                PostureTarget(REGULAR + [0, 0, 0, 0, 0, 1.0], weight=1e-4, joints=["joint_6"])])
+    ik = DifferentialIK(
+        robot,
+        [
+            PoseTarget("tool0", T_target, rows=("x", "y", "z", "rx", "ry")),
+            PostureTarget(REGULAR + [0, 0, 0, 0, 0, 1.0], weight=1e-4, joints=["joint_6"]),
+        ],
+    )
     q = _iterate(robot, ik, REGULAR + np.array([0.2, -0.1, 0.15, -0.2, 0.1, 0.0]), steps=150)
     T = robot.frame_pose(q, "tool0")
     np.testing.assert_allclose(T[:3, 3], T_target[:3, 3], atol=1e-7)
-    np.testing.assert_allclose(T[:3, 2], T_target[:3, 2], atol=1e-7)    # tool axis aligned
-    assert abs(q[5] - REGULAR[5]) > 0.1     # ... and the posture task turned the free rotation
+    np.testing.assert_allclose(T[:3, 2], T_target[:3, 2], atol=1e-7)  # tool axis aligned
+    assert abs(q[5] - REGULAR[5]) > 0.1  # ... and the posture task turned the free rotation
 
 
 def test_relative_target_and_posture_lock_on_the_panda():
     robot = kinengine.load("panda")
-    q_star = np.clip(np.array([0.3, -0.4, 0.2, -2.0, 0.3, 1.8, 0.5, 0.02]), robot.lower_limits, robot.upper_limits)
+    q_star = np.clip(
+        np.array([0.3, -0.4, 0.2, -2.0, 0.3, 1.8, 0.5, 0.02]), robot.lower_limits, robot.upper_limits
+    )
     # relative to link 1: joints 2-7 move the hand in it (6 coordinates for 6 rows)
     T_rel = robot.relative_pose(q_star, "panda_hand_tcp", relative_to="panda_link1")
-    ik = DifferentialIK(robot, [PoseTarget("panda_hand_tcp", T_rel, relative_to="panda_link1"),
-                                PostureTarget(robot.neutral(), weight=1.0, joints=["panda_finger_joint1"])],
-                        velocity_limits={"panda_finger_joint1": 0.0})
+    ik = DifferentialIK(
+        robot,
+        [
+            PoseTarget("panda_hand_tcp", T_rel, relative_to="panda_link1"),
+            PostureTarget(robot.neutral(), weight=1.0, joints=["panda_finger_joint1"]),
+        ],
+        velocity_limits={"panda_finger_joint1": 0.0},
+    )
     q0 = robot.neutral()
     q0[:7] = q_star[:7] + 0.15
     q = _iterate(robot, ik, q0, steps=120)
-    np.testing.assert_allclose(robot.relative_pose(q, "panda_hand_tcp", relative_to="panda_link1"), T_rel, atol=1e-6)
-    assert q[7] == q0[7]   # the finger never moved
+    np.testing.assert_allclose(
+        robot.relative_pose(q, "panda_hand_tcp", relative_to="panda_link1"), T_rel, atol=1e-6
+    )
+    assert q[7] == q0[7]  # the finger never moved
 
 
 def test_at_a_kinematic_singularity_the_step_is_finite(abb_robot):
     robot = abb_robot
     ik = DifferentialIK(robot, [PoseTarget("tool0", robot.frame_pose(REGULAR, "tool0"))])
-    qdot = ik.solve(np.zeros(6), 0.01)   # q5 = 0: the wrist is singular
+    qdot = ik.solve(np.zeros(6), 0.01)  # q5 = 0: the wrist is singular
     assert np.isfinite(qdot).all()
 
 

@@ -4,20 +4,21 @@ the analytic Jacobian of χ(T_BA) against finite differences of χ; batches agai
 
 from __future__ import annotations
 
-from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
+from custom_robots import mixed_chain_urdf
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import kinengine
-from custom_robots import mixed_chain_urdf
 
 CASES = [  # robot, A, B, expressed_in
     ("abb_irb120", "tool0", "link_3", None),
     ("abb_irb120", "tool0", "link_3", "link_1"),
-    ("abb_irb120", "link_2", "tool0", "base_link"),      # B further down the chain than A
+    ("abb_irb120", "link_2", "tool0", "base_link"),  # B further down the chain than A
     ("panda", "panda_hand_tcp", "panda_link3", "panda_leftfinger"),
-    ("mixed", "side", "finger_b", None),                 # two branches, a mimic joint
+    ("mixed", "side", "finger_b", None),  # two branches, a mimic joint
     ("mixed", "tip", "side", "l2"),
 ]
 _ROBOTS: dict[str, kinengine.Robot] = {}
@@ -25,8 +26,9 @@ _ROBOTS: dict[str, kinengine.Robot] = {}
 
 def _robot(name):
     if name not in _ROBOTS:
-        _ROBOTS[name] = (kinengine.load_urdf_string(mixed_chain_urdf()) if name == "mixed"
-                         else kinengine.load(name))
+        _ROBOTS[name] = (
+            kinengine.load_urdf_string(mixed_chain_urdf()) if name == "mixed" else kinengine.load(name)
+        )
     return _ROBOTS[name]
 
 
@@ -52,7 +54,9 @@ def _interior(robot, rng):
     """A random q at least 1e-3 inside the limits (central differences stay inside)."""
     lo, hi = robot.lower_limits, robot.upper_limits
     q = robot.random_configuration(rng)
-    return np.clip(q, np.where(np.isfinite(lo), lo + 1e-3, -np.inf), np.where(np.isfinite(hi), hi - 1e-3, np.inf))
+    return np.clip(
+        q, np.where(np.isfinite(lo), lo + 1e-3, -np.inf), np.where(np.isfinite(hi), hi - 1e-3, np.inf)
+    )
 
 
 @pytest.mark.parametrize("name,a,b,e", CASES)
@@ -79,16 +83,26 @@ def test_relative_jacobian_fd_for_varying_q(values):
     robot = _robot("abb_irb120")
     q = np.clip(values, robot.lower_limits + 1e-3, robot.upper_limits - 1e-3)
     J = robot.relative_jacobian(q, "tool0", relative_to="link_2", expressed_in="link_5")
-    np.testing.assert_allclose(J, relative_jacobian_fd(robot, q, "tool0", "link_2", "link_5"), rtol=0, atol=2e-8)
+    np.testing.assert_allclose(
+        J, relative_jacobian_fd(robot, q, "tool0", "link_2", "link_5"), rtol=0, atol=2e-8
+    )
 
 
 def test_relative_to_the_root_is_the_geometric_jacobian_and_a_frame_relative_to_itself_is_zero():
     robot = _robot("abb_irb120")
     q = np.array([0.3, 0.2, -0.4, 0.5, 0.7, 1.0])
-    np.testing.assert_allclose(robot.relative_jacobian(q, "tool0", relative_to="base_link"),
-                               robot.jacobian(q, "tool0"), rtol=0, atol=1e-14)
-    np.testing.assert_allclose(robot.relative_jacobian(q, "tool0", relative_to="base_link", expressed_in="tool0"),
-                               robot.jacobian(q, "tool0", "local"), rtol=0, atol=1e-14)
+    np.testing.assert_allclose(
+        robot.relative_jacobian(q, "tool0", relative_to="base_link"),
+        robot.jacobian(q, "tool0"),
+        rtol=0,
+        atol=1e-14,
+    )
+    np.testing.assert_allclose(
+        robot.relative_jacobian(q, "tool0", relative_to="base_link", expressed_in="tool0"),
+        robot.jacobian(q, "tool0", "local"),
+        rtol=0,
+        atol=1e-14,
+    )
     np.testing.assert_allclose(robot.relative_jacobian(q, "tool0", relative_to="tool0"), 0.0, atol=1e-15)
     np.testing.assert_allclose(robot.relative_pose(q, "tool0", relative_to="tool0"), np.eye(4), atol=1e-15)
 
@@ -102,8 +116,9 @@ def test_batches_equal_single_calls(name, a, b, e):
     assert T.shape == (7, 4, 4) and J.shape == (7, 6, robot.dof)
     for i, q in enumerate(Q):
         np.testing.assert_allclose(T[i], robot.relative_pose(q, a, relative_to=b), rtol=0, atol=1e-13)
-        np.testing.assert_allclose(J[i], robot.relative_jacobian(q, a, relative_to=b, expressed_in=e),
-                                   rtol=0, atol=1e-13)
+        np.testing.assert_allclose(
+            J[i], robot.relative_jacobian(q, a, relative_to=b, expressed_in=e), rtol=0, atol=1e-13
+        )
 
 
 @pytest.mark.parametrize("rotation", ["euler_zyx", "euler_zyz", "quaternion", "rotation_vector"])
@@ -115,9 +130,15 @@ def test_analytic_jacobian_relative_to_equals_finite_differences_of_chi(position
     while len(Q) < 3:
         q = _interior(robot, rng)
         chi = robot.pose_parameters(q, "tool0", position, rotation, relative_to="link_2")
-        if (kinengine.parameterizations.get_rotation(rotation).singularity_distance(chi[3:]) > 0.2
-                and np.linalg.norm(Rotation.from_matrix(
-                    robot.relative_pose(q, "tool0", relative_to="link_2")[:3, :3]).as_rotvec()) < np.pi - 0.2):
+        if (
+            kinengine.parameterizations.get_rotation(rotation).singularity_distance(chi[3:]) > 0.2
+            and np.linalg.norm(
+                Rotation.from_matrix(
+                    robot.relative_pose(q, "tool0", relative_to="link_2")[:3, :3]
+                ).as_rotvec()
+            )
+            < np.pi - 0.2
+        ):
             Q.append(q)
     for q in Q:
         JA = robot.analytic_jacobian(q, "tool0", position, rotation, relative_to="link_2")
@@ -125,13 +146,19 @@ def test_analytic_jacobian_relative_to_equals_finite_differences_of_chi(position
         for k in range(robot.dof):
             dq = np.zeros(robot.dof)
             dq[k] = h
-            fd[:, k] = (robot.pose_parameters(q + dq, "tool0", position, rotation, relative_to="link_2")
-                        - robot.pose_parameters(q - dq, "tool0", position, rotation, relative_to="link_2")) / (2 * h)
+            fd[:, k] = (
+                robot.pose_parameters(q + dq, "tool0", position, rotation, relative_to="link_2")
+                - robot.pose_parameters(q - dq, "tool0", position, rotation, relative_to="link_2")
+            ) / (2 * h)
         np.testing.assert_allclose(JA, fd, rtol=0, atol=1e-7)
     batch = robot.analytic_jacobian(np.array(Q), "tool0", position, rotation, relative_to="link_2")
     for i, q in enumerate(Q):
-        np.testing.assert_allclose(batch[i], robot.analytic_jacobian(q, "tool0", position, rotation,
-                                                                     relative_to="link_2"), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            batch[i],
+            robot.analytic_jacobian(q, "tool0", position, rotation, relative_to="link_2"),
+            rtol=0,
+            atol=1e-12,
+        )
 
 
 def test_relative_analytic_jacobian_singularity_raises_or_gives_nan_rows():
@@ -143,7 +170,9 @@ def test_relative_analytic_jacobian_singularity_raises_or_gives_nan_rows():
     chi = kinengine.parameterizations.get_rotation("euler_zyx").from_rotation(chi[:3, :3], warn=False)
     assert abs(np.cos(chi[1])) < 1e-9
     # joint 1 moves both frames alike: the relative Jacobian has 5 columns, and q5 = 0 takes one rank away
-    with pytest.raises(kinengine.RepresentationSingularityError, match=r"also kinematically singular.*rank 4 of 5"):
+    with pytest.raises(
+        kinengine.RepresentationSingularityError, match=r"also kinematically singular.*rank 4 of 5"
+    ):
         robot.analytic_jacobian(q, "tool0", relative_to="link_1")
     JA = robot.analytic_jacobian(np.array([q, q + 0.3]), "tool0", relative_to="link_1", on_singularity="nan")
     assert np.isnan(JA[0, 3:]).all() and np.isfinite(JA[0, :3]).all() and np.isfinite(JA[1]).all()

@@ -7,11 +7,11 @@ import tracemalloc
 
 import numpy as np
 import pytest
+from custom_robots import mixed_chain_urdf
+from finite_differences import assert_close_relative
 from scipy.spatial.transform import Rotation
 
 import kinengine
-from custom_robots import mixed_chain_urdf
-from finite_differences import assert_close_relative
 
 CASES = [
     ("abb_irb120", "tool0", "cartesian", "euler_zyz"),

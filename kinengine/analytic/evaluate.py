@@ -104,4 +104,5 @@ def _analytic_loop(kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, thre
     return out
 
 
-__all__ = ["ANALYTIC_CALLS", "analytic_at", "analytic_batch", "analytic_relative", "analytic_single", "frame_views"]
+__all__ = ["ANALYTIC_CALLS", "analytic_at", "analytic_batch", "analytic_relative", "analytic_single",
+           "frame_views"]

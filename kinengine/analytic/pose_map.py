@@ -14,18 +14,18 @@ The formulas are the parameterizations' own, written once over ``xp`` (see
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
-from functools import lru_cache
 import math
 import struct
 import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
 from ..errors import ParameterizationError
 from ..parameterizations import get_position, get_rotation
-from .singular import check_on_singularity, pose_of, singularity_error  # noqa: F401 (check_on_singularity: re-exported)
+from .singular import check_on_singularity, pose_of, singularity_error  # noqa: F401 (re-exported)
 
 DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 """analytic_jacobian raises RepresentationSingularityError when the distance to the singular set
@@ -82,7 +82,7 @@ class PoseMap:
         chi = chi if self.rows is None else chi[..., self.rows]
         if threshold is None:
             return chi
-        for param, values in zip(self.parts, parts):
+        for param, values in zip(self.parts, parts, strict=False):
             distances.append(np.asarray(param.singularity_distance(values), dtype=float))
         distances = np.stack(distances, axis=-1)
         if nan:
@@ -161,7 +161,8 @@ class PoseMap:
         """
         E_rows, distances = [], []
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            for param, block in zip(self.parts, (J[:3], J[3:]) if self.position is not None else (J[3:],)):
+            blocks = (J[:3], J[3:]) if self.position is not None else (J[3:],)
+            for param, block in zip(self.parts, blocks, strict=True):
                 if param.kind == "position":
                     chi = param._from_position(np, *p)
                 else:
@@ -191,7 +192,7 @@ class PoseMap:
                                      None if single else row, None if jacobian is None else jacobian(row))
 
     def nan_where_singular(self, distances: np.ndarray, threshold: float, out: np.ndarray) -> None:
-        """NaN in out (N, m, dof)'s rows of every part within ``threshold`` of its singular set, per batch row."""
+        """NaN in out (N, m, dof)'s rows of every part within ``threshold`` of its singular set, per row."""
         below = ~(distances >= threshold) | (distances == 0.0)
         for k, rows in enumerate(self.part_rows):
             hit = np.flatnonzero(below[:, k])
@@ -224,7 +225,7 @@ class _Layout:
 def _combine(entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.ndarray,
              scratch: np.ndarray) -> None:
     """out = Σ_k entries[k] · block[k]: a row of E (entries (n,) or constants) times J's rows (3, dof, n)."""
-    terms = [(e, b) for e, b in zip(entries, block) if not (isinstance(e, float) and e == 0.0)]
+    terms = [(e, b) for e, b in zip(entries, block, strict=False) if not (isinstance(e, float) and e == 0.0)]
     if not terms:
         out[...] = 0.0
         return

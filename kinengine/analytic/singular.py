@@ -10,8 +10,8 @@ geometric Jacobian that E(χ) multiplies (J_e0, or a relative Jacobian).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 import warnings
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -52,25 +52,39 @@ def robot_rank(J: np.ndarray) -> tuple[int, int]:
     return int(np.count_nonzero(s > RANK_TOLERANCE * s[0])) if s[0] > 0 else 0, full
 
 
-def singularity_error(param: object, distance: float, threshold: float, T: np.ndarray,
-                       row: int | None = None, J: np.ndarray | None = None) -> RepresentationSingularityError:
+def singularity_error(
+    param: object,
+    distance: float,
+    threshold: float,
+    T: np.ndarray,
+    row: int | None = None,
+    J: np.ndarray | None = None,
+) -> RepresentationSingularityError:
     """The error at pose T (4, 4), with the parameterizations that are regular at the same pose and
     (given the geometric Jacobian J (6, dof)) whether the robot itself is singular there."""
     with warnings.catch_warnings():  # "on the z axis" from the other position parameterizations
         warnings.simplefilter("ignore", UserWarning)
         if param.kind == "position":
-            regular = [name for name, other in POSITION_PARAMETERIZATIONS.items()
-                       if float(other.singularity_distance(other.from_position(T[:3, 3]))) > 0.1]
+            regular = [
+                name
+                for name, other in POSITION_PARAMETERIZATIONS.items()
+                if float(other.singularity_distance(other.from_position(T[:3, 3]))) > 0.1
+            ]
         else:
-            regular = [name for name, other in ROTATION_PARAMETERIZATIONS.items()
-                       if float(other.singularity_distance(other.from_rotation(T[:3, :3], warn=False))) > 0.1]
-    preferred = [n for n in ("quaternion", "rotation_matrix", "euler_zyz", "euler_xyz", "cartesian")
-                 if n in regular]
+            regular = [
+                name
+                for name, other in ROTATION_PARAMETERIZATIONS.items()
+                if float(other.singularity_distance(other.from_rotation(T[:3, :3], warn=False))) > 0.1
+            ]
+    preferred = [
+        n for n in ("quaternion", "rotation_matrix", "euler_zyz", "euler_xyz", "cartesian") if n in regular
+    ]
     alternatives = preferred + [n for n in regular if n not in preferred]
     where = "" if row is None else f"row {row} of the batch: "
     rank, full = (None, None) if J is None else robot_rank(J)
-    return RepresentationSingularityError(param.name, float(distance), threshold, alternatives[:4],
-                                          where + param.singular_set, rank, full)
+    return RepresentationSingularityError(
+        param.name, float(distance), threshold, alternatives[:4], where + param.singular_set, rank, full
+    )
 
 
 def pose_of(C: Sequence[Sequence[float]], p: Sequence[float]) -> np.ndarray:
@@ -80,5 +94,11 @@ def pose_of(C: Sequence[Sequence[float]], p: Sequence[float]) -> np.ndarray:
     return T
 
 
-__all__ = ["ON_SINGULARITY", "RANK_TOLERANCE", "check_on_singularity", "pose_of", "robot_rank",
-           "singularity_error"]
+__all__ = [
+    "ON_SINGULARITY",
+    "RANK_TOLERANCE",
+    "check_on_singularity",
+    "pose_of",
+    "robot_rank",
+    "singularity_error",
+]

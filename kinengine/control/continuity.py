@@ -10,8 +10,8 @@ J_A and χ̇ stay exact. Rules work on lists of Python floats (no numpy allocati
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import math
+from collections.abc import Callable
 
 TWO_PI = 2.0 * math.pi
 
@@ -28,6 +28,7 @@ def _angles(indices: tuple[int, ...]) -> Rule:
         for i in indices:
             chi[i] = _unwrap(chi[i], previous[i])
         return chi
+
     return rule
 
 
@@ -42,15 +43,18 @@ def _euler(proper: bool) -> Rule:
         p1, p2, p3 = previous
         a1, a2, a3 = _unwrap(chi[0], p1), _unwrap(chi[1], p2), _unwrap(chi[2], p3)
         b1, b2, b3 = _unwrap(chi[0] + math.pi, p1), _unwrap(shift - chi[1], p2), _unwrap(chi[2] + math.pi, p3)
-        if (b1 - p1) ** 2 + (b2 - p2) ** 2 + (b3 - p3) ** 2 < (a1 - p1) ** 2 + (a2 - p2) ** 2 + (a3 - p3) ** 2:
+        if (b1 - p1) ** 2 + (b2 - p2) ** 2 + (b3 - p3) ** 2 < (a1 - p1) ** 2 + (a2 - p2) ** 2 + (
+            a3 - p3
+        ) ** 2:
             return [b1, b2, b3]
         return [a1, a2, a3]
+
     return rule
 
 
 def _quaternion(chi: list[float], previous: list[float]) -> list[float]:
     """q and −q are the same rotation: keep the sign of the previous quaternion."""
-    if sum(a * b for a, b in zip(chi, previous)) < 0.0:
+    if sum(a * b for a, b in zip(chi, previous, strict=False)) < 0.0:
         return [-c for c in chi]
     return chi
 
@@ -63,9 +67,11 @@ def _rotation_vector(chi: list[float], previous: list[float]) -> list[float]:
         k = round(p / TWO_PI)
         return [c * (k * TWO_PI / p) for c in previous] if k and p > 0 else chi
     n = [c / theta for c in chi]
-    along = sum(a * b for a, b in zip(n, previous))
-    best = min((round((along - theta) / TWO_PI) + d for d in (-1, 0, 1)),
-               key=lambda k: sum((x * (theta + TWO_PI * k) - p) ** 2 for x, p in zip(n, previous)))
+    along = sum(a * b for a, b in zip(n, previous, strict=False))
+    best = min(
+        (round((along - theta) / TWO_PI) + d for d in (-1, 0, 1)),
+        key=lambda k: sum((x * (theta + TWO_PI * k) - p) ** 2 for x, p in zip(n, previous, strict=False)),
+    )
     return [x * (theta + TWO_PI * best) for x in n]
 
 
@@ -77,7 +83,7 @@ def _angle_axis(chi: list[float], previous: list[float]) -> list[float]:
         axis = [sign * x for x in n]
         angle = _unwrap(sign * theta, previous[0])
         candidates.append([angle, *axis])
-    return min(candidates, key=lambda c: sum((a - b) ** 2 for a, b in zip(c, previous)))
+    return min(candidates, key=lambda c: sum((a - b) ** 2 for a, b in zip(c, previous, strict=False)))
 
 
 def _identity(chi: list[float], previous: list[float]) -> list[float]:

@@ -9,9 +9,9 @@ them into preallocated arrays.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-import math
 
 from ..errors import OptionError
 
@@ -46,9 +46,13 @@ class FrameTask:
         object.__setattr__(self, "weight", float(self.weight))
 
 
-def as_frame_tasks(frames: str | FrameTask | Sequence[str | FrameTask], position: str | None,
-                   rotation: str | None, rows: Sequence[str | int] | None,
-                   relative_to: str | None) -> tuple[FrameTask, ...]:
+def as_frame_tasks(
+    frames: str | FrameTask | Sequence[str | FrameTask],
+    position: str | None,
+    rotation: str | None,
+    rows: Sequence[str | int] | None,
+    relative_to: str | None,
+) -> tuple[FrameTask, ...]:
     """FrameTask entries for each item of ``frames`` (names take the other arguments)."""
     items = (frames,) if isinstance(frames, (str, FrameTask)) else tuple(frames)
     out = []
@@ -56,8 +60,15 @@ def as_frame_tasks(frames: str | FrameTask | Sequence[str | FrameTask], position
         if isinstance(item, FrameTask):
             out.append(item)
         elif isinstance(item, str):
-            out.append(FrameTask(item, position, rotation, None if rows is None else tuple(rows)
-                                 if not isinstance(rows, str) else (rows,), relative_to))
+            out.append(
+                FrameTask(
+                    item,
+                    position,
+                    rotation,
+                    None if rows is None else tuple(rows) if not isinstance(rows, str) else (rows,),
+                    relative_to,
+                )
+            )
         else:
             raise OptionError(f"a task's frames are frame names or kinengine.FrameTask entries, got {item!r}")
     return tuple(out)

@@ -26,8 +26,10 @@ FRAMES = ("local", "local_world_aligned", "world")
 def _as_pose(T: object, name: str) -> np.ndarray:
     array = np.asarray(T, dtype=float)
     if array.shape[-2:] != (4, 4) or array.ndim not in (2, 3) or not np.isfinite(array).all():
-        raise OptionError(f"`{name}` must be a finite homogeneous transform (4, 4) or a batch (N, 4, 4), "
-                          f"got shape {array.shape}")
+        raise OptionError(
+            f"`{name}` must be a finite homogeneous transform (4, 4) or a batch (N, 4, 4), "
+            f"got shape {array.shape}"
+        )
     return array
 
 
@@ -43,7 +45,7 @@ def pose_error(T: object, T_target: object, frame: str = "local_world_aligned") 
     if A.ndim == 2 and B.ndim == 2:
         return _single(A, B, frame)
     A, B = np.broadcast_arrays(A if A.ndim == 3 else A[None], B if B.ndim == 3 else B[None])
-    return np.array([_single(a, b, frame) for a, b in zip(A, B)]).reshape(-1, 6)
+    return np.array([_single(a, b, frame) for a, b in zip(A, B, strict=False)]).reshape(-1, 6)
 
 
 def _single(T: np.ndarray, T_target: np.ndarray, frame: str) -> np.ndarray:

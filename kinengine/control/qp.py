@@ -26,9 +26,9 @@ quadratically. Rows select a sub-task: ("x", "y", "z", "rx", "ry") leaves the ro
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-import math
 
 import numpy as np
 import pinocchio as pin
@@ -40,7 +40,7 @@ from ..kinematics.relative import relative_terms
 ROWS = ("x", "y", "z", "rx", "ry", "rz")
 SOLVERS = ("daqp", "proxqp")
 _LWA = pin.LOCAL_WORLD_ALIGNED
-_BIG = 1e20   # stands for an infinite bound
+_BIG = 1e20  # stands for an infinite bound
 
 
 @dataclass(eq=False)
@@ -88,8 +88,10 @@ class _PoseTerm:
         self.rows = np.array([ROWS.index(r) for r in rows], dtype=np.intp)
         self.all_rows = rows == ROWS
         if not (0.0 < target.gain <= 1.0) or not (target.weight >= 0.0 and math.isfinite(target.weight)):
-            raise OptionError(f"PoseTarget gain must be in (0, 1] and weight finite >= 0, got gain {target.gain!r}, "
-                              f"weight {target.weight!r}")
+            raise OptionError(
+                f"PoseTarget gain must be in (0, 1] and weight finite >= 0, got gain {target.gain!r}, "
+                f"weight {target.weight!r}"
+            )
         self.A6 = np.zeros((6, robot.dof))
         self.e6 = np.zeros(6)
 
@@ -103,14 +105,27 @@ class DifferentialIK:
     locks a joint). position_limits: False ignores the joint limits. solver: "daqp" (default) or "proxqp".
     """
 
-    def __init__(self, robot, tasks: Sequence[PoseTarget | PostureTarget], *, damping: float = 1e-12,
-                 lm_damping: float = 1e-3, velocity_limits: object = None, position_limits: bool = True,
-                 solver: str = "daqp") -> None:
+    def __init__(
+        self,
+        robot,
+        tasks: Sequence[PoseTarget | PostureTarget],
+        *,
+        damping: float = 1e-12,
+        lm_damping: float = 1e-3,
+        velocity_limits: object = None,
+        position_limits: bool = True,
+        solver: str = "daqp",
+    ) -> None:
         if solver not in SOLVERS:
             raise OptionError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
         if not (damping >= 0 and lm_damping >= 0):
             raise OptionError(f"damping and lm_damping must be >= 0, got {damping!r}, {lm_damping!r}")
-        self.robot, self.solver, self.damping, self.lm_damping = robot, solver, float(damping), float(lm_damping)
+        self.robot, self.solver, self.damping, self.lm_damping = (
+            robot,
+            solver,
+            float(damping),
+            float(lm_damping),
+        )
         kin = robot.engine
         self._model, self._coords = kin.model, kin.coordinates
         self._data = self._model.createData()
@@ -120,12 +135,17 @@ class DifferentialIK:
             if isinstance(task, PoseTarget):
                 self._pose_terms.append(_PoseTerm(robot, task))
             elif isinstance(task, PostureTarget):
-                mask = np.ones(n) if task.joints is None else np.array(
-                    [1.0 if name in set(task.joints) else 0.0 for name in robot.joint_names])
+                mask = (
+                    np.ones(n)
+                    if task.joints is None
+                    else np.array([1.0 if name in set(task.joints) else 0.0 for name in robot.joint_names])
+                )
                 unknown = set(task.joints or ()) - set(robot.joint_names)
                 if unknown:
-                    raise OptionError(f"PostureTarget joints {sorted(unknown)} are not coordinates of the robot; "
-                                      f"known: {', '.join(robot.joint_names)}")
+                    raise OptionError(
+                        f"PostureTarget joints {sorted(unknown)} are not coordinates of the robot; "
+                        f"known: {', '.join(robot.joint_names)}"
+                    )
                 task._mask = mask
                 self._postures.append(task)
             else:
@@ -137,7 +157,7 @@ class DifferentialIK:
         self._upper = robot.upper_limits if position_limits else np.full(n, np.inf)
         self._H, self._c = np.zeros((n, n)), np.zeros(n)
         self._lb, self._ub = np.zeros(n), np.zeros(n)
-        self._diag = self._H.reshape(-1)[::n + 1]   # a view of H's diagonal
+        self._diag = self._H.reshape(-1)[:: n + 1]  # a view of H's diagonal
         self._AtA = np.zeros((n, n))
         self.last_error = np.full(6 * len(self._pose_terms), np.nan)
         self.qp_calls = 0
@@ -146,14 +166,17 @@ class DifferentialIK:
     @staticmethod
     def _velocity_limits(robot, limits: object) -> np.ndarray:
         urdf = {j.name: j.velocity for j in robot.description.joints}
-        out = np.array([urdf.get(name) if urdf.get(name) else np.inf for name in robot.joint_names], dtype=float)
+        out = np.array(
+            [urdf.get(name) if urdf.get(name) else np.inf for name in robot.joint_names], dtype=float
+        )
         if limits is None:
             return out
         if isinstance(limits, Mapping):
             for name, value in limits.items():
                 if name not in robot.joint_names:
-                    raise OptionError(f"velocity_limits names unknown joint {name!r}; known: "
-                                      f"{', '.join(robot.joint_names)}")
+                    raise OptionError(
+                        f"velocity_limits names unknown joint {name!r}; known: {', '.join(robot.joint_names)}"
+                    )
                 out[robot.joint_names.index(name)] = float(value)
         else:
             out = np.array(limits, dtype=float).reshape(-1)
@@ -186,7 +209,7 @@ class DifferentialIK:
         weighted_sq = 0.0
         for k, term in enumerate(self._pose_terms):
             A, e = self._pose_rows(term, model, data)
-            self.last_error[6 * k:6 * k + 6] = e
+            self.last_error[6 * k : 6 * k + 6] = e
             target = term.target
             if term.all_rows:
                 e *= target.gain
@@ -212,7 +235,7 @@ class DifferentialIK:
         lb, ub = self._lb, self._ub
         np.maximum(self._lower - q, -vmax, out=lb)
         np.minimum(self._upper - q, vmax, out=ub)
-        np.maximum(ub, np.minimum(lb, 0.0), out=ub)   # q outside its limits: move back as fast as allowed
+        np.maximum(ub, np.minimum(lb, 0.0), out=ub)  # q outside its limits: move back as fast as allowed
         np.minimum(lb, ub, out=lb)
         # H is positive definite: when the unconstrained minimizer −H⁻¹c lies within the bounds it is the
         # QP's solution (no bound active), found by one linear solve; otherwise the QP solver decides.
@@ -222,11 +245,12 @@ class DifferentialIK:
             step = None
         if step is None or not ((step >= lb).all() and (step <= ub).all()):
             self.qp_calls += 1
-            step = qpsolvers.solve_qp(H, c, lb=np.clip(lb, -_BIG, _BIG), ub=np.clip(ub, -_BIG, _BIG),
-                                      solver=self.solver)
+            step = qpsolvers.solve_qp(
+                H, c, lb=np.clip(lb, -_BIG, _BIG), ub=np.clip(ub, -_BIG, _BIG), solver=self.solver
+            )
             if step is None:  # cannot happen for a box QP with H > 0; a safe answer anyway
                 step = np.zeros(self.dof)
-            np.clip(step, lb, ub, out=step)   # the solver's tolerance (~1e-14) off a bound: onto it
+            np.clip(step, lb, ub, out=step)  # the solver's tolerance (~1e-14) off a bound: onto it
         return step / dt
 
     def _pose_rows(self, term: _PoseTerm, model, data) -> tuple[np.ndarray, np.ndarray]:
@@ -253,4 +277,4 @@ class DifferentialIK:
         return A, e
 
 
-__all__ = ["DifferentialIK", "PoseTarget", "PostureTarget", "ROWS", "SOLVERS"]
+__all__ = ["ROWS", "SOLVERS", "DifferentialIK", "PoseTarget", "PostureTarget"]

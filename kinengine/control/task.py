@@ -63,11 +63,20 @@ class Task:
     after the update). ``relative_to`` (for frames given by name): χ of T_BA and the relative Jacobian in B.
     """
 
-    def __init__(self, robot, frames: str | FrameTask | Sequence[str | FrameTask],
-                 position: str | None = "cartesian", rotation: str | None = "euler_zyx", *,
-                 rows: Sequence[str | int] | None = None, check_inputs: bool = True, continuous: bool = True,
-                 singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD, relative_to: str | None = None,
-                 on_singularity: str = "raise") -> None:
+    def __init__(
+        self,
+        robot,
+        frames: str | FrameTask | Sequence[str | FrameTask],
+        position: str | None = "cartesian",
+        rotation: str | None = "euler_zyx",
+        *,
+        rows: Sequence[str | int] | None = None,
+        check_inputs: bool = True,
+        continuous: bool = True,
+        singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
+        relative_to: str | None = None,
+        on_singularity: str = "raise",
+    ) -> None:
         specs = as_frame_tasks(frames, position, rotation, rows, relative_to)
         if not specs:
             raise OptionError("a task needs at least one frame: pass a frame name or a list of them")
@@ -75,11 +84,17 @@ class Task:
         self.on_singularity = on_singularity
         pmaps = [pose_map(f.position, f.rotation, as_rows(f.rows)) for f in specs]
         self.frame_tasks, self.frames = specs, tuple(f.frame for f in specs)
-        uniform = all(not isinstance(f, FrameTask) for f in ((frames,) if isinstance(frames, (str, FrameTask))
-                                                             else frames))
+        uniform = all(
+            not isinstance(f, FrameTask)
+            for f in ((frames,) if isinstance(frames, (str, FrameTask)) else frames)
+        )
         self.labels = pmaps[0].labels if uniform else tuple(lab for pm in pmaps for lab in pm.labels)
-        self.row_labels = tuple(f"{f.frame}:{lab}" for f, pm in zip(specs, pmaps) for lab in pm.labels)
-        self.singularity_labels = tuple(f"{f.frame}:{part.name}" for f, pm in zip(specs, pmaps) for part in pm.parts)
+        self.row_labels = tuple(
+            f"{f.frame}:{lab}" for f, pm in zip(specs, pmaps, strict=False) for lab in pm.labels
+        )
+        self.singularity_labels = tuple(
+            f"{f.frame}:{part.name}" for f, pm in zip(specs, pmaps, strict=False) for part in pm.parts
+        )
         self.check_inputs, self.continuous = check_inputs, continuous
         self.singularity_threshold = singularity_threshold
         kin = robot.engine
@@ -98,7 +113,9 @@ class Task:
         self._twist = np.zeros((k, 6))
         self._chi, self._chi_dot = np.zeros(M), np.zeros(M)
         self._JA, self._JAdot = np.zeros((M, n)), np.zeros((M, n))
-        self._weights = np.concatenate([np.full(pm.size, f.weight) for f, pm in zip(specs, pmaps)])
+        self._weights = np.concatenate(
+            [np.full(pm.size, f.weight) for f, pm in zip(specs, pmaps, strict=False)]
+        )
         self._distances = np.full(len(self.singularity_labels), np.inf)
         kinematics: dict[int, FrameKinematics] = {}
 
@@ -109,14 +126,20 @@ class Task:
             return kinematics[fid]
 
         self._blocks, row, part = [], 0, 0
-        for i, (spec, pm) in enumerate(zip(specs, pmaps)):
+        for i, (spec, pm) in enumerate(zip(specs, pmaps, strict=False)):
             a = frame_kinematics(spec.frame)
             b = None if spec.relative_to is None else frame_kinematics(spec.relative_to)
             rows_i = slice(row, row + pm.size)
-            out = {"pose": self._pose[i], "J": self._J[i], "Jdot": self._Jdot[i], "twist": self._twist[i],
-                   "JA": self._JA[rows_i], "JAdot": self._JAdot[rows_i], "chi_dot": self._chi_dot[rows_i]}
-            block = FrameBlock(spec, pm, a, b, n, out, row)
-            block.distance_offset = part
+            out = {
+                "pose": self._pose[i],
+                "J": self._J[i],
+                "Jdot": self._Jdot[i],
+                "twist": self._twist[i],
+                "JA": self._JA[rows_i],
+                "JAdot": self._JAdot[rows_i],
+                "chi_dot": self._chi_dot[rows_i],
+            }
+            block = FrameBlock(spec, pm, a, b, n, out, row, part)
             self._blocks.append(block)
             row, part = row + pm.size, part + len(pm.parts)
         self._kinematics = tuple(kinematics.values())
@@ -165,8 +188,9 @@ class Task:
                 vp = self._vp
                 np.dot(coords.matrix, qdot, out=vp)
         # returns nothing: no allocation
-        pin.computeForwardKinematicsDerivatives(self._model, self._data, qp, self._zero if vp is None else vp,
-                                                self._zero)
+        pin.computeForwardKinematicsDerivatives(
+            self._model, self._data, qp, self._zero if vp is None else vp, self._zero
+        )
         if qdot is None:
             if self._rates_valid:
                 self._invalidate_rates()
@@ -176,8 +200,12 @@ class Task:
         for frame in self._kinematics:
             frame.update(Jw, dJw, qdot)
         error = None
-        threshold, continuous, chi, distances = self.singularity_threshold, self.continuous, self._chi, \
-            self._distances
+        threshold, continuous, chi, distances = (
+            self.singularity_threshold,
+            self.continuous,
+            self._chi,
+            self._distances,
+        )
         for block in self._blocks:
             found = block.update(qdot, threshold, continuous, chi, distances, block.distance_offset)
             if found is not None and error is None:

@@ -21,24 +21,28 @@ import struct
 import numpy as np
 import pinocchio as pin
 
+from ..analytic.pose_map import PoseMap
 from ..analytic.singular import singularity_error
+from ..errors import RepresentationSingularityError
+from ..model.coordinates import CoordinateMap
 from .continuity import continuity_rule
+from .frame_task import FrameTask
 
 
 class FrameKinematics:
     """J_e0, J̇_e0, twist of one frame F (rows [v; ω] in I) from the Task's Pinocchio Data."""
 
-    def __init__(self, model: pin.Model, data: pin.Data, fid: int, dof: int, coords) -> None:
+    def __init__(self, model: pin.Model, data: pin.Data, fid: int, dof: int, coords: CoordinateMap) -> None:
         self.model, self.data, self.fid, self.coords = model, data, fid, coords
         placement = data.oMf[fid]  # a reference into data: these views follow every update
         self.R, self.p = placement.rotation, placement.translation
         mask = np.zeros(model.nv)  # Pinocchio's columns of the joints that move this frame
         for j in model.supports[model.frames[fid].parentJoint][1:]:
             joint = model.joints[j]
-            mask[joint.idx_v:joint.idx_v + joint.nv] = 1.0
+            mask[joint.idx_v : joint.idx_v + joint.nv] = 1.0
         self.mask = None if mask.all() else mask
         self.X = np.eye(6)
-        self.Xdot_lin = np.zeros((3, 3))   # −[ṗ]x
+        self.Xdot_lin = np.zeros((3, 3))  # −[ṗ]x
         self.masked, self.masked_dot = np.empty((6, model.nv)), np.empty((6, model.nv))
         self.folded, self.folded_dot = np.empty((6, dof)), np.empty((6, dof))
         self.tmp = np.empty((3, dof))
@@ -85,12 +89,23 @@ def _skew(S: np.ndarray, x: float, y: float, z: float) -> None:
 class FrameBlock:
     """One FrameTask's rows of a Task: see the module doc. ``out`` holds the views it writes into."""
 
-    def __init__(self, spec, pmap, a: FrameKinematics, b: FrameKinematics | None, dof: int, out: dict,
-                 chi_offset: int) -> None:
+    def __init__(
+        self,
+        spec: FrameTask,
+        pmap: PoseMap,
+        a: FrameKinematics,
+        b: FrameKinematics | None,
+        dof: int,
+        out: dict[str, np.ndarray],
+        chi_offset: int,
+        distance_offset: int,
+    ) -> None:
         self.spec, self.pmap, self.a, self.b = spec, pmap, a, b
-        for name, view in out.items():
-            setattr(self, name, view)  # pose (4, 4), J, Jdot (6, dof), twist (6,), JA, JAdot (ms, dof), chi_dot
-        self.chi_offset = chi_offset
+        # views into the Task's stacked arrays: pose (4, 4), J, Jdot (6, dof), twist (6,),
+        # JA, JAdot (ms, dof), chi_dot (ms,)
+        self.pose, self.J, self.Jdot, self.twist = out["pose"], out["J"], out["Jdot"], out["twist"]
+        self.JA, self.JAdot, self.chi_dot = out["JA"], out["JAdot"], out["chi_dot"]
+        self.chi_offset, self.distance_offset = chi_offset, distance_offset
         layout = pmap.layout
         self.template, self.pack_into, self.offset = layout.template, layout.pack_into, layout.offset
         self.E = np.frombuffer(bytearray(layout.template)).reshape(layout.shape)
@@ -103,8 +118,15 @@ class FrameBlock:
         self.parts = []
         start = 0
         for param in pmap.parts:
-            self.parts.append((param, param.kind == "position", param.name == "cartesian",
-                               continuity_rule(param.name), slice(start, start + param.size)))
+            self.parts.append(
+                (
+                    param,
+                    param.kind == "position",
+                    param.name == "cartesian",
+                    continuity_rule(param.name),
+                    slice(start, start + param.size),
+                )
+            )
             start += param.size
         self.previous: list[float] | None = None
         if b is not None:  # relative: buffers for J_rel and its rate
@@ -117,6 +139,7 @@ class FrameBlock:
     # -- pose and Jacobian ------------------------------------------------------------------------
     def _relative(self, qdot: np.ndarray | None) -> tuple[list, list]:
         a, b = self.a, self.b
+        assert b is not None
         (ax, ay, az), (bx, by, bz) = a.pos, b.pos
         dx, dy, dz = ax - bx, ay - by, az - bz
         CBt, S, inner, t3 = self.CBt, self.S, self.inner, self.t3
@@ -138,13 +161,13 @@ class FrameBlock:
             dinner = self.dinner
             np.subtract(a.Jdot, b.Jdot, out=dinner)
             va, vb = a.twist[:3].tolist(), b.twist[:3].tolist()
-            _skew(S, va[0] - vb[0], va[1] - vb[1], va[2] - vb[2])   # [ḋ]x J_B,ω
+            _skew(S, va[0] - vb[0], va[1] - vb[1], va[2] - vb[2])  # [ḋ]x J_B,ω
             np.dot(S, JB[3:], out=t3)
             np.add(dinner[:3], t3, out=dinner[:3])
-            _skew(S, dx, dy, dz)                                     # [d]x J̇_B,ω
+            _skew(S, dx, dy, dz)  # [d]x J̇_B,ω
             np.dot(S, b.Jdot[3:], out=t3)
             np.add(dinner[:3], t3, out=dinner[:3])
-            wx, wy, wz = b.twist[3:].tolist()                         # − [ω_B]x inner
+            wx, wy, wz = b.twist[3:].tolist()  # − [ω_B]x inner
             _skew(S, wx, wy, wz)
             for half in (slice(0, 3), slice(3, 6)):
                 np.dot(S, inner[half], out=t3)
@@ -152,8 +175,15 @@ class FrameBlock:
                 np.dot(CBt, dinner[half], out=self.Jdot[half])
         return C, p
 
-    def update(self, qdot: np.ndarray | None, threshold: float, continuous: bool, chi_out: np.ndarray,
-               distances: np.ndarray, distance_offset: int):
+    def update(
+        self,
+        qdot: np.ndarray | None,
+        threshold: float,
+        continuous: bool,
+        chi_out: np.ndarray,
+        distances: np.ndarray,
+        distance_offset: int,
+    ) -> RepresentationSingularityError | None:
         """Fill this block's views; returns the RepresentationSingularityError to raise (or None)."""
         if self.b is None:
             a = self.a
@@ -195,8 +225,11 @@ class FrameBlock:
             np.take(E, self.rows, axis=0, out=self.Esel)
             E = self.Esel
         np.dot(E, self.J, out=self.JA)
-        self.write_chi(chi_out, 8 * self.chi_offset,
-                       *(values if self.rows is None else [values[i] for i in self.pmap.rows]))
+        self.write_chi(
+            chi_out,
+            8 * self.chi_offset,
+            *(values if self.rows is None else [values[i] for i in self.pmap.rows]),
+        )
         if continuous:
             self.previous = values
         if qdot is not None:
@@ -209,7 +242,7 @@ class FrameBlock:
         """J̇_A = Ė·J + E·J̇ and χ̇ = J_A·q̇ (NaN rows where E is NaN)."""
         vx, vy, vz, wx, wy, wz = self.twist.tolist()
         entries: tuple[float, ...] = ()
-        for param, position, constant, rule, rows in self.parts:
+        for param, position, constant, _rule, rows in self.parts:
             if constant:
                 continue
             chi = values[rows]
