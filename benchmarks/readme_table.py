@@ -9,7 +9,7 @@ import argparse
 import json
 from pathlib import Path
 
-from kinengine.bench import _peer_cell, _us, case_label
+from kinengine.cli.bench.command import _peer_cell, _us, case_label
 
 HERE = Path(__file__).resolve().parent
 

@@ -43,11 +43,14 @@ def test_quick_run_has_every_row(quick_run):
     cases = [(r["group"], r["case"], r["n"]) for r in report["rows"]]
     latency = {c for g, c, _ in cases if g == "latency"}
     assert {"frame_pose", "jacobian[local_world_aligned]", "jacobian[local]", "jacobian[world]",
-            "task.update(q)", "task.update(q)[euler_zyz]", "task.update(q, qdot)",
-            "inverse_kinematics"} <= latency
+            "task.update(q)", "task.update(q)[euler_zyz]", "task.update(q, qdot)", "kinematics",
+            "frame().pose", "frame().jacobian", "frame().kinematics", "frame(), check_inputs=False.pose",
+            "frame(), check_inputs=False.jacobian", "frame(), check_inputs=False.kinematics",
+            "inverse_kinematics", "inverse_kinematics[random targets]"} <= latency
+    assert ("throughput", "inverse_kinematics[random targets]", bench_run.QUICK.ik[1]) in cases
     assert {f"analytic_jacobian[{name}]" for name in ROTATION_PARAMETERIZATIONS} <= latency
     for n in bench_run.QUICK.sizes:
-        for name in ("frame_pose", "jacobian[local_world_aligned]", "pose+jacobian",
+        for name in ("frame_pose", "jacobian[local_world_aligned]", "kinematics", "kinematics[out=]",
                      "analytic_jacobian[euler_zyx]", "analytic_jacobian[quaternion]"):
             assert ("throughput", name, n) in cases
     assert len(cases) == len(set(cases))
@@ -62,9 +65,10 @@ def test_timings_are_consistent(quick_run):
                 continue
             assert 0 < side["min_us"] <= side["median_us"]
             assert side["per_second"] == pytest.approx(row["n"] / side["min_us"] * 1e6, rel=1e-12)
-        if row["kinengine"]["status"] == "ok":
+        if row["kinengine"]["status"] == "ok" and row["pinocchio"]["status"] != "none":
             expected = row["kinengine"]["min_us"] / row["pinocchio"]["min_us"]
             assert row["ratio"] == pytest.approx(expected, rel=1e-12)
+            assert row["floor"]  # the floor's code is named
         else:
             assert "ratio" not in row and row["note"]
 
@@ -73,7 +77,7 @@ def test_kinengine_agrees_with_its_pinocchio_floor(quick_run):
     _, report, _ = quick_run
     compared = [r for r in report["rows"] if "difference" in r["pinocchio"]]
     # poses, Jacobians, the batches and the analytic Jacobians Pinocchio can convert (zyx, quaternion, log3)
-    assert len(compared) >= 4 + 3 + 5 * len(bench_run.QUICK.sizes)
+    assert len(compared) >= 4 + 3 + 7 + 6 * len(bench_run.QUICK.sizes)
     for row in compared:
         assert row["pinocchio"]["status"] == "ok", row
         assert row["pinocchio"]["difference"] <= 1e-9
@@ -112,7 +116,7 @@ def _peer_rows(report, name):
 def test_roboticstoolbox_agrees_before_it_is_timed(quick_run):
     _, report, _ = quick_run
     rows = _peer_rows(report, "roboticstoolbox")
-    timed = [key for key, result in rows.items() if result["status"] == "ok"]
+    timed = [key for key, result in rows.items() if result["status"] == "ok" and not key[0].startswith("inverse")]
     # poses and Jacobians (single and batched), and jacob0_analytical for its four representations
     assert {("frame_pose", 1), ("jacobian[local_world_aligned]", 1), ("frame_pose", 1000),
             ("analytic_jacobian[euler_zyz]", 1), ("analytic_jacobian[euler_zyx]", 1),
@@ -133,6 +137,27 @@ def test_pytorch_kinematics_float32_origins_are_reported_not_timed(quick_run):
         assert result["status"] == "disagrees" and "min_us" not in result, key
         assert 1e-9 < result["difference"] < 1e-6, key  # a rounding difference, not a convention mismatch
     assert report["versions"]["torch"].endswith("+cpu")  # the CPU build, never a CUDA download
+
+
+@pytest.mark.parametrize("name", ["mujoco", "drake"])
+def test_mujoco_and_drake_agree_before_they_are_timed(quick_run, name):
+    _, report, _ = quick_run
+    rows = _peer_rows(report, name)
+    for key in (("frame_pose", 1), ("jacobian[local_world_aligned]", 1), ("frame_pose", 100),
+                ("jacobian[local_world_aligned]", 1000)):
+        assert rows[key]["status"] == "ok" and rows[key]["difference"] <= 1e-9 and rows[key]["min_us"] > 0, key
+    assert report["versions"][name]
+
+
+def test_ik_rows_count_reached_targets(quick_run):
+    _, report, _ = quick_run
+    ik_rows = [r for r in report["rows"] if r["case"] == "inverse_kinematics[random targets]"]
+    assert len(ik_rows) == 2
+    for row in ik_rows:
+        assert 0.9 <= row["success"] <= 1.0 and row["pinocchio"]["status"] == "none"
+        rtb = row["peers"]["roboticstoolbox"]
+        if report["robots"][0]["peers"]["roboticstoolbox"]["loaded"]:
+            assert rtb["status"] == "ok" and 0.0 <= rtb["success"] <= 1.0
 
 
 def test_ikpy_poses_agree(quick_run):

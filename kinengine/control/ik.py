@@ -34,7 +34,7 @@ import pinocchio as pin
 from ..errors import OptionError, ParameterizationError
 from ..parameterizations import get_position, get_rotation
 
-NEAREST_SEEDS = 6
+NEAREST_SEEDS = 10
 PROBE_ITERATIONS = 10
 GIVE_UP = 1e-2
 """[m] score |e_p| + 0.2 m/rad·|e_R| above which an attempt gives way after PROBE_ITERATIONS iterations."""
@@ -330,7 +330,7 @@ def first_seeds(robot, problem: Problem, p_d, C_d, q0) -> np.ndarray:
     key = (problem.frame, p_d is not None, C_d is not None)
     configs, tree = tables.get(key, lambda: _seed_table(robot, problem.frame, p_d is not None, C_d is not None))
     k = min(NEAREST_SEEDS, len(configs))
-    _, index = tree.query(_embed(p_d, C_d, n), k=k)
+    _, index = tree.query(_embed(p_d, C_d, n), k=k, workers=-1 if n > 256 else 1)
     seeds = np.empty((n, k + 1, robot.dof))
     seeds[:, :k] = configs[np.asarray(index).reshape(n, k)]
     seeds[:, k] = first  # the middle of the ranges (or the nullspace target): rarely the nearest
@@ -347,21 +347,22 @@ class LimitWeights:
         self.bounded = np.isfinite(lower) & np.isfinite(upper)
         self.any = bool(self.bounded.any())
         self.lower, self.upper = np.where(self.bounded, lower, -1.0), np.where(self.bounded, upper, 1.0)
-        self.span_sq = np.where(self.bounded, self.upper - self.lower, 0.0) ** 2
+        self.middle_twice = self.lower + self.upper
+        self.quarter_span_sq = np.where(self.bounded, self.upper - self.lower, 0.0) ** 2 / 4  # 0: unbounded
 
     def inverse_weights(self, q: np.ndarray, previous: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """(1 / w, |∂φ/∂q|) at q, given |∂φ/∂q| of the last iteration (None: the first)."""
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            grad = np.abs(self.span_sq * (2 * q - self.upper - self.lower)
-                          / (4 * (self.upper - q) ** 2 * (q - self.lower) ** 2))
-        grad = np.where(self.bounded, np.nan_to_num(grad, nan=0.0, posinf=1e300), 0.0)  # inf on a limit
+        """(1 / w, |∂φ/∂q|) at q, given |∂φ/∂q| of the last iteration (None: the first). Distances to the
+        limits are floored at 1e-12 (a joint on its limit gets a huge finite gradient, weight ~0)."""
+        distances = np.maximum(self.upper - q, 1e-12) * np.maximum(q - self.lower, 1e-12)
+        grad = self.quarter_span_sq * np.abs(2 * q - self.middle_twice) / (distances * distances)
+        inverse = 1.0 / (1.0 + grad)
         if previous is None:
-            return 1.0 / (1.0 + grad), grad
-        return np.where(grad > previous, 1.0 / (1.0 + grad), 1.0), grad
+            return inverse, grad
+        return np.where(grad > previous, inverse, 1.0), grad
 
 
 # -- the single-target solver ----------------------------------------------------------------------
-def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator) -> IKResult:
+def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, wrap: bool = True) -> IKResult:
     """Attempts from each seed, then ``restarts`` random ones; the first converged (or the best) wins."""
     kin = robot.engine
     joints = kin.coordinates
@@ -435,7 +436,8 @@ def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator) -
         if done:
             break
     q, ep, er, _, attempt = best
-    q[joints.continuous] = np.remainder(q[joints.continuous] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)
+    if wrap:
+        q[joints.continuous] = np.remainder(q[joints.continuous] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)
     return IKResult(q, bool(ep <= tol_p and er <= tol_r), total, ep, er, attempt)
 
 

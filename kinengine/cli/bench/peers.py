@@ -12,6 +12,15 @@
   its poses differ from kinengine's by 6e-9 m, so at the default ``--peer-atol`` it is reported, not timed.)
 * ``ikpy``: ``Chain.from_urdf_file`` along the path to the frame; ``forward_kinematics`` only
   (no Jacobian), one configuration per call.
+* ``mujoco``: kinengine's canonical URDF (no meshes) with a ``<mujoco><compiler fusestatic="false" .../>``
+  tag, a site added at the frame (``MjSpec``); per call ``mj_kinematics`` + ``mj_comPos``, then the
+  site pose (``site_xpos``/``site_xmat``) or ``mj_jacSite`` (origin velocity and ω in the world: rows
+  [jacp; jacr] = "local_world_aligned"). One configuration per call (batches loop in Python).
+* ``drake`` (pydrake): ``MultibodyPlant`` from the canonical URDF, root welded to the world;
+  ``SetPositions`` then ``CalcRelativeTransform`` or ``CalcJacobianSpatialVelocity`` (rows [ω; v],
+  reordered to [v; ω]).
+* IK rows: roboticstoolbox's C++ ``ets.ik_LM`` per target (tol 1e-12 on ½eᵀe, joint limits on), with the
+  targets counted as reached by the same rule as kinengine's (1e-6 m, 1e-6 rad, within limits).
 
 Each adapter maps kinengine's q (``joint_names`` order) to the peer's joint order once, outside the
 timed call, and converts the peer's answer back for the agreement check. Peers read the robot's own
@@ -29,9 +38,9 @@ import warnings
 
 import numpy as np
 
-PEERS = ("roboticstoolbox", "pytorch_kinematics", "ikpy")
+PEERS = ("roboticstoolbox", "pytorch_kinematics", "ikpy", "mujoco", "drake")
 _DISTRIBUTIONS = {"roboticstoolbox": "roboticstoolbox-python", "pytorch_kinematics": "pytorch-kinematics",
-                  "ikpy": "ikpy"}
+                  "ikpy": "ikpy", "mujoco": "mujoco", "drake": "drake"}
 RUNTIMES = {"pytorch_kinematics": ("torch",), "roboticstoolbox": ("spatialmath-python",)}
 """Libraries a peer runs on, whose versions the JSON records too."""
 _LWA = "jacobian[local_world_aligned]"
@@ -95,9 +104,11 @@ class Peer:
 
     def prepare(self, case):
         """(timed call, result -> numpy in kinengine's convention), None if unsupported; may raise Skip."""
-        if not self.loaded or case.q is None:
+        if not self.loaded or (case.q is None and case.targets is None):
             return None
-        return getattr(self, f"_prepare_{self.name}")(case, case.q.ndim == 1)
+        if case.targets is not None and self.name != "roboticstoolbox":
+            return None
+        return getattr(self, f"_prepare_{self.name}")(case, case.q is not None and case.q.ndim == 1)
 
     @staticmethod
     def _loop(case) -> None:
@@ -114,8 +125,14 @@ class Peer:
         self._rtb_order = self._order([child_to_joint.get(by_index[et.jindex]) for et in self._ets.joints()])
 
     def _prepare_roboticstoolbox(self, case, single: bool):
-        x = self._native(case.q, self._rtb_order)
         ets = self._ets
+        if case.targets is not None:
+            targets = list(case.targets)
+
+            def solve():
+                return [ets.ik_LM(T, tol=1e-12, joint_limits=True)[0] for T in targets]
+            return solve, (lambda out: np.array(out) @ self._unmap())
+        x = self._native(case.q, self._rtb_order)
         if case.name == "frame_pose":
             if single:
                 return (lambda: ets.fkine(x[0])), (lambda out: out.A)
@@ -188,6 +205,121 @@ class Peer:
             return (lambda: chain.forward_kinematics(x[0], full_kinematics=True)[k]), np.asarray
         self._loop(case)
         return (lambda: [chain.forward_kinematics(xi, full_kinematics=True)[k] for xi in x]), np.asarray
+
+    # -- mujoco -------------------------------------------------------------------------------------
+    def _load_mujoco(self) -> None:
+        import mujoco
+        xml = self.robot.description.to_xml()
+        head = xml.index(">", xml.index("<robot")) + 1
+        compiler = ('<mujoco><compiler discardvisual="true" fusestatic="false" boundmass="1e-6" '
+                    'boundinertia="1e-9" autolimits="true"/></mujoco>')
+        spec = mujoco.MjSpec.from_string(xml[:head] + compiler + xml[head:])
+        spec.body(self.frame).add_site(name="kinengine_frame", pos=[0.0, 0.0, 0.0])
+        self._mj = mujoco
+        self._mj_model = spec.compile()
+        self._mj_data = mujoco.MjData(self._mj_model)
+        self._mj_site = mujoco.mj_name2id(self._mj_model, mujoco.mjtObj.mjOBJ_SITE, "kinengine_frame")
+        names = [mujoco.mj_id2name(self._mj_model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(self._mj_model.njnt)]
+        self._mj_order = self._pinocchio_order(names)
+
+    def _pinocchio_order(self, names: list[str]) -> np.ndarray:
+        """Index into Pinocchio's configuration q_pin (every movable joint, mimic ones too) per peer joint."""
+        pin_names = list(self.robot.engine.coordinates.pinocchio_names)
+        return np.array([pin_names.index(n) for n in names], dtype=np.intp)
+
+    def _pinocchio_q(self, case) -> np.ndarray:
+        Q = np.atleast_2d(case.q)
+        return np.array([self.robot.pinocchio_configuration(q) for q in Q])
+
+    def _fold(self, J_peer: np.ndarray, order: np.ndarray) -> np.ndarray:
+        """A Jacobian (..., 6, peer dofs) as kinengine's (..., 6, dof): Pinocchio's columns, then J_pin · M."""
+        J_pin = np.zeros(J_peer.shape[:-1] + (len(self.robot.engine.coordinates.pinocchio_names),))
+        J_pin[..., order] = J_peer
+        return self.robot.engine.coordinates.fold(J_pin)
+
+    def _prepare_mujoco(self, case, single: bool):
+        if case.name not in ("frame_pose", _LWA):
+            return None
+        mujoco, model, data, site = self._mj, self._mj_model, self._mj_data, self._mj_site
+        kinematics, com_pos, jac_site = mujoco.mj_kinematics, mujoco.mj_comPos, mujoco.mj_jacSite
+        X = self._pinocchio_q(case)[:, self._mj_order]
+        if not single:
+            self._loop(case)
+        qpos, xpos, xmat = data.qpos, data.site_xpos, data.site_xmat
+        if case.name == "frame_pose":
+            def pose(x):
+                qpos[:] = x
+                kinematics(model, data)
+                T = np.eye(4)
+                T[:3, :3] = xmat[site].reshape(3, 3)
+                T[:3, 3] = xpos[site]
+                return T
+            if single:
+                x = X[0]
+                return (lambda: pose(x)), np.asarray
+            return (lambda: [pose(x) for x in X]), np.asarray
+        nv = model.nv
+
+        def jacobian(x):
+            qpos[:] = x
+            kinematics(model, data)
+            com_pos(model, data)
+            J = np.empty((6, nv))
+            jac_site(model, data, J[:3], J[3:], site)
+            return J
+        convert = (lambda out: self._fold(np.asarray(out), self._mj_order))
+        if single:
+            x = X[0]
+            return (lambda: jacobian(x)), convert
+        return (lambda: [jacobian(x) for x in X]), convert
+
+    # -- drake ----------------------------------------------------------------------------------------
+    def _load_drake(self) -> None:
+        from pydrake.multibody.parsing import Parser
+        from pydrake.multibody.plant import MultibodyPlant
+        from pydrake.multibody.tree import JacobianWrtVariable
+        plant = MultibodyPlant(0.0)
+        Parser(plant).AddModelsFromString(self.robot.description.to_xml(), "urdf")
+        root = self.robot.description.root
+        if root != "world":  # Drake's URDF "world" link is the world body already
+            plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(root))
+        plant.Finalize()
+        self._drake = plant
+        self._drake_context = plant.CreateDefaultContext()
+        self._drake_frame = plant.GetFrameByName(self.frame)
+        self._drake_qdot = JacobianWrtVariable.kQDot
+        pin_names = self.robot.engine.coordinates.pinocchio_names
+        self._drake_index = np.array([plant.GetJointByName(n).position_start() for n in pin_names], dtype=np.intp)
+
+    def _prepare_drake(self, case, single: bool):
+        if case.name not in ("frame_pose", _LWA):
+            return None
+        plant, context, frame, world = self._drake, self._drake_context, self._drake_frame, self._drake.world_frame()
+        QP = self._pinocchio_q(case)
+        X = np.zeros((len(QP), plant.num_positions()))
+        X[:, self._drake_index] = QP
+        if not single:
+            self._loop(case)
+        set_positions, origin = plant.SetPositions, np.zeros(3)
+        if case.name == "frame_pose":
+            transform = plant.CalcRelativeTransform
+
+            def pose(x):
+                set_positions(context, x)
+                return transform(context, world, frame).GetAsMatrix4()
+            fn = (lambda: pose(X[0])) if single else (lambda: [pose(x) for x in X])
+            return fn, np.asarray
+        spatial, qdot = plant.CalcJacobianSpatialVelocity, self._drake_qdot
+
+        def jacobian(x):
+            set_positions(context, x)
+            return spatial(context, qdot, frame, origin, world, world)
+
+        def convert(out):
+            J = np.asarray(out)[..., [3, 4, 5, 0, 1, 2], :][..., self._drake_index]  # [v; ω], Pinocchio's columns
+            return self.robot.engine.coordinates.fold(J)
+        fn = (lambda: jacobian(X[0])) if single else (lambda: [jacobian(x) for x in X])
+        return fn, convert
 
     def _load(self) -> None:
         getattr(self, f"_load_{self.name}")()

@@ -25,7 +25,7 @@ import timeit
 import numpy as np
 from tqdm import tqdm
 
-from .cases import Case, latency_cases, throughput_cases
+from .cases import Case, ik_cases, latency_cases, throughput_cases
 from .peers import RUNTIMES, Skip, load_peers
 from ...loading import load
 from ...parameterizations import ROTATION_PARAMETERIZATIONS
@@ -38,21 +38,38 @@ class Settings:
     sizes: tuple[int, ...]
     repeat: int
     min_time: float           # [s] per repeat
+    ik: tuple[int, int] = (200, 10_000)   # random IK targets: solved one by one, and as one batch
 
 
-FULL = Settings((1, 100, 10_000, 100_000), repeat=7, min_time=0.05)
-QUICK = Settings((1, 100, 1_000), repeat=3, min_time=0.002)
+FULL = Settings((1, 100, 10_000, 100_000, 1_000_000), repeat=21, min_time=0.01)
+QUICK = Settings((1, 100, 1_000), repeat=3, min_time=0.002, ik=(10, 100))
+SLOW_CALL = 0.1
+"""[s] a call slower than this is repeated only 5 times."""
 
 
 def measure(fn: Callable[[], object], settings: Settings) -> dict[str, float]:
     """min and median seconds per call of ``fn`` over ``settings.repeat`` repeats, after a warm-up."""
-    timer = timeit.Timer(fn)
-    number, elapsed = 1, timer.timeit(1)  # the warm-up call
-    while elapsed < settings.min_time and number < 10**6:
-        number *= 10 if elapsed < settings.min_time / 10 else 2
-        elapsed = timer.timeit(number)
-    times = [t / number for t in timer.repeat(settings.repeat, number)]
-    return {"min_us": min(times) * 1e6, "median_us": statistics.median(times) * 1e6, "calls": number}
+    return measure_interleaved([fn], settings)[0]
+
+
+def measure_interleaved(fns: list[Callable[[], object]], settings: Settings) -> list[dict[str, float]]:
+    """For each fn: min and median [µs] per call. Each fn's calls per repeat grow until a repeat lasts
+    ``min_time``; then the repeats alternate between the fns (kinengine, its floor, kinengine, ...), so
+    that a noisy neighbour on a shared machine slows both sides alike, and the min is taken."""
+    timers, numbers, slow = [timeit.Timer(fn) for fn in fns], [], False
+    for timer in timers:
+        number, elapsed = 1, timer.timeit(1)  # the warm-up call
+        slow |= elapsed > SLOW_CALL
+        while elapsed < settings.min_time and number < 10**6:
+            number *= 10 if elapsed < settings.min_time / 10 else 2
+            elapsed = timer.timeit(number)
+        numbers.append(number)
+    times: list[list[float]] = [[] for _ in fns]
+    for _ in range(min(settings.repeat, 5) if slow else settings.repeat):
+        for k, timer in enumerate(timers):
+            times[k].append(timer.timeit(numbers[k]) / numbers[k])
+    return [{"min_us": min(t) * 1e6, "median_us": statistics.median(t) * 1e6, "calls": number}
+            for t, number in zip(times, numbers)]
 
 
 def max_relative_difference(a: object, b: object) -> float:
@@ -67,25 +84,38 @@ def max_relative_difference(a: object, b: object) -> float:
 
 def run_case(case: Case, settings: Settings, peers: list | None = None, peer_atol: float = 1e-9) -> dict:
     """Time one case (kinengine, its Pinocchio floor, then each peer) into one JSON row."""
-    row: dict = {"group": case.group, "case": case.name, "n": case.n, "note": case.note}
-    result = None
-    if case.kinengine is None:
-        row["kinengine"] = {"status": "skipped"}
-    else:
-        result = case.kinengine()
-        row["kinengine"] = {"status": "ok", **_rate(measure(case.kinengine, settings), case.n)}
-    floor = {"status": "ok"}
-    if case.compare and result is not None:
+    row: dict = {"group": case.group, "case": case.name, "n": case.n, "note": case.note, "floor": case.floor}
+    result = None if case.kinengine is None else case.kinengine()
+    floor = {"status": "ok" if case.pinocchio is not None else "none"}
+    if case.compare and result is not None and case.pinocchio is not None:
         difference = max_relative_difference(result, case.pinocchio())
         floor["difference"] = difference if math.isfinite(difference) else None
         if not difference <= 1e-9:
             floor["status"] = "disagrees"
-    row["pinocchio"] = {**floor, **_rate(measure(case.pinocchio, settings), case.n)}
-    if case.kinengine is not None:
+    timed = [fn for fn in (case.kinengine, case.pinocchio) if fn is not None]
+    timings = iter(measure_interleaved(timed, settings))
+    row["kinengine"] = {"status": "skipped"} if case.kinengine is None else \
+        {"status": "ok", **_rate(next(timings), case.n)}
+    row["pinocchio"] = {**floor, **(_rate(next(timings), case.n) if case.pinocchio is not None else {})}
+    if case.targets is not None and result is not None:
+        row["success"] = ik_success(case, result)
+    if case.kinengine is not None and case.pinocchio is not None:
         row["ratio"] = row["kinengine"]["min_us"] / row["pinocchio"]["min_us"]
     if peers:
         row["peers"] = {peer.name: _run_peer(peer, case, result, settings, peer_atol) for peer in peers}
     return row
+
+
+def ik_success(case: Case, Q: object, robot=None) -> float:
+    """Fraction of ``case.targets`` that the solutions Q (n, dof) reach within 1e-6 m and 1e-6 rad."""
+    robot = robot or case.robot
+    F = robot.frame_pose(np.asarray(Q, dtype=float), case.frame)
+    T = case.targets
+    dp = np.linalg.norm(F[:, :3, 3] - T[:, :3, 3], axis=1)
+    cos = (np.einsum("nij,nij->n", F[:, :3, :3], T[:, :3, :3]) - 1.0) / 2.0
+    angle = np.arccos(np.clip(cos, -1.0, 1.0))
+    inside = np.all((Q >= robot.lower_limits) & (Q <= robot.upper_limits), axis=1)
+    return float(np.mean((dp <= 1e-6) & (angle <= 1e-6 + 2e-8) & inside))
 
 
 def _rate(timing: dict[str, float], n: int) -> dict[str, float]:
@@ -101,6 +131,9 @@ def _run_peer(peer, case: Case, expected: object, settings: Settings, atol: floa
         if expected is None:
             return {"status": "skipped", "note": "no kinengine result to check the answer against"}
         fn, to_numpy = prepared
+        if case.targets is not None:  # IK: each library finds its own solutions; count the reached targets
+            success = ik_success(case, to_numpy(fn()))
+            return {"status": "ok", "success": success, **_rate(measure(fn, settings), case.n)}
         got, expected = np.asarray(to_numpy(fn()), dtype=float), np.asarray(expected, dtype=float)
     except Skip as skip:
         return {"status": "skipped", "note": str(skip)}
@@ -162,7 +195,8 @@ def run(robots: list[str], settings: Settings, peers: bool = False, peer_atol: f
     for name in robots:
         robot = load(name) if isinstance(name, str) else name  # a name, or a Robot loaded by the command
         frame = robot.end_effector
-        cases = latency_cases(robot, frame, rotations) + throughput_cases(robot, frame, list(settings.sizes))
+        cases = (latency_cases(robot, frame, rotations) + throughput_cases(robot, frame, list(settings.sizes))
+                 + ik_cases(robot, frame, *settings.ik))
         plans.append((robot, frame, load_peers(robot, frame) if peers else None, cases))
     loaded = [peer for *_, robot_peers, _ in plans for peer in robot_peers or () if peer.loaded]
     report = {"schema": 1, **environment(loaded), "robots": [], "rows": [],
