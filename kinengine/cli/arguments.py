@@ -1,5 +1,11 @@
 """argparse value types shared by the sub-commands: bad values stop before any work is done.
 
+Numbers are read strictly: ASCII only, Python's float literal grammar without underscores
+(``1.5``, ``-2e-3``, ``.5``), whole numbers as ASCII digits; ``"1 5"``, ``"1_0"``, ``"١"`` and empty
+entries are refused. Output paths are checked before the work (a folder, a missing or read-only
+folder, a read-only file, a dangling link, a device other than /dev/null). :class:`OneLineParser`
+prints argparse's own errors as one line (exit status 2), like every other kinengine error.
+
 Also the robot options every robot-taking command shares (:func:`add_robot_arguments`,
 :func:`load_robot`): ``--xacro-arg NAME=VALUE`` and ``--package NAME=PATH``, both repeatable.
 """
@@ -9,41 +15,131 @@ from __future__ import annotations
 import argparse
 import os
 from pathlib import Path
+import re
+import stat
+import sys
+from typing import NoReturn
 
 from ..loading import load
 from ..robot import Robot
 
 
+_FLOAT = re.compile(r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf|infinity|nan)",
+                    re.ASCII | re.IGNORECASE)
+_WHOLE = re.compile(r"[+-]?[0-9]+", re.ASCII)
+_SPACE = " \t"
+
+
+def strict_float(text: str) -> float:
+    """'1.5' -> 1.5: one float literal (ASCII, no underscores or inner spaces); argparse type."""
+    stripped = text.strip(_SPACE)
+    if not _FLOAT.fullmatch(stripped):
+        raise argparse.ArgumentTypeError(f"expected a number such as 0.5 or -1e-3, got {printable(text)!r}")
+    return float(stripped)
+
+
 def parse_vector(text: str) -> list[float]:
-    """'0.1,-0.3,0.2' -> [0.1, -0.3, 0.2] (argparse type for --q)."""
-    try:
-        return [float(v) for v in text.replace(" ", "").split(",") if v]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+    """'0.1,-0.3,0.2' -> [0.1, -0.3, 0.2] (argparse type for --q): comma-separated float literals, spaces
+    around commas allowed; empty entries, spaces inside a number, underscores and non-ASCII digits refused."""
+    values = []
+    for i, entry in enumerate(text.split(",")):
+        stripped = entry.strip(_SPACE)
+        if not _FLOAT.fullmatch(stripped):
+            what = "an empty entry" if not stripped else f"{printable(stripped)!r}"
+            raise argparse.ArgumentTypeError(f"expected comma-separated numbers such as 0.1,-0.3,2e-3; entry {i + 1} "
+                                             f"is {what}")
+        values.append(float(stripped))
+    return values
+
+
+def whole_number(text: str, low: int, high: int) -> int:
+    """An ASCII whole number in [low, high] (ArgumentTypeError otherwise)."""
+    stripped = text.strip(_SPACE)
+    if not _WHOLE.fullmatch(stripped):
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {printable(text)!r}")
+    value = int(stripped)
+    if not low <= value <= high:
+        raise argparse.ArgumentTypeError(f"expected a whole number in [{low}, {high}], got {value}")
+    return value
 
 
 def positive_int(text: str) -> int:
     """'20' -> 20; zero, negatives and non-integers are refused (argparse type for counts)."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
-    return value
+    return whole_number(text, 1, 2**63 - 1)
+
+
+def bounded_int(low: int, high: int):
+    """An argparse type for a whole number in [low, high]."""
+    def parse(text: str) -> int:
+        return whole_number(text, low, high)
+    parse.__name__ = "whole number"
+    return parse
+
+
+def name_argument(text: str) -> str:
+    """A non-empty name (argparse type for --frame and the like)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a name, got an empty string")
+    return text
 
 
 def output_path(text: str) -> Path:
-    """A file path whose folder exists and is writable (argparse type for --json, --plot, -o)."""
+    """A file kinengine may write (argparse type for --json, --plot, -o), checked before any work: not
+    empty, not a folder, its folder exists and is writable, not a dangling link, not a read-only file,
+    not a device (but /dev/null)."""
+    if not text:
+        raise argparse.ArgumentTypeError("expected a file name, got an empty string")
     path = Path(text)
+    shown = printable(text)
     folder = path.parent if str(path.parent) else Path(".")
-    if path.is_dir():
-        raise argparse.ArgumentTypeError(f"{text!r} is a folder; give a file name, e.g. {text.rstrip('/')}/out")
-    if not folder.is_dir():
-        raise argparse.ArgumentTypeError(f"cannot write {text!r}: folder {str(folder)!r} does not exist")
-    if not os.access(folder, os.W_OK):
-        raise argparse.ArgumentTypeError(f"cannot write {text!r}: folder {str(folder)!r} is not writable")
+    try:
+        if path.is_symlink() and not path.exists():
+            raise argparse.ArgumentTypeError(f"{shown!r} is a link to a missing file; give a plain file name")
+        if path.is_dir():
+            raise argparse.ArgumentTypeError(f"{shown!r} is a folder; give a file name, e.g. "
+                                             f"{shown.rstrip('/')}/out")
+        if not folder.is_dir():
+            raise argparse.ArgumentTypeError(f"cannot write {shown!r}: folder {printable(str(folder))!r} "
+                                             "does not exist")
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise argparse.ArgumentTypeError(f"cannot write {shown!r}: folder {printable(str(folder))!r} is not "
+                                             "writable")
+        if path.exists():
+            mode = path.stat().st_mode
+            if not stat.S_ISREG(mode) and os.path.realpath(path) != os.devnull:
+                raise argparse.ArgumentTypeError(f"cannot write {shown!r}: not a regular file (a device, FIFO "
+                                                 "or socket)")
+            if not os.access(path, os.W_OK):
+                raise argparse.ArgumentTypeError(f"cannot write {shown!r}: the file is read-only")
+    except OSError as exc:  # a name too long, a loop of links, no permission to look
+        raise argparse.ArgumentTypeError(f"cannot write {shown!r}: {exc.strerror}") from None
     return path
+
+
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def printable(text: str) -> str:
+    """``text`` with control characters (newlines, tabs, escapes) as \\xNN / \\uNNNN: a name from a file
+    can never break a line of output or move the terminal's cursor."""
+    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100
+                        else f"\\u{ord(m.group()):04x}", text)
+
+
+def one_line(message: object) -> str:
+    """An error message on one line: line breaks (e.g. in libxml2's messages) become spaces, other control
+    characters are escaped (:func:`printable`)."""
+    return printable(re.sub(r"\s*[\r\n\u2028\u2029]+\s*", " ", str(message)).strip())
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with its errors as one line on stderr (``kinengine: error: ...``, exit status 2), not usage
+    plus error; sub-command parsers made from it inherit the behaviour."""
+
+    def error(self, message: str) -> NoReturn:
+        hint = f" (see {self.prog} --help)"
+        print(f"kinengine: error: {one_line(self.prog + ': ' + message)}{hint}", file=sys.stderr)
+        raise SystemExit(2)
 
 
 def name_value(text: str) -> tuple[str, str]:

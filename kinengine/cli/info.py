@@ -5,23 +5,24 @@ from __future__ import annotations
 import argparse
 
 from ..loading import extra_coordinates
-from .arguments import add_robot_arguments, load_robot
+from .arguments import add_robot_arguments, load_robot, printable
 
 
 def _run(args: argparse.Namespace) -> int:
     robot = load_robot(args)
-    print(f"{robot.name}: {robot.dof} dof, source {robot.source}")
-    print(f"end effector: {robot.end_effector}")
-    print(f"root link (the frame poses are given in): {robot.description.root}")
+    print(f"{printable(robot.name)}: {robot.dof} dof, source {printable(robot.source)}")
+    print(f"end effector: {printable(robot.end_effector)}")
+    print(f"root link (the frame poses are given in): {printable(robot.description.root)}")
     print(f"{'q':>3} {'joint':<28} {'type':<11} {'lower':>10} {'upper':>10}")
     kinds = {j.name: j.type for j in robot.description.joints}
     for i, (name, lo, hi) in enumerate(zip(robot.joint_names, robot.lower_limits, robot.upper_limits)):
-        print(f"{i:>3} {name:<28} {kinds[name]:<11} {lo:>10.5g} {hi:>10.5g}")
+        print(f"{i:>3} {printable(name):<28} {kinds[name]:<11} {lo:>10.5g} {hi:>10.5g}")
     for joint in robot.description.joints:
         if joint.mimic is not None:
             m = joint.mimic
-            print(f"  - {joint.name} (mimic, {joint.type}) = {m.multiplier:g}·{m.joint} + {m.offset:g}")
-    print("frames: " + ", ".join(robot.frame_names))
+            print(f"  - {printable(joint.name)} (mimic, {joint.type}) = {m.multiplier:g}·{printable(m.joint)} + "
+                  f"{m.offset:g}")
+    print("frames: " + ", ".join(printable(f) for f in robot.frame_names))
     extra = [name for name in extra_coordinates(args.robot) if name in robot.joint_names]
     if extra:
         values = ", ".join(f"{name!r}: {robot.neutral()[robot.joint_names.index(name)]:g}" for name in extra)

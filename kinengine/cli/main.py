@@ -1,7 +1,11 @@
 """The kinengine command line: list, info, pose, verify, bench and show (one module per command).
 
-Every sub-command handler takes the parsed arguments and returns an exit code;
-kinengine errors are printed as one line and exit with status 2.
+Every sub-command handler takes the parsed arguments and returns an exit code. Every bad input
+ends in one line on stderr, ``kinengine: error: ...``, and exit status 2: argparse's own errors
+(:class:`~kinengine.cli.arguments.OneLineParser`), kinengine errors, an output that cannot be
+written (a full disk, /dev/full as stdout) and memory that runs out. Names are printed with their
+control characters escaped; stdout and stderr escape what their encoding cannot show
+(``PYTHONIOENCODING=ascii``). An unexpected exception is one line too, with exit status 1.
 """
 
 from __future__ import annotations
@@ -16,11 +20,11 @@ import warnings
 
 from .. import KinematicsError, __version__
 from . import bench, catalog, info, pose, show, verify
-from .arguments import summary
+from .arguments import OneLineParser, one_line, summary
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="kinengine", description=summary(__doc__))
+    parser = OneLineParser(prog="kinengine", description=summary(__doc__))
     parser.add_argument("--version", action="version", version=f"kinengine {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -45,18 +49,48 @@ def join_negative_values(argv: Sequence[str]) -> list[str]:
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    print(f"kinengine: warning: {message}", file=sys.stderr)
+    print(f"kinengine: warning: {one_line(message)}", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    for stream in (sys.stdout, sys.stderr):  # e.g. PYTHONIOENCODING=ascii and a robot named "bras_é"
+        if hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors="backslashreplace")
     args = build_parser().parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
     with warnings.catch_warnings():
         warnings.showwarning = _one_line_warning
         try:
-            return int(args.handler(args))
+            code = int(args.handler(args))
+            sys.stdout.flush()  # a full disk or /dev/full as stdout fails here, not at exit
+            return code
         except KinematicsError as exc:
-            print(f"kinengine: error: {exc}", file=sys.stderr)
-            return 2
+            return _error(exc)
         except BrokenPipeError:  # e.g. `kinengine pose ... | head`: the reader left, nothing to report
-            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            _silence_stdout()
             return 141
+        except OSError as exc:
+            where = f" {exc.filename!r}" if exc.filename else " the output"
+            return _error(f"cannot write{where}: {exc.strerror or exc}", silence=True)
+        except MemoryError:
+            return _error("out of memory; use a smaller model, fewer samples or a lower resolution")
+        except KeyboardInterrupt:
+            return 130
+        except Exception as exc:  # a bug: still one line, and a distinct exit status
+            print(f"kinengine: internal error: {type(exc).__name__}: {one_line(exc)}", file=sys.stderr)
+            return 1
+
+
+def _error(message: object, silence: bool = False) -> int:
+    """Print ``kinengine: error: <message on one line>`` to stderr; exit status 2."""
+    if silence:
+        _silence_stdout()
+    print(f"kinengine: error: {one_line(message)}", file=sys.stderr)
+    return 2
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null, so that the flush at exit cannot fail a second time."""
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass

@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from ..parameterizations import parameter_labels
-from .arguments import add_robot_arguments, load_robot, parse_vector
+from .arguments import add_robot_arguments, load_robot, name_argument, parse_vector, printable
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -22,9 +22,9 @@ def _run(args: argparse.Namespace) -> int:
         chi = robot.pose_parameters(q, frame, args.position, args.rotation)
         JA = robot.analytic_jacobian(q, frame, args.position, args.rotation)
     np.set_printoptions(precision=5, suppress=True, linewidth=120)
-    print(f"robot {robot.name} ({robot.dof} dof), frame {frame!r}")
+    print(f"robot {printable(robot.name)} ({robot.dof} dof), frame {printable(frame)!r}")
     print("q [rad | m] = " + np.array2string(q))
-    print(f"\nT (pose of {frame} in the root link frame {robot.description.root!r}):")
+    print(f"\nT (pose of {printable(frame)} in the root link frame {printable(robot.description.root)!r}):")
     print(T)
     print(f"\nJ ({args.reference}, rows [vx vy vz wx wy wz]):")
     print(J)
@@ -42,7 +42,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     add_robot_arguments(p)
     p.add_argument("--q", type=parse_vector, default=None,
                    help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
-    p.add_argument("--frame", default=None, help="frame name (default: the end effector)")
+    p.add_argument("--frame", type=name_argument, default=None, help="frame name (default: the end effector)")
     p.add_argument("--reference", default="local_world_aligned",
                    choices=["local_world_aligned", "world", "local"])
     p.add_argument("--position", default="cartesian", help="position parameterization for chi and J_A")

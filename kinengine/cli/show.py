@@ -12,9 +12,13 @@ import argparse
 from pathlib import Path
 import re
 
-from .arguments import add_robot_arguments, load_robot, parse_vector, summary
+from .arguments import add_robot_arguments, bounded_int, load_robot, name_argument, output_path, parse_vector, summary
 from ..errors import KinematicsError
 from ..presentation.plotting import plot_robot
+
+
+MAX_DPI = 600
+"""The finest --dpi: the 6.4 x 4.8 inch figure is then 3840 x 2880 pixels (~44 MB in memory)."""
 
 
 def _names(text: str) -> list[str]:
@@ -32,14 +36,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
                    help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
     p.add_argument("--frames", type=_names, default=None,
                    help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)")
-    p.add_argument("--ellipsoid", default=None, metavar="FRAME",
+    p.add_argument("--ellipsoid", type=name_argument, default=None, metavar="FRAME",
                    help="draw the velocity manipulability ellipsoid of FRAME")
-    p.add_argument("-o", "--output", type=Path, default=None, metavar="PATH",
+    p.add_argument("-o", "--output", type=output_path, default=None, metavar="PATH",
                    help="image to write, format from the extension (default: <robot>.png in the current "
                    "directory)")
     p.add_argument("--view", type=parse_vector, default=None, metavar="ELEV,AZIM",
                    help="camera elevation and azimuth [deg] (default: matplotlib's 30,-60)")
-    p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG (default 100)")
+    p.add_argument("--dpi", type=bounded_int(1, MAX_DPI), default=100,
+                   help=f"resolution of the PNG, 1 to {MAX_DPI} (default 100)")
     p.set_defaults(handler=handle)
     return p
 
