@@ -145,9 +145,9 @@ class CoordinateMap:
         modified). NaN/inf, strings, None, booleans, complex, masked entries, empty batches
         and wrongly shaped input are refused with the expected shape in the message.
         """
-        # Hot path: a contiguous float64 vector of the right shape costs one float sum to check; a
-        # non-finite sum (NaN, inf or overflow) is confirmed element-wise.
-        if type(q) is np.ndarray and q.dtype is _F64 and q.shape == self._shape and q.strides == _STRIDES:
+        # Hot path: a contiguous float64 vector (strides (8,): one axis, no gaps) of the right length costs
+        # one float sum to check; a sum beyond ±MAX_MAGNITUDE (NaN, inf, overflow, large) is looked at entry-wise.
+        if type(q) is np.ndarray and q.dtype is _F64 and q.strides == _STRIDES and len(q) == self.dof:
             if not -MAX_MAGNITUDE <= sum(q.tolist()) <= MAX_MAGNITUDE:  # NaN, inf, overflow or large
                 self._check_values(q, name)
         elif (allow_batch and type(q) is np.ndarray and q.dtype is _F64 and q.ndim == 2 and q.shape[0]
