@@ -50,6 +50,8 @@ from .urdf import RobotDescription
 if TYPE_CHECKING:
     import matplotlib.axes
 
+    from .presentation.viewer import Viewer
+
 class Robot:
     """A fixed-base robot: one coordinate per independent movable joint.
 
@@ -392,6 +394,16 @@ class Robot:
         :func:`kinengine.presentation.plotting.plot_robot`."""
         from .presentation.plotting import plot_robot  # matplotlib only when asked for
         return plot_robot(self, q, ax, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length, title=title)
+
+    def view(self, q: object = None, *, port: int | None = None, frames: Sequence[str] = (),
+             ellipsoid: str | None = None, parameterization: str = "euler_zyx", meshes: bool = True,
+             host: str = "127.0.0.1") -> Viewer:
+        """Serve the robot at q (None: neutral) in the browser (Viser); returns the running viewer:
+        ``.url``, ``.update(q)`` (moves the robot live), ``.close()``. Needs ``pip install 'kinengine[view]'``.
+        See :func:`kinengine.presentation.viewer.view`."""
+        from .presentation.viewer import view  # viser only when asked for
+        return view(self, q, port=port, host=host, frames=frames, ellipsoid=ellipsoid,
+                    parameterization=parameterization, meshes=meshes)
 
 
 def _rebuild_robot(description: RobotDescription, urdf_text: str, name: str, end_effector: str,

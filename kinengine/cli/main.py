@@ -19,7 +19,7 @@ import warnings
 
 
 from .. import KinematicsError, __version__
-from . import bench, catalog, info, pose, show, verify
+from . import bench, catalog, info, pose, show, verify, view
 from .arguments import OneLineParser, one_line, summary
 
 
@@ -28,7 +28,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"kinengine {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    for command in (catalog, info, pose, verify, bench, show):
+    for command in (catalog, info, pose, verify, bench, show, view):
         command.add_parser(sub)
     return parser
 

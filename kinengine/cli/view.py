@@ -1,0 +1,68 @@
+"""``kinengine view``: serve the robot in the browser (Viser) and run until Ctrl-C.
+
+    kinengine view ROBOT [--q v1,v2,...] [--port N] [--host ADDR] [--frames tool0,...] [--ellipsoid FRAME]
+                   [--parameterization euler_zyx] [--no-meshes] [--package NAME=PATH] [--xacro-arg NAME=VALUE]
+
+Prints the page's URL (http://127.0.0.1:8080 unless that port is taken); the page shows the robot's
+meshes or primitive visuals in the root link frame [m], a slider per coordinate, frame triads, the
+velocity ellipsoid and the pose parameters. Needs the optional extra: ``pip install 'kinengine[view]'``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import time
+
+from ..presentation.viewer import view
+from .arguments import add_robot_arguments, load_robot, parse_vector, summary
+
+
+def _names(text: str) -> list[str]:
+    """'tool0, flange' -> ['tool0', 'flange'] (argparse type for --frames)."""
+    return [name for name in text.replace(" ", "").split(",") if name]
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register ``view`` on the kinengine command line."""
+    p = subparsers.add_parser("view", help="show the robot in the browser (interactive 3D viewer)",
+                              description=summary(__doc__))
+    p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf or .xacro file")
+    add_robot_arguments(p)
+    p.add_argument("--q", type=parse_vector, default=None,
+                   help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
+    p.add_argument("--port", type=int, default=None,
+                   help="port to serve on (default 8080, or the next free one; 0: any free port)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1; 0.0.0.0 serves the whole network)")
+    p.add_argument("--frames", type=_names, default=None,
+                   help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)")
+    p.add_argument("--ellipsoid", default=None, metavar="FRAME",
+                   help="draw the velocity manipulability ellipsoid of FRAME (and read out its pose)")
+    p.add_argument("--parameterization", default="euler_zyx", metavar="NAME",
+                   help="rotation parameterization of the pose readout (default euler_zyx)")
+    p.add_argument("--no-meshes", dest="meshes", action="store_false",
+                   help="draw URDF primitives and the skeleton only, without reading mesh files")
+    p.set_defaults(handler=handle)
+    return p
+
+
+def handle(args: argparse.Namespace) -> int:
+    """Serve the viewer, print its URL, and wait for Ctrl-C."""
+    # a browser's speculative connections end without a request; websockets would log each as an error
+    logging.getLogger("websockets.server").setLevel(logging.CRITICAL)
+    robot = load_robot(args)
+    frames = [robot.end_effector] if args.frames is None else args.frames
+    viewer = view(robot, args.q, port=args.port, host=args.host, frames=frames, ellipsoid=args.ellipsoid,
+                  parameterization=args.parameterization, meshes=args.meshes)
+    try:
+        print(f"kinengine: viewing {robot.name} at {viewer.url} (Ctrl-C to stop)", flush=True)
+        while True:
+            time.sleep(3600)
+    except KeyboardInterrupt:
+        return 0
+    finally:
+        viewer.close()
+
+
+__all__ = ["add_parser", "handle"]
