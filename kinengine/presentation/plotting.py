@@ -113,9 +113,10 @@ def plot_robot(robot, q: object = None, ax=None, *, frames: Sequence[str] = (), 
                                 f"(1 m/s per unit $|\\dot{{q}}|$ drawn as {d.ellipsoid_scale:g} m)")
         points.append(surface.reshape(3, -1).T)
 
-    ax.add_collection3d(Line3DCollection(d.skeleton, colors="0.25", linewidths=2.5, zorder=2,
-                                         label="links (joint origin to joint origin)"))
-    ax.scatter(*d.skeleton.reshape(-1, 3).T, color="0.25", s=12, depthshade=False, zorder=2)
+    if len(d.skeleton):  # a robot of one link has no segment to draw
+        ax.add_collection3d(Line3DCollection(d.skeleton, colors="0.25", linewidths=2.5, zorder=2,
+                                             label="links (joint origin to joint origin)"))
+        ax.scatter(*d.skeleton.reshape(-1, 3).T, color="0.25", s=12, depthshade=False, zorder=2)
     ax.scatter(0, 0, 0, color="k", marker="s", s=30, depthshade=False, zorder=2,
                label=f"root {robot.description.root}")
 
