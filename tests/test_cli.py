@@ -11,8 +11,8 @@ from kinengine.cli import main
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["verify", "abb_irb120", "--samples", "-3"], "argument --samples: expected a positive integer, got -3"),
-    (["verify", "abb_irb120", "--samples", "0"], "argument --samples: expected a positive integer, got 0"),
+    (["verify", "abb_irb120", "--samples", "-3"], "argument --samples: expected a whole number in [1, 100000], got -3"),
+    (["verify", "abb_irb120", "--samples", "0"], "argument --samples: expected a whole number in [1, 100000], got 0"),
     (["verify", "abb_irb120", "--json", "/nonexistent/x.json"], "folder '/nonexistent' does not exist"),
     (["bench", "abb_irb120", "--quick", "--json", "/nonexistent/b.json"], "folder '/nonexistent' does not exist"),
     (["bench", "abb_irb120", "--quick", "--plot", "."], "'.' is a folder"),

@@ -326,7 +326,6 @@ def test_check_configuration_returns_a_fresh_contiguous_float64_copy(abb):
     ("1e400,0,0,0,0,0", r"`q`\[0\] \(joint 'joint_1'\) is inf"),   # float('1e400') overflows to inf
     ("0.1,0.2", r"Expected `q` to have shape \(6,\).*got \(2,\)"),
     ("0,0,0,0,0,0,0", r"got \(7,\)"),
-    ("", r"got \(0,\)"),
 ])
 def test_cli_pose_refuses_bad_q_with_one_line_and_status_2(capsys, text, message):
     assert cli_main(["pose", "abb_irb120", "--q", text]) == 2
@@ -337,12 +336,17 @@ def test_cli_pose_refuses_bad_q_with_one_line_and_status_2(capsys, text, message
     assert re.search(message, lines[0]), lines[0]
 
 
-@pytest.mark.parametrize("text", ["a,b,c,d,e,f", "0x1,0,0,0,0,0", "1;2;3;4;5;6"])
+@pytest.mark.parametrize("text", ["a,b,c,d,e,f", "0x1,0,0,0,0,0", "1;2;3;4;5;6", "", "1,,0,0,0,0,0",
+                                  "1 5,0,0,0,0,0", "1_0,0,0,0,0,0", "\u0661,0,0,0,0,0", "\uff11,0,0,0,0,0",
+                                  "0.5\u00a0,0,0,0,0,0"])
 def test_cli_pose_refuses_non_numbers_before_loading(capsys, text):
+    # strict float literals (ASCII, no underscores, no inner spaces): "1 5" is not 15, "1_0" not 10
     with pytest.raises(SystemExit) as info:
         cli_main(["pose", "abb_irb120", "--q", text])
     assert info.value.code == 2
-    assert f"argument --q: expected comma-separated numbers, got {text!r}" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1
+    assert "argument --q: expected comma-separated numbers such as 0.1,-0.3,2e-3; entry" in err
 
 
 def test_cli_pose_integers_give_the_float_answer(capsys):
