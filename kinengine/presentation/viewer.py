@@ -79,7 +79,10 @@ class Viewer:
         self._links = tuple(link.name for link in robot.description.links)
         visuals = scene.read_visuals(robot.urdf_text, robot.source, meshes=meshes,
                                      packages=robot.packages if packages is None else packages)
-        if visuals.failures:
+        if visuals.error is not None:
+            warnings.warn(f"the visuals of {robot.name} could not be read ({visuals.error}); the robot is "
+                          "drawn as its skeleton", UserWarning, stacklevel=3)
+        elif visuals.failures:
             (first, why), n = visuals.failures[0], len(visuals.failures)
             warnings.warn(f"{n} mesh{'es' if n > 1 else ''} of {robot.name} could not be used "
                           f"(first: {first}: {why}); "
@@ -114,21 +117,21 @@ class Viewer:
         self._root = server.scene.add_frame("/robot", show_axes=False)
         self._link_nodes = {}
         for i, link in enumerate(self._links):
-            node = server.scene.add_frame(f"/robot/{i}_{_clean(link)}", show_axes=False)
+            node = server.scene.add_frame(f"/robot/{i}_{scene.node_name(link)}", show_axes=False)
             self._link_nodes[link] = node
             for k, v in enumerate(visuals.links.get(link, ())):
                 self._add_visual(server, f"{node.name}/visual_{k}", v)
         self._skeleton = server.scene.add_line_segments(
             "/robot/skeleton", scene.skeleton(self.robot, poses), colors=(60, 60, 60),
             thickness=max(0.004, 0.01 * extent))
-        self._triads = {name: server.scene.add_frame(f"/frames/{_clean(name)}", axes_length=self.axis_length,
-                                                     axes_radius=self.axis_length / 25)
-                        for name in self.frames}
+        length = self.axis_length
+        self._triads = {name: server.scene.add_frame(f"/frames/{scene.node_name(name)}", axes_length=length,
+                                                     axes_radius=length / 25) for name in self.frames}
         self._ellipsoid = None
         if self.ellipsoid_frame is not None:
             semi = self.robot.velocity_ellipsoid(q, self.ellipsoid_frame).semi_axes
             self.ellipsoid_scale = 0.3 * extent / max(float(semi.max()), 1e-9)
-            sphere = _unit_sphere()
+            sphere = scene.unit_sphere()
             self._sphere = sphere
             self._ellipsoid = server.scene.add_mesh_simple("/ellipsoid", sphere[0], sphere[1],
                                                            color=(230, 150, 30), opacity=0.45, side="double")
@@ -137,7 +140,7 @@ class Viewer:
         self._apply(q, from_gui=False)
 
     def _add_visual(self, server: Any, name: str, v: scene.Visual) -> None:
-        wxyz, position = _wxyz(v.origin[:3, :3]), v.origin[:3, 3]
+        wxyz, position = scene.wxyz(v.origin[:3, :3]), v.origin[:3, 3]
         color = v.color or scene.DEFAULT_COLOR
         if v.kind == "box":
             server.scene.add_box(name, color=color, dimensions=v.size, wxyz=wxyz, position=position)
@@ -191,11 +194,11 @@ class Viewer:
         poses = scene.link_poses(self.robot, q, self._links)
         with self._server.atomic():
             for link, node in self._link_nodes.items():
-                node.position, node.wxyz = poses[link][:3, 3], _wxyz(poses[link][:3, :3])
+                node.position, node.wxyz = poses[link][:3, 3], scene.wxyz(poses[link][:3, :3])
             self._skeleton.points = scene.skeleton(self.robot, poses)
             for name, node in self._triads.items():
                 T = self.robot.frame_pose(q, name)
-                node.position, node.wxyz = T[:3, 3], _wxyz(T[:3, :3])
+                node.position, node.wxyz = T[:3, 3], scene.wxyz(T[:3, :3])
             if self._ellipsoid is not None:
                 e = self.robot.velocity_ellipsoid(q, self.ellipsoid_frame)
                 shape = e.axes @ np.diag(self.ellipsoid_scale * np.maximum(e.semi_axes, 1e-4))
@@ -275,25 +278,6 @@ def view(robot: Any, q: object = None, *, port: int | None = None, host: str = "
     return Viewer(robot, q, port=port, host=host, frames=frames, ellipsoid=ellipsoid,
                   parameterization=parameterization, meshes=meshes, singularity_warning=singularity_warning,
                   packages=packages)
-
-
-def _wxyz(C: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of a rotation matrix (3, 3) (Shepperd's method, w >= 0)."""
-    from scipy.spatial.transform import Rotation
-
-    x, y, z, w = Rotation.from_matrix(C).as_quat()
-    return np.array([w, x, y, z]) if w >= 0 else -np.array([w, x, y, z])
-
-
-def _clean(name: str) -> str:
-    return "".join(c if c.isalnum() or c in "_-." else "_" for c in name)
-
-
-def _unit_sphere() -> tuple[np.ndarray, np.ndarray]:
-    import trimesh
-
-    sphere = trimesh.creation.icosphere(subdivisions=3)
-    return np.asarray(sphere.vertices, dtype=np.float32), np.asarray(sphere.faces, dtype=np.uint32)
 
 
 __all__ = ["DEFAULT_PORT", "FOV", "SINGULARITY_WARNING", "Viewer", "view"]

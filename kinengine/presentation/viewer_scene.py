@@ -48,10 +48,12 @@ class Visual:
 
 @dataclass
 class Visuals:
-    """Visuals per link name, and the meshes that could not be used: (file name, reason)."""
+    """Visuals per link name, the meshes that could not be used: (file name, reason), and why no
+    visual at all could be read (``error``, None if they could)."""
 
     links: dict[str, list[Visual]] = field(default_factory=dict)
     failures: list[tuple[str, str]] = field(default_factory=list)
+    error: str | None = None
 
 
 def read_visuals(urdf_text: str, source: str, *, meshes: bool = True,
@@ -62,10 +64,11 @@ def read_visuals(urdf_text: str, source: str, *, meshes: bool = True,
     import yourdfpy
 
     try:
-        urdf = yourdfpy.URDF.load(io.StringIO(urdf_text), build_scene_graph=False, load_meshes=False,
-                                  build_collision_scene_graph=False, load_collision_meshes=False)
+        urdf = yourdfpy.URDF.load(io.BytesIO(urdf_text.encode("utf-8")), build_scene_graph=False,
+                                  load_meshes=False, build_collision_scene_graph=False,
+                                  load_collision_meshes=False)
     except Exception as exc:  # yourdfpy reports bad attributes with assorted builtin errors
-        return Visuals(failures=[("<visuals>", f"yourdfpy could not read them: {type(exc).__name__}: {exc}")])
+        return Visuals(error=f"yourdfpy could not read them: {type(exc).__name__}: {exc}")
     named = {m.name: _rgb(m) for m in (urdf.robot.materials or []) if m.name}
     start = None if source.startswith("<") else Path(source)
     out = Visuals()
@@ -181,5 +184,39 @@ def project(points: np.ndarray, position: np.ndarray, look_at: np.ndarray, fov: 
     return np.stack([width / 2.0 + f * (rel @ right) / depth, height / 2.0 - f * (rel @ up) / depth], axis=1)
 
 
-__all__ = ["DEFAULT_COLOR", "UNBOUNDED_PRISMATIC", "Visual", "Visuals", "camera", "link_poses", "project",
-           "read_visuals", "skeleton", "slider_ranges"]
+def wxyz(C: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix C (3, 3) (scipy's Rotation)."""
+    from scipy.spatial.transform import Rotation
+
+    x, y, z, w = Rotation.from_matrix(C).as_quat()
+    return np.array([w, x, y, z]) if w >= 0 else -np.array([w, x, y, z])
+
+
+def node_name(name: str) -> str:
+    """A scene-tree name for a link or frame name (characters other than letters, digits, _-. become _)."""
+    return "".join(c if c.isalnum() or c in "_-." else "_" for c in name)
+
+
+def unit_sphere() -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V, 3) float32 and faces (F, 3) uint32 of a unit icosphere (the ellipsoid's template)."""
+    import trimesh
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    return np.asarray(sphere.vertices, dtype=np.float32), np.asarray(sphere.faces, dtype=np.uint32)
+
+
+__all__ = [
+    "DEFAULT_COLOR",
+    "UNBOUNDED_PRISMATIC",
+    "Visual",
+    "Visuals",
+    "camera",
+    "link_poses",
+    "node_name",
+    "project",
+    "read_visuals",
+    "skeleton",
+    "slider_ranges",
+    "unit_sphere",
+    "wxyz",
+]
