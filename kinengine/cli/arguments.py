@@ -109,7 +109,8 @@ def output_path(text: str) -> Path:
             if not stat.S_ISREG(mode) and os.path.realpath(path) != os.devnull:
                 raise argparse.ArgumentTypeError(f"cannot write {shown!r}: not a regular file (a device, FIFO "
                                                  "or socket)")
-            if not os.access(path, os.W_OK):
+            if not os.access(path, os.W_OK) or not mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH):
+                # the mode bits too: root could write a file marked read-only, but should not overwrite it
                 raise argparse.ArgumentTypeError(f"cannot write {shown!r}: the file is read-only")
     except OSError as exc:  # a name too long, a loop of links, no permission to look
         raise argparse.ArgumentTypeError(f"cannot write {shown!r}: {exc.strerror}") from None
