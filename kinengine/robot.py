@@ -42,9 +42,9 @@ from .kinematics import REFERENCES, Kinematics, resolve_reference
 from .kinematics import batch as _batch
 from .kinematics.options import checked_parameterization, checked_rng, checked_threshold
 from .kinematics import derivatives as _derivatives
-from .kinematics.handle import FrameHandle
 from .kinematics import relative as _relative
 from .model.editing import add_frame, edited_urdf_text, lock_joints
+from .kinematics.handle import FrameHandle
 from .urdf import RobotDescription
 
 if TYPE_CHECKING:
@@ -71,6 +71,7 @@ class Robot:
         if end_effector is not None:
             kin.frame_id(end_effector)  # FrameNotFoundError with suggestions for an unknown name
         self._end_effector = end_effector if end_effector is not None else _default_end_effector(description)
+        self._handles: dict[object, FrameHandle] = {}  # frame name (None: end effector) -> unchecked handle
 
     # -- description ------------------------------------------------------------------------
     name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
@@ -155,22 +156,36 @@ class Robot:
         :mod:`kinengine.kinematics.handle`."""
         return FrameHandle(self._kin, self._end_effector if name is None else name, check_inputs=check_inputs)
 
+    def _handle(self, frame: str | None) -> FrameHandle:
+        """The unchecked handle of ``frame`` (None: the end effector), kept for up to 256 frame names: the
+        single-q paths of frame_pose/jacobian/kinematics call it after checking q once."""
+        try:
+            return self._handles[frame]
+        except (KeyError, TypeError):
+            pass
+        handle = FrameHandle(self._kin, self._end_effector if frame is None else frame, check_inputs=False)
+        if len(self._handles) < 256:
+            self._handles[frame] = handle
+        return handle
+
     def _fid(self, frame: str | None) -> int:
         fid = self._kin.frame_ids.get(self._end_effector if frame is None else frame) \
             if type(frame) is str or frame is None else None
         return self._kin.frame_id(frame) if fid is None else fid
-
 
     def frame_pose(self, q: object, frame: str | None = None, *, check_limits: bool = False) -> np.ndarray:
         """T_IF: pose of ``frame`` (default: end_effector) in the root link frame.
 
         q (dof,) -> (4, 4); q (N, dof) -> (N, 4, 4). Translation in [m].
         """
-        fid = self._fid(frame)
-        q = self._coords.check(q, check_limits=check_limits)
+        try:
+            handle = self._handles[frame]
+        except (KeyError, TypeError):
+            handle = self._handle(frame)
+        q = self._coords.check(q, check_limits=True) if check_limits else self._coords.check(q)
         if q.ndim == 2:
-            return _batch.evaluate(self._kin, q, fid, None, jacobian=False)[0]
-        return self._kin.pose(q, fid)
+            return _batch.evaluate(self._kin, q, handle.frame_id, None, jacobian=False)[0]
+        return handle.pose(q)
 
     def jacobian(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
                  check_limits: bool = False) -> np.ndarray:
@@ -178,13 +193,16 @@ class Robot:
 
         q (dof,) -> (6, dof); q (N, dof) -> (N, 6, dof). See the module doc for the references.
         """
-        fid = self._fid(frame)
+        try:
+            handle = self._handles[frame]
+        except (KeyError, TypeError):
+            handle = self._handle(frame)
         ref = REFERENCES[reference] if type(reference) is str and reference in REFERENCES else \
             resolve_reference(reference)
-        q = self._coords.check(q, check_limits=check_limits)
+        q = self._coords.check(q, check_limits=True) if check_limits else self._coords.check(q)
         if q.ndim == 2:
-            return _batch.evaluate(self._kin, q, fid, ref, pose=False)[1]
-        return self._kin.jacobian(q, fid, ref)
+            return _batch.evaluate(self._kin, q, handle.frame_id, ref, pose=False)[1]
+        return handle.jacobian(q, ref)
 
     def kinematics(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
                    check_limits: bool = False, out: tuple[np.ndarray, np.ndarray] | None = None,
@@ -193,17 +211,20 @@ class Robot:
         equal bit for bit to :meth:`frame_pose` and :meth:`jacobian` called separately. Batches only:
         ``out=(T, J)`` preallocated C-contiguous float64 arrays of those shapes, filled and returned;
         ``workers``: threads to use (default: the cores this process may use)."""
-        fid = self._fid(frame)
+        try:
+            handle = self._handles[frame]
+        except (KeyError, TypeError):
+            handle = self._handle(frame)
         ref = resolve_reference(reference)
-        q = self._coords.check(q, check_limits=check_limits)
+        q = self._coords.check(q, check_limits=True) if check_limits else self._coords.check(q)
         if q.ndim == 2:
-            T, J = _batch.evaluate(self._kin, q, fid, ref, out=_batch.checked_out(out, len(q), self.dof),
+            T, J = _batch.evaluate(self._kin, q, handle.frame_id, ref, out=_batch.checked_out(out, len(q), self.dof),
                                    workers=_batch.checked_workers(workers))
             return T, J  # type: ignore[return-value]
         if out is not None:
             raise OptionError("`out=` is for batches q (N, dof); a single q returns fresh arrays")
         _batch.checked_workers(workers)
-        return self._kin.pose_and_jacobian(q, fid, ref)
+        return handle.kinematics(q, ref)
 
     # -- analytic Jacobians --------------------------------------------------------------------
     def pose_parameters(self, q: object, frame: str | None = None, position: str | None = "cartesian",

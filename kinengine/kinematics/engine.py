@@ -54,6 +54,50 @@ def resolve_reference(reference: object) -> pin.ReferenceFrame:
                       "'local_world_aligned' (or a pinocchio.ReferenceFrame)")
 
 
+class MimicMap:
+    """q_pin = M q + b and J = J_pin · M for one configuration, cheaper than the matrix products when the
+    independent joints come first in Pinocchio's order (the usual case: grippers' mimic fingers last):
+    q_pin[:dof] = q and one float per mimic joint; J_pin's mimic columns are added onto their leaders'
+    in place and the first dof columns returned (a view of the fresh J_pin). Else, when every mimic joint
+    copies its leader, q_pin = q[leader] (one take); otherwise the CoordinateMap's matrix products."""
+
+    def __init__(self, coords: CoordinateMap) -> None:
+        self.coords, self.dof = coords, coords.dof
+        self.prefix = bool(np.array_equal(coords.independent, np.arange(coords.dof)))
+        self.unit = bool(np.all(coords.multiplier == 1.0) and not coords.has_offset)  # q_pin = q[leader]
+        self.leader = coords.leader
+        self.rows = tuple((k, int(coords.leader[k]), float(coords.multiplier[k]), float(coords.offset[k]))
+                          for k in range(coords.nq) if k >= coords.dof)
+
+    def q_pin(self, q: np.ndarray, buffer: np.ndarray) -> np.ndarray:
+        """M q + b written into ``buffer`` (nq,), which is returned."""
+        if self.prefix:  # the independent joints first: one slice copy and one float per mimic joint
+            buffer[:self.dof] = q
+            for k, leader, m, o in self.rows:
+                buffer[k] = q.item(leader) if m == 1.0 and o == 0.0 else q.item(leader) * m + o
+            return buffer
+        if self.unit:
+            return q.take(self.leader, out=buffer)
+        coords = self.coords
+        _dot(coords.matrix, q, out=buffer)
+        if coords.has_offset:
+            _add(buffer, coords.offset, out=buffer)
+        return buffer
+
+    def fold(self, J_pin: np.ndarray) -> np.ndarray:
+        """J (6, dof) = J_pin (6, nq) · M; J_pin (fresh from Pinocchio) may be modified."""
+        if J_pin.ndim == 1:
+            J_pin = J_pin.reshape(6, 1)
+        if not self.prefix:
+            return self.coords.fold(J_pin)
+        for k, leader, m, _ in self.rows:
+            if m == 1.0:
+                J_pin[:, leader] += J_pin[:, k]
+            elif m != 0.0:
+                J_pin[:, leader] += m * J_pin[:, k]
+        return J_pin[:, :self.dof]
+
+
 class Kinematics:
     """Pinocchio model + coordinate map of one robot; poses and Jacobians at checked configurations."""
 
@@ -66,6 +110,7 @@ class Kinematics:
         self.frame_names: tuple[str, ...] = tuple(self.frame_ids)
         self._tls = threading.local()
         self._memo: dict[object, object] = {}
+        self.mimic = MimicMap(self.coordinates)
 
     def data(self) -> pin.Data:
         """This thread's Pinocchio Data (created on first use)."""
@@ -85,10 +130,7 @@ class Kinematics:
             buffer = self._tls.q_pin
         except AttributeError:
             buffer = self._tls.q_pin = np.empty(coords.nq)
-        _dot(coords.matrix, q, out=buffer)
-        if coords.has_offset:
-            _add(buffer, coords.offset, out=buffer)
-        return buffer
+        return self.mimic.q_pin(q, buffer)
 
     def memoized(self, key: object, make: Callable[[], T]) -> T:
         """A constant derived from the model (a compiled chain, an IK seed table), made once per key.
@@ -138,10 +180,7 @@ class Kinematics:
         if coords.identity:
             J = _frame_jacobian(self.model, data, q, fid, ref)
             return J if self.dof > 1 else J.reshape(6, 1)
-        J = _frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref)
-        if J.ndim == 1:  # eigenpy returns a (6, 1) matrix as (6,)
-            J = J.reshape(6, 1)
-        return self.coordinates.fold(J)
+        return self.mimic.fold(_frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref))
 
     def pose_and_jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
         """(T_IF (4, 4), J (6, dof) in ``ref``), bit for bit :meth:`pose` and :meth:`jacobian`: for
@@ -168,4 +207,4 @@ def _frame_ids(model: pin.Model) -> dict[str, int]:
     return dict(sorted(ids.items(), key=lambda kv: kv[1]))
 
 
-__all__ = ["REFERENCES", "Kinematics", "resolve_reference"]
+__all__ = ["REFERENCES", "Kinematics", "MimicMap", "resolve_reference"]

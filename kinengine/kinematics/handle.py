@@ -52,10 +52,8 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
     ``kinematics(q, reference="local_world_aligned")``."""
     model, coords, dof = kin.model, kin.coordinates, kin.dof
     check, identity = coords.check, coords.identity
-    M, b, offset = coords.matrix, coords.offset, coords.has_offset
     forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
     local_frame = pin.LOCAL
-    dot, add = np.dot, np.add
     references = dict(REFERENCES)
     local = threading.local()
 
@@ -64,12 +62,11 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
         local.data, local.buffer = kin.data(), np.empty(coords.nq)
         return local.data
 
+    mimic = kin.mimic
+    q_pin, fold_mimic = mimic.q_pin, mimic.fold
+
     def pinocchio_q(q):
-        buffer = local.buffer
-        dot(M, q, out=buffer)
-        if offset:
-            add(buffer, b, out=buffer)
-        return buffer
+        return q_pin(q, local.buffer)
 
     def resolve(reference):
         try:
@@ -142,7 +139,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             return place(model, data, fid).homogeneous, J
         return pose, jacobian, kinematics
 
-    fold = coords.fold  # J_pin · M (and (6,) → (6, 1) for one column)
+    fold = fold_mimic if not identity else (lambda J: J.reshape(6, -1))  # J_pin · M; (6,) → (6, 1)
 
     def jacobian(q, reference="local_world_aligned"):
         ref = resolve(reference)
@@ -152,8 +149,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             data = local.data
         except AttributeError:
             data = state()
-        J = frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, ref)
-        return fold(J.reshape(6, -1))
+        return fold(frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, ref))
 
     def kinematics(q, reference="local_world_aligned"):
         ref = resolve(reference)
@@ -167,8 +163,8 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             q = pinocchio_q(q)
         if ref == local_frame:  # Pinocchio's LOCAL frame Jacobian does not place the joints
             forward(model, data, q)
-            return place(model, data, fid).homogeneous, fold(frame_jacobian(model, data, q, fid, ref).reshape(6, -1))
-        J = fold(frame_jacobian(model, data, q, fid, ref).reshape(6, -1))
+            return place(model, data, fid).homogeneous, fold(frame_jacobian(model, data, q, fid, ref))
+        J = fold(frame_jacobian(model, data, q, fid, ref))
         return place(model, data, fid).homogeneous, J
     return pose, jacobian, kinematics
 
