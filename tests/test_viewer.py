@@ -277,6 +277,35 @@ def test_the_robot_is_drawn_and_moves_in_a_real_browser(abb, tmp_path):
     assert _changed(moved, drawn, p0[_in_view(p0) & travelled]).mean() >= 0.5, "the old place is not cleared"
 
 
+def test_panda_meshes_are_drawn_in_a_real_browser(tmp_path):
+    """example-robot-data's textured DAE meshes, found through package:// and drawn where the links are."""
+    executable = _chromium()
+    panda = kinengine.load("panda")
+    q = panda.neutral()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # every mesh must be read: no "drawn as skeleton only" warning
+        v = panda.view(q, port=0, frames=[])
+    try:
+        browser = Browser(executable, v.url)
+        try:
+            drawn, png = browser.settled()
+            (tmp_path / "drawn.png").write_bytes(png)
+            v.show_robot(False)
+            empty, png = browser.settled()
+            (tmp_path / "empty.png").write_bytes(png)
+        finally:
+            browser.close()
+        links = [f"panda_link{i}" for i in range(8)] + ["panda_hand"]
+        points = np.array([panda.frame_pose(q, link)[:3, 3] for link in links])
+        pixels = viewer_scene.project(points, v.camera_position, v.camera_look_at, v.fov, WIDTH, HEIGHT)
+    finally:
+        v.close()
+    seen = _in_view(pixels)
+    assert seen.sum() >= 5, f"the camera should frame the robot: links at pixels {pixels.round()}"
+    hit = _changed(drawn, empty, pixels[seen])
+    assert hit.mean() >= 0.75, f"meshes not drawn at {pixels[seen].round()}: {hit}; screenshots in {tmp_path}"
+
+
 if os.environ.get("KINENGINE_VIEWER_SCREENSHOT"):  # writes docs/images/viewer_abb.png; not a test
     def test_write_documentation_screenshot(abb):
         with abb.view([0.4, 0.3, -0.2, 0.0, 0.6, 0.0], port=0, frames=["tool0"], ellipsoid="tool0") as v:
