@@ -162,7 +162,7 @@ class PoseMap:
         E_rows, distances = [], []
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             blocks = (J[:3], J[3:]) if self.position is not None else (J[3:],)
-            for param, block in zip(self.parts, blocks, strict=True):
+            for param, block in zip(self.parts, blocks, strict=False):  # no rotation: J[3:] unused
                 if param.kind == "position":
                     chi = param._from_position(np, *p)
                 else:
