@@ -6,6 +6,7 @@ moves there when ``update(q)`` is called on the open page."""
 from __future__ import annotations
 
 import base64
+import importlib.util
 import io
 import json
 import os
@@ -24,11 +25,13 @@ import pytest
 
 import kinengine
 from kinengine.errors import KinematicsError
+from kinengine.presentation import viewer_scene
+from kinengine.presentation.viewer import view
 
-viser = pytest.importorskip("viser", reason="the viewer extra is not installed: pip install '.[view]'")
-
-from kinengine.presentation import viewer_scene  # noqa: E402
-from kinengine.presentation.viewer import view  # noqa: E402
+# Every test but the first needs the [view] extra (viser, pycollada for the DAE meshes).
+needs_view = pytest.mark.skipif(
+    importlib.util.find_spec("viser") is None or importlib.util.find_spec("collada") is None,
+    reason="the viewer extra is not installed: pip install '.[view]'")
 
 WIDTH, HEIGHT = 800, 600
 PANEL_LEFT = 450  # the control panel covers the page right of this column [px]
@@ -41,6 +44,7 @@ def test_missing_extra_names_the_install_command(abb, monkeypatch):
         abb.view(port=0)
 
 
+@needs_view
 def test_the_scene_is_kinengines_forward_kinematics(abb):
     q0 = np.array([0.3, -0.4, 0.5, 0.2, -0.7, 1.1])
     with abb.view(q0, port=0, frames=["tool0"], ellipsoid="tool0") as v:
@@ -59,6 +63,7 @@ def test_the_scene_is_kinengines_forward_kinematics(abb):
         v.update(q0)
 
 
+@needs_view
 def test_the_readout_turns_red_at_the_representation_singularity(abb):
     """At q = 0 the IRB 120's tool0 z axis points along the root x axis: ZYX pitch = π/2 (gimbal lock);
     the quaternion has no singular set."""
@@ -69,6 +74,7 @@ def test_the_readout_turns_red_at_the_representation_singularity(abb):
         assert not v.readout["singular"] and v.readout["distance"] == np.inf
 
 
+@needs_view
 def test_bad_input_is_refused_before_serving(abb):
     with pytest.raises(kinengine.FrameNotFoundError):
         abb.view(port=0, frames=["no_such_frame"])
@@ -78,6 +84,7 @@ def test_bad_input_is_refused_before_serving(abb):
         abb.view(port=70000)
 
 
+@needs_view
 def test_panda_meshes_are_found_and_read():
     panda = kinengine.load("panda")
     visuals = viewer_scene.read_visuals(panda.urdf_text, panda.source)
@@ -87,6 +94,7 @@ def test_panda_meshes_are_found_and_read():
     assert len(visuals.links["panda_link3"][0].mesh.faces) > 1000
 
 
+@needs_view
 def test_a_missing_or_broken_mesh_costs_one_warning(tmp_path):
     (tmp_path / "broken.stl").write_bytes(b"solid nothing\nthis is not an STL\n")
     (tmp_path / "robot.urdf").write_text("""<robot name="meshy">
@@ -114,6 +122,7 @@ def test_a_missing_or_broken_mesh_costs_one_warning(tmp_path):
     assert viewer_scene.slider_ranges(robot) == [(-1.0, 1.0), (-np.pi, np.pi)]
 
 
+@needs_view
 def test_the_command_serves_the_page_until_ctrl_c():
     proc = subprocess.Popen([sys.executable, "-m", "kinengine", "view", "abb_irb120", "--port", "0"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -232,6 +241,7 @@ def _in_view(points: np.ndarray) -> np.ndarray:
     return (points[:, 0] > 5) & (points[:, 0] < PANEL_LEFT) & (points[:, 1] > 5) & (points[:, 1] < HEIGHT - 5)
 
 
+@needs_view
 def test_the_robot_is_drawn_and_moves_in_a_real_browser(abb, tmp_path):
     executable = _chromium()
     links = [link.name for link in abb.description.links]
@@ -277,6 +287,7 @@ def test_the_robot_is_drawn_and_moves_in_a_real_browser(abb, tmp_path):
     assert _changed(moved, drawn, p0[_in_view(p0) & travelled]).mean() >= 0.5, "the old place is not cleared"
 
 
+@needs_view
 def test_panda_meshes_are_drawn_in_a_real_browser(tmp_path):
     """example-robot-data's textured DAE meshes, found through package:// and drawn where the links are."""
     executable = _chromium()
@@ -307,6 +318,7 @@ def test_panda_meshes_are_drawn_in_a_real_browser(tmp_path):
 
 
 if os.environ.get("KINENGINE_VIEWER_SCREENSHOT"):  # writes docs/images/viewer_abb.png; not a test
+    @needs_view
     def test_write_documentation_screenshot(abb):
         with abb.view([0.4, 0.3, -0.2, 0.0, 0.6, 0.0], port=0, frames=["tool0"], ellipsoid="tool0") as v:
             browser = Browser(_chromium(), v.url)
