@@ -15,7 +15,7 @@ import sys
 from kinengine.cli import main
 
 HERE = Path(__file__).resolve().parent
-ROBOTS = ("abb_irb120", "ur5", "panda", "kinova", "baxter")
+ROBOTS = ("abb_irb120", "ur5", "panda", "kinova")
 
 if __name__ == "__main__":
     outputs = ["--json", str(HERE / "results.json"), "--plot", str(HERE / "results.png")]

@@ -317,3 +317,36 @@ def test_batched_position_singularity_is_checked_before_rotation(strategy):
                 pytest.warns(UserWarning, match="ρ = 0"):
             robot.analytic_jacobian(q, position="cylindrical", rotation="euler_zyx",
                                     singularity_threshold=0.0)
+
+
+@pytest.mark.parametrize("name", ["abb_irb120", "mixed_chain"])
+@pytest.mark.parametrize("n", [None, 1, 3, 40, 5000])
+def test_kinematics_equals_frame_pose_and_jacobian_bit_for_bit(name, n):
+    """robot.kinematics(q) is (frame_pose(q), jacobian(q)) exactly, single q and batches on either path."""
+    robot = _load(name)
+    frame = robot.end_effector
+    Q = robot.random_configuration(11, size=n)
+    for reference in REFERENCES:
+        T, J = robot.kinematics(Q, frame, reference)
+        assert np.array_equal(T, robot.frame_pose(Q, frame)), reference
+        assert np.array_equal(J, robot.jacobian(Q, frame, reference)), reference
+
+
+def test_kinematics_out_and_workers():
+    robot = kinengine.load("abb_irb120")
+    Q = robot.random_configuration(12, size=9000)
+    out = (np.empty((9000, 4, 4)), np.empty((9000, 6, 6)))
+    T, J = robot.kinematics(Q, out=out, workers=1)
+    assert T is out[0] and J is out[1]
+    T2, J2 = robot.kinematics(Q, workers=3)
+    assert np.array_equal(T, T2) and np.array_equal(J, J2)
+    for bad in ((np.empty((9000, 4, 4)),), (np.empty((9000, 4, 4)), np.empty((9000, 6, 5))),
+                (np.empty((9000, 4, 4), dtype=np.float32), np.empty((9000, 6, 6))), [out[0], out[1]],
+                (out[0], out[0])):
+        with pytest.raises(kinengine.OptionError):
+            robot.kinematics(Q, out=bad)
+    for bad in (0, -1, 1.5, True, "2", 10**6):
+        with pytest.raises(kinengine.OptionError):
+            robot.kinematics(Q, workers=bad)
+    with pytest.raises(kinengine.OptionError):
+        robot.kinematics(Q[0], out=out)
