@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 import difflib
+import re
 
 
 class KinematicsError(Exception):
@@ -48,6 +49,7 @@ class URDFError(KinematicsError, ValueError):
         if element:
             where.append(element)
         prefix = ", ".join(where)
+        message = re.sub(r"\s*[\r\n]+\s*", " ", str(message))  # one line, e.g. a libxml2 message or an array
         super().__init__(f"{prefix}: {message}" if prefix else message)
 
 
@@ -65,7 +67,9 @@ class FrameNotFoundError(KinematicsError, KeyError):
         hint = (f" Did you mean {', '.join(repr(c) for c in close)}?" if close
                 else f" Known {kind}s: {', '.join(self.known[:12])}"
                 + (", ..." if len(self.known) > 12 else "") + ".")
-        self.message = f"unknown {kind} {name!r}.{hint}"
+        shown = " ".join(repr(name).split())  # one line, e.g. for a numpy array
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        self.message = f"unknown {kind} {shown}.{hint}"
         super().__init__(self.message)
 
     def __str__(self) -> str:  # KeyError would print the repr of the message

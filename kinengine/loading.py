@@ -52,7 +52,7 @@ def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
     if isinstance(target, str) and text_target in available_robots():
         entry = catalog_entry(text_target)
         description, text = _warn_once(lambda: _read(entry.path, limits))
-        robot = Robot(description, text, name=entry.name, end_effector=end_effector or entry.end_effector,
+        robot = Robot(description, text, name=entry.name, end_effector=entry.end_effector if end_effector is None else end_effector,
                       packages=packages)
         return robot.locked(dict(entry.locked)) if entry.locked else robot
     path = Path(text_target)

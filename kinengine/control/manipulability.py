@@ -173,18 +173,21 @@ def _rows(rows: Rows) -> tuple[int, ...]:
         if rows in ROW_SETS:
             return ROW_SETS[rows]
         rows = (rows,)
+    if isinstance(rows, (bytes, dict)) or not hasattr(rows, "__iter__"):
+        raise ParameterizationError(f"Expected `rows` to be 'all', 'linear', 'angular' or a sequence of labels "
+                                    f"from {ROW_LABELS} (or indices 0-5), got {type(rows).__name__}")
     index = []
     for row in rows:
-        if isinstance(row, (int, np.integer)) and not isinstance(row, bool) and 0 <= row < 6:
+        if isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_)) and 0 <= row < 6:
             index.append(int(row))
-        elif row in ROW_LABELS:
+        elif type(row) is str and row in ROW_LABELS:
             index.append(ROW_LABELS.index(row))
         else:
             raise ParameterizationError(f"Expected `rows` to be 'all', 'linear', 'angular' or labels from "
-                                        f"{ROW_LABELS} (or indices 0-5), got {row!r}")
+                                        f"{ROW_LABELS} (or indices 0-5), got {' '.join(repr(row).split())[:40]}")
     if not index or len(set(index)) != len(index):
         raise ParameterizationError(f"Expected `rows` to name each row at most once and at least one row, "
-                                    f"got {rows!r}")
+                                    f"got {' '.join(repr(rows).split())[:60]}")
     return tuple(index)
 
 

@@ -45,6 +45,15 @@ def checked_tolerance(value: object) -> float:
     return checked_nonnegative(value, "tolerance")
 
 
+def checked_flag(value: object, name: str) -> bool:
+    """``value`` if it is a bool (or numpy bool); OptionError otherwise (an array's truth is ambiguous)."""
+    if value is True or value is False:
+        return value
+    if isinstance(value, np.bool_):
+        return bool(value)
+    raise OptionError(f"{name} must be True or False, got {type(value).__name__} {_short(value)}")
+
+
 def checked_rng(rng: object) -> np.random.Generator:
     """A numpy Generator from ``rng`` (None: fresh entropy; an int >= 0: a seed; a Generator: itself)."""
     if rng is None or isinstance(rng, np.random.Generator):
@@ -78,9 +87,9 @@ def checked_parameterization(position: object, rotation: object, rows: object) -
 
 
 def _short(value: object) -> str:
-    text = repr(value)
+    text = " ".join(repr(value).split())  # one line, e.g. for a numpy array
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-__all__ = ["checked_nonnegative", "checked_parameterization", "checked_rng", "checked_threshold",
+__all__ = ["checked_flag", "checked_nonnegative", "checked_parameterization", "checked_rng", "checked_threshold",
            "checked_tolerance"]

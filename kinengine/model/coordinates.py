@@ -157,8 +157,11 @@ class CoordinateMap:
                 self._check_values(q, name)
         else:
             q = self._convert(q, name, allow_batch)
-        if check_limits:
-            self.check_limits(q, name=name)
+        if check_limits is not False:  # the default costs one identity test
+            if check_limits is not True and not isinstance(check_limits, np.bool_):
+                raise OptionError(f"check_limits must be True or False, got {type(check_limits).__name__}")
+            if check_limits:
+                self.check_limits(q, name=name)
         return q
 
     def _convert(self, q: object, name: str, allow_batch: bool) -> np.ndarray:
@@ -281,7 +284,7 @@ class CoordinateMap:
 
 
 def _short(value: object) -> str:
-    text = repr(value)
+    text = " ".join(repr(value).split())  # one line, e.g. for a numpy array
     return text if len(text) <= 40 else text[:37] + "..."
 
 

@@ -63,7 +63,7 @@ class Limits:
             real = f.type in ("float", float)
             kinds = (numbers.Real,) if real else (numbers.Integral,)
             if isinstance(value, bool) or not isinstance(value, kinds) or \
-                    not (math.isfinite(value) and low <= value <= high):
+                    not ((not real or math.isfinite(value)) and low <= value <= high):
                 kind = "a finite real number" if real else "a whole number"
                 span = f"[{low:g}, {high:g}]" if real else f"[{low}, {high}]"
                 raise OptionError(f"Limits.{f.name} must be {kind} in {span}, got {value!r}")
