@@ -183,7 +183,7 @@ class Robot:
             handle = self._handles[frame]
         except (KeyError, TypeError):
             handle = self._handle(frame)
-        q = self._coords.check(q, check_limits=True) if check_limits else self._coords.check(q)
+        q = self._coords.check(q) if check_limits is False else self._coords.check(q, check_limits=check_limits)
         if q.ndim == 2:
             return _batch.evaluate(self._kin, q, handle.frame_id, None, jacobian=False)[0]
         return handle.pose(q)
@@ -200,7 +200,7 @@ class Robot:
             handle = self._handle(frame)
         ref = REFERENCES[reference] if type(reference) is str and reference in REFERENCES else \
             resolve_reference(reference)
-        q = self._coords.check(q, check_limits=True) if check_limits else self._coords.check(q)
+        q = self._coords.check(q) if check_limits is False else self._coords.check(q, check_limits=check_limits)
         if q.ndim == 2:
             return _batch.evaluate(self._kin, q, handle.frame_id, ref, pose=False)[1]
         return handle.jacobian(q, ref)
@@ -217,7 +217,7 @@ class Robot:
         except (KeyError, TypeError):
             handle = self._handle(frame)
         ref = resolve_reference(reference)
-        q = self._coords.check(q, check_limits=True) if check_limits else self._coords.check(q)
+        q = self._coords.check(q) if check_limits is False else self._coords.check(q, check_limits=check_limits)
         if q.ndim == 2:
             T, J = _batch.evaluate(self._kin, q, handle.frame_id, ref, out=_batch.checked_out(out, len(q), self.dof),
                                    workers=_batch.checked_workers(workers))
