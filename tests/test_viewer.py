@@ -31,7 +31,8 @@ from kinengine.presentation.viewer import view
 # Every test but the first needs the [view] extra (viser, pycollada for the DAE meshes).
 needs_view = pytest.mark.skipif(
     importlib.util.find_spec("viser") is None or importlib.util.find_spec("collada") is None,
-    reason="the viewer extra is not installed: pip install '.[view]'")
+    reason="the viewer extra is not installed: pip install '.[view]'",
+)
 
 WIDTH, HEIGHT = 800, 600
 PANEL_LEFT = 450  # the control panel covers the page right of this column [px]
@@ -124,8 +125,12 @@ def test_a_missing_or_broken_mesh_costs_one_warning(tmp_path):
 
 @needs_view
 def test_the_command_serves_the_page_until_ctrl_c():
-    proc = subprocess.Popen([sys.executable, "-m", "kinengine", "view", "abb_irb120", "--port", "0"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "kinengine", "view", "abb_irb120", "--port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         line = proc.stdout.readline()
         assert "viewing abb_irb120 at http://127.0.0.1:" in line, line + proc.stderr.read()
@@ -147,8 +152,10 @@ def _chromium() -> str:
         path = shutil.which(name)
         if path:
             return path
-    pytest.skip("no Chromium on this machine (Debian: apt-get install chromium; .ci/run installs it where "
-                "it may): the browser test cannot run")
+    pytest.skip(
+        "no Chromium on this machine (Debian: apt-get install chromium; .ci/run installs it where "
+        "it may): the browser test cannot run"
+    )
 
 
 _HIDE_NOTICES = """if (document.head && !document.getElementById('kinengine-test')) {
@@ -166,12 +173,26 @@ class Browser:
 
         self.folder = tempfile.mkdtemp(prefix="kinengine-chromium-")
         self.process = subprocess.Popen(
-            [executable, "--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
-             "--enable-unsafe-swiftshader", "--disable-quic", "--no-first-run",
-             "--disable-background-networking",
-             "--disable-component-update", "--disable-sync", f"--user-data-dir={self.folder}",
-             f"--window-size={WIDTH},{HEIGHT}", "--remote-debugging-port=0", url],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            [
+                executable,
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--use-angle=swiftshader",
+                "--enable-unsafe-swiftshader",
+                "--disable-quic",
+                "--no-first-run",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                f"--user-data-dir={self.folder}",
+                f"--window-size={WIDTH},{HEIGHT}",
+                "--remote-debugging-port=0",
+                url,
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         port_file = Path(self.folder) / "DevToolsActivePort"
         deadline = time.monotonic() + 60
         while not (port_file.exists() and port_file.read_text().strip()):
@@ -183,8 +204,13 @@ class Browser:
             page = next(t for t in json.load(response) if t["type"] == "page")
         self.socket = connect(page["webSocketDebuggerUrl"], max_size=None)
         self.count = 0
-        self.call("Emulation.setDeviceMetricsOverride", width=WIDTH, height=HEIGHT, deviceScaleFactor=1,
-                  mobile=False)
+        self.call(
+            "Emulation.setDeviceMetricsOverride",
+            width=WIDTH,
+            height=HEIGHT,
+            deviceScaleFactor=1,
+            mobile=False,
+        )
 
     def call(self, method: str, **params: object) -> dict:
         self.count += 1
@@ -209,8 +235,12 @@ class Browser:
         deadline, last = time.monotonic() + timeout, None
         while True:
             image, png = self.screenshot()
-            if last is not None and image.shape == last.shape and not np.any(image != last) \
-                    and image.std() > 0:
+            if (
+                last is not None
+                and image.shape == last.shape
+                and not np.any(image != last)
+                and image.std() > 0
+            ):
                 return image, png
             if time.monotonic() > deadline:
                 raise AssertionError(f"the page kept changing for {timeout} s")
@@ -227,8 +257,9 @@ class Browser:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
-def _changed(a: np.ndarray, b: np.ndarray, points: np.ndarray, radius: int = 10,
-             level: float = 12.0) -> np.ndarray:
+def _changed(
+    a: np.ndarray, b: np.ndarray, points: np.ndarray, radius: int = 10, level: float = 12.0
+) -> np.ndarray:
     """Per pixel point (column, row): does the mean |a - b| in a (2 radius + 1)² window exceed ``level``?"""
     out = []
     for c, r in np.round(points).astype(int):
@@ -249,6 +280,7 @@ def test_the_robot_is_drawn_and_moves_in_a_real_browser(abb, tmp_path):
     with abb.view(q0, port=0, frames=["tool0"]) as v:
         browser = Browser(executable, v.url)
         try:
+
             def pixels(q):
                 points = np.array([abb.frame_pose(q, link)[:3, 3] for link in links])
                 return viewer_scene.project(points, v.camera_position, v.camera_look_at, v.fov, WIDTH, HEIGHT)
@@ -270,8 +302,10 @@ def test_the_robot_is_drawn_and_moves_in_a_real_browser(abb, tmp_path):
     seen0 = _in_view(p0)
     assert seen0.sum() >= 4, f"the camera should frame the robot: links at pixels {p0.round()}"
     hit0 = _changed(drawn, empty, p0[seen0])
-    assert hit0.mean() >= 0.75, (f"robot not drawn where its links project at q0: {hit0} at "
-                                 f"{p0[seen0].round()}; screenshots in {tmp_path}")
+    assert hit0.mean() >= 0.75, (
+        f"robot not drawn where its links project at q0: {hit0} at "
+        f"{p0[seen0].round()}; screenshots in {tmp_path}"
+    )
     # far from every link the robot leaves the picture alone (the grid and sky are the same)
     corner = np.array([[30.0, HEIGHT - 100.0]])
     if np.min(np.linalg.norm(np.vstack([p0, p1]) - corner, axis=1)) > 150:
@@ -282,8 +316,9 @@ def test_the_robot_is_drawn_and_moves_in_a_real_browser(abb, tmp_path):
     assert seen1.sum() >= 3, f"q1 should move the links visibly: {p0.round()} -> {p1.round()}"
     hit1 = _changed(moved, drawn, p1[seen1])
     drawn1 = _changed(moved, empty, p1[seen1])
-    assert hit1.mean() >= 0.75 and drawn1.mean() >= 0.75, \
+    assert hit1.mean() >= 0.75 and drawn1.mean() >= 0.75, (
         f"after update(q1) the links are not drawn at {p1[seen1].round()}: {hit1}, {drawn1}; see {tmp_path}"
+    )
     assert _changed(moved, drawn, p0[_in_view(p0) & travelled]).mean() >= 0.5, "the old place is not cleared"
 
 
@@ -318,6 +353,7 @@ def test_panda_meshes_are_drawn_in_a_real_browser(tmp_path):
 
 
 if os.environ.get("KINENGINE_VIEWER_SCREENSHOT"):  # writes docs/images/viewer_abb.png; not a test
+
     @needs_view
     def test_write_documentation_screenshot(abb):
         with abb.view([0.4, 0.3, -0.2, 0.0, 0.6, 0.0], port=0, frames=["tool0"], ellipsoid="tool0") as v:

@@ -25,24 +25,52 @@ def _names(text: str) -> list[str]:
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``view`` on the kinengine command line."""
-    p = subparsers.add_parser("view", help="show the robot in the browser (interactive 3D viewer)",
-                              description=summary(__doc__))
+    p = subparsers.add_parser(
+        "view", help="show the robot in the browser (interactive 3D viewer)", description=summary(__doc__)
+    )
     p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf or .xacro file")
     add_robot_arguments(p)
-    p.add_argument("--q", type=parse_vector, default=None,
-                   help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
-    p.add_argument("--port", type=int, default=None,
-                   help="port to serve on (default 8080, or the next free one; 0: any free port)")
-    p.add_argument("--host", default="127.0.0.1",
-                   help="address to listen on (default 127.0.0.1; 0.0.0.0 serves the whole network)")
-    p.add_argument("--frames", type=_names, default=None,
-                   help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)")
-    p.add_argument("--ellipsoid", default=None, metavar="FRAME",
-                   help="draw the velocity manipulability ellipsoid of FRAME (and read out its pose)")
-    p.add_argument("--parameterization", default="euler_zyx", metavar="NAME",
-                   help="rotation parameterization of the pose readout (default euler_zyx)")
-    p.add_argument("--no-meshes", dest="meshes", action="store_false",
-                   help="draw URDF primitives and the skeleton only, without reading mesh files")
+    p.add_argument(
+        "--q",
+        type=parse_vector,
+        default=None,
+        help="comma-separated joint values [rad | m] (default: zero clipped into the limits)",
+    )
+    p.add_argument(
+        "--port",
+        type=int,
+        default=None,
+        help="port to serve on (default 8080, or the next free one; 0: any free port)",
+    )
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to listen on (default 127.0.0.1; 0.0.0.0 serves the whole network)",
+    )
+    p.add_argument(
+        "--frames",
+        type=_names,
+        default=None,
+        help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)",
+    )
+    p.add_argument(
+        "--ellipsoid",
+        default=None,
+        metavar="FRAME",
+        help="draw the velocity manipulability ellipsoid of FRAME (and read out its pose)",
+    )
+    p.add_argument(
+        "--parameterization",
+        default="euler_zyx",
+        metavar="NAME",
+        help="rotation parameterization of the pose readout (default euler_zyx)",
+    )
+    p.add_argument(
+        "--no-meshes",
+        dest="meshes",
+        action="store_false",
+        help="draw URDF primitives and the skeleton only, without reading mesh files",
+    )
     p.set_defaults(handler=handle)
     return p
 
@@ -53,8 +81,16 @@ def handle(args: argparse.Namespace) -> int:
     logging.getLogger("websockets.server").setLevel(logging.CRITICAL)
     robot = load_robot(args)
     frames = [robot.end_effector] if args.frames is None else args.frames
-    viewer = view(robot, args.q, port=args.port, host=args.host, frames=frames, ellipsoid=args.ellipsoid,
-                  parameterization=args.parameterization, meshes=args.meshes)
+    viewer = view(
+        robot,
+        args.q,
+        port=args.port,
+        host=args.host,
+        frames=frames,
+        ellipsoid=args.ellipsoid,
+        parameterization=args.parameterization,
+        meshes=args.meshes,
+    )
     try:
         print(f"kinengine: viewing {robot.name} at {viewer.url} (Ctrl-C to stop)", flush=True)
         while True:

@@ -18,7 +18,6 @@ page (a control loop can be watched live). Viser is an optional extra: ``pip ins
 from __future__ import annotations
 
 import contextlib
-import html
 import io
 import math
 import os
@@ -31,6 +30,7 @@ import numpy as np
 
 from ..errors import KinematicsError
 from ..parameterizations import ROTATION_PARAMETERIZATIONS, get_rotation
+from . import viewer_nodes as nodes
 from . import viewer_scene as scene
 
 DEFAULT_PORT = 8080
@@ -46,8 +46,10 @@ def _viser() -> Any:
         import trimesh  # noqa: F401  (read meshes; a dependency of yourdfpy, checked here all the same)
         import viser
     except ImportError as exc:
-        raise KinematicsError(f"the viewer needs the optional packages viser and trimesh ({exc.name} is "
-                              "missing): pip install 'kinengine[view]'") from None
+        raise KinematicsError(
+            f"the viewer needs the optional packages viser and trimesh ({exc.name} is "
+            "missing): pip install 'kinengine[view]'"
+        ) from None
     return viser
 
 
@@ -59,11 +61,20 @@ class Viewer:
     ``camera_look_at`` [m, in I] and ``fov`` [rad] describe the initial camera of a new page.
     """
 
-    def __init__(self, robot: Any, q: object = None, *, port: int | None = None, host: str = "127.0.0.1",
-                 frames: Sequence[str] = (), ellipsoid: str | None = None,
-                 parameterization: str = "euler_zyx", meshes: bool = True,
-                 singularity_warning: float = SINGULARITY_WARNING,
-                 packages: Mapping[str, str | os.PathLike] | None = None) -> None:
+    def __init__(
+        self,
+        robot: Any,
+        q: object = None,
+        *,
+        port: int | None = None,
+        host: str = "127.0.0.1",
+        frames: Sequence[str] = (),
+        ellipsoid: str | None = None,
+        parameterization: str = "euler_zyx",
+        meshes: bool = True,
+        singularity_warning: float = SINGULARITY_WARNING,
+        packages: Mapping[str, str | os.PathLike] | None = None,
+    ) -> None:
         viser = _viser()
         self.robot = robot
         q0: np.ndarray = robot.neutral() if q is None else robot.check_configuration(q, batch=False)
@@ -77,21 +88,36 @@ class Viewer:
         self.singularity_warning = float(singularity_warning)
         self._lock = threading.RLock()
         self._links = tuple(link.name for link in robot.description.links)
-        visuals = scene.read_visuals(robot.urdf_text, robot.source, meshes=meshes,
-                                     packages=robot.packages if packages is None else packages)
+        visuals = scene.read_visuals(
+            robot.urdf_text,
+            robot.source,
+            meshes=meshes,
+            packages=robot.packages if packages is None else packages,
+        )
         if visuals.error is not None:
-            warnings.warn(f"the visuals of {robot.name} could not be read ({visuals.error}); the robot is "
-                          "drawn as its skeleton", UserWarning, stacklevel=3)
+            warnings.warn(
+                f"the visuals of {robot.name} could not be read ({visuals.error}); the robot is "
+                "drawn as its skeleton",
+                UserWarning,
+                stacklevel=3,
+            )
         elif visuals.failures:
             (first, why), n = visuals.failures[0], len(visuals.failures)
-            warnings.warn(f"{n} mesh{'es' if n > 1 else ''} of {robot.name} could not be used "
-                          f"(first: {first}: {why}); "
-                          f"{'those links are' if n > 1 else 'that link is'} drawn as skeleton only",
-                          UserWarning, stacklevel=3)
+            warnings.warn(
+                f"{n} mesh{'es' if n > 1 else ''} of {robot.name} could not be used "
+                f"(first: {first}: {why}); "
+                f"{'those links are' if n > 1 else 'that link is'} drawn as skeleton only",
+                UserWarning,
+                stacklevel=3,
+            )
 
         with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner; the URL is self.url
-            self._server = server = viser.ViserServer(host=host, port=DEFAULT_PORT if port is None else port,
-                                                      label=f"kinengine: {robot.name}", verbose=False)
+            self._server = server = viser.ViserServer(
+                host=host,
+                port=DEFAULT_PORT if port is None else port,
+                label=f"kinengine: {robot.name}",
+                verbose=False,
+            )
         try:
             self._build(server, visuals, q0, parameterization)
         except BaseException:
@@ -120,53 +146,47 @@ class Viewer:
             node = server.scene.add_frame(f"/robot/{i}_{scene.node_name(link)}", show_axes=False)
             self._link_nodes[link] = node
             for k, v in enumerate(visuals.links.get(link, ())):
-                self._add_visual(server, f"{node.name}/visual_{k}", v)
+                nodes.add_visual(server, f"{node.name}/visual_{k}", v)
         self._skeleton = server.scene.add_line_segments(
-            "/robot/skeleton", scene.skeleton(self.robot, poses), colors=(60, 60, 60),
-            thickness=max(0.004, 0.01 * extent))
+            "/robot/skeleton",
+            scene.skeleton(self.robot, poses),
+            colors=(60, 60, 60),
+            thickness=max(0.004, 0.01 * extent),
+        )
         length = self.axis_length
-        self._triads = {name: server.scene.add_frame(f"/frames/{scene.node_name(name)}", axes_length=length,
-                                                     axes_radius=length / 25) for name in self.frames}
+        self._triads = {
+            name: server.scene.add_frame(
+                f"/frames/{scene.node_name(name)}", axes_length=length, axes_radius=length / 25
+            )
+            for name in self.frames
+        }
         self._ellipsoid = None
         if self.ellipsoid_frame is not None:
             semi = self.robot.velocity_ellipsoid(q, self.ellipsoid_frame).semi_axes
             self.ellipsoid_scale = 0.3 * extent / max(float(semi.max()), 1e-9)
             sphere = scene.unit_sphere()
             self._sphere = sphere
-            self._ellipsoid = server.scene.add_mesh_simple("/ellipsoid", sphere[0], sphere[1],
-                                                           color=(230, 150, 30), opacity=0.45, side="double")
+            self._ellipsoid = server.scene.add_mesh_simple(
+                "/ellipsoid", sphere[0], sphere[1], color=(230, 150, 30), opacity=0.45, side="double"
+            )
         self._build_gui(server, parameterization)
         self.q = q
         self._apply(q, from_gui=False)
-
-    def _add_visual(self, server: Any, name: str, v: scene.Visual) -> None:
-        wxyz, position = scene.wxyz(v.origin[:3, :3]), v.origin[:3, 3]
-        color = v.color or scene.DEFAULT_COLOR
-        if v.kind == "box":
-            server.scene.add_box(name, color=color, dimensions=v.size, wxyz=wxyz, position=position)
-        elif v.kind == "cylinder":
-            server.scene.add_cylinder(name, radius=v.size[0], height=v.size[1], color=color, wxyz=wxyz,
-                                      position=position)
-        elif v.kind == "sphere":
-            server.scene.add_icosphere(name, radius=v.size[0], color=color, wxyz=wxyz, position=position)
-        elif v.color is not None or getattr(v.mesh.visual, "kind", None) is None:  # mesh, URDF colour
-            server.scene.add_mesh_simple(name, np.asarray(v.mesh.vertices), np.asarray(v.mesh.faces),
-                                         color=color, wxyz=wxyz, position=position)
-        else:  # the mesh's own colours or textures
-            server.scene.add_mesh_trimesh(name, v.mesh, wxyz=wxyz, position=position)
 
     def _build_gui(self, server: Any, parameterization: str) -> None:
         ranges = scene.slider_ranges(self.robot)
         self._sliders = []
         with server.gui.add_folder("Coordinates q [rad | m]"):
             for name, (lo, hi) in zip(self.robot.joint_names, ranges, strict=True):
-                slider = server.gui.add_slider(name, min=lo, max=hi, step=1e-3,
-                                               initial_value=min(max(0.0, lo), hi))
+                slider = server.gui.add_slider(
+                    name, min=lo, max=hi, step=1e-3, initial_value=min(max(0.0, lo), hi)
+                )
                 slider.on_update(self._on_slider)
                 self._sliders.append(slider)
         with server.gui.add_folder(f"Pose of {self.readout_frame}"):
             self._parameterization = server.gui.add_dropdown(
-                "rotation", tuple(ROTATION_PARAMETERIZATIONS), initial_value=parameterization)
+                "rotation", tuple(ROTATION_PARAMETERIZATIONS), initial_value=parameterization
+            )
             self._parameterization.on_update(lambda _: self._refresh_readout())
             self._readout = server.gui.add_html("")
         self._robot_visible = server.gui.add_checkbox("show robot", True)
@@ -216,27 +236,11 @@ class Viewer:
         distance = float(get_rotation(name).singularity_distance(chi[3:]))
         self.readout = {"chi": chi, "distance": distance, "singular": distance < self.singularity_warning}
         labels = ("x", "y", "z", *get_rotation(name).labels)
-        rows = "".join(f"<tr><td>{html.escape(str(label))}</td>"
-                       f"<td style='text-align:right'>{value:+.4f}</td></tr>"
-                       for label, value in zip(labels, chi, strict=True))
-        color = "#d00000" if self.readout["singular"] else "#208020"
-        below = f" (below {self.singularity_warning:g})" if self.readout["singular"] else ""
-        self._readout.content = (
-            f"<table style='font-family:monospace;font-size:0.85em'>{rows}</table>"
-            f"<div style='color:{color};font-size:0.85em'>distance to the {html.escape(name)} singularity: "
-            f"{distance:.3g}{below}"
-            "</div>")
+        self._readout.content = nodes.readout_html(labels, chi, name, distance, self.singularity_warning)
 
     def shown_pose(self, link: str) -> np.ndarray:
         """T_IL (4, 4) [m] of ``link`` as sent to the browser (position and quaternion of its scene node)."""
-        node = self._link_nodes[link]
-        w, x, y, z = np.asarray(node.wxyz, dtype=float)
-        T = np.eye(4)
-        T[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]
-        T[:3, 3] = node.position
-        return T
+        return nodes.node_pose(self._link_nodes[link])
 
     def show_robot(self, visible: bool = True) -> None:
         """Show or hide the robot (visuals and skeleton); frames and the ellipsoid stay."""
@@ -260,11 +264,19 @@ class Viewer:
         return f"<kinengine Viewer of {self.robot.name} at {self.url}>"
 
 
-def view(robot: Any, q: object = None, *, port: int | None = None, host: str = "127.0.0.1",
-         frames: Sequence[str] = (),
-         ellipsoid: str | None = None, parameterization: str = "euler_zyx", meshes: bool = True,
-         singularity_warning: float = SINGULARITY_WARNING,
-         packages: Mapping[str, str | os.PathLike] | None = None) -> Viewer:
+def view(
+    robot: Any,
+    q: object = None,
+    *,
+    port: int | None = None,
+    host: str = "127.0.0.1",
+    frames: Sequence[str] = (),
+    ellipsoid: str | None = None,
+    parameterization: str = "euler_zyx",
+    meshes: bool = True,
+    singularity_warning: float = SINGULARITY_WARNING,
+    packages: Mapping[str, str | os.PathLike] | None = None,
+) -> Viewer:
     """Serve ``robot`` at q (dof,) (None: neutral) in the browser; returns the running :class:`Viewer`.
 
     ``port`` None: 8080 (the next free one if taken; 0: any free port; ``Viewer.url`` says which);
@@ -275,9 +287,18 @@ def view(robot: Any, q: object = None, *, port: int | None = None, host: str = "
     ``packages``, then ``ROS_PACKAGE_PATH``, then the folders above the robot's file); ``host``
     "0.0.0.0" serves the network.
     """
-    return Viewer(robot, q, port=port, host=host, frames=frames, ellipsoid=ellipsoid,
-                  parameterization=parameterization, meshes=meshes, singularity_warning=singularity_warning,
-                  packages=packages)
+    return Viewer(
+        robot,
+        q,
+        port=port,
+        host=host,
+        frames=frames,
+        ellipsoid=ellipsoid,
+        parameterization=parameterization,
+        meshes=meshes,
+        singularity_warning=singularity_warning,
+        packages=packages,
+    )
 
 
 __all__ = ["DEFAULT_PORT", "FOV", "SINGULARITY_WARNING", "Viewer", "view"]

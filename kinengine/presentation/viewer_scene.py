@@ -56,17 +56,26 @@ class Visuals:
     error: str | None = None
 
 
-def read_visuals(urdf_text: str, source: str, *, meshes: bool = True,
-                 packages: Mapping[str, str | os.PathLike] | None = None) -> Visuals:
+def read_visuals(
+    urdf_text: str,
+    source: str,
+    *,
+    meshes: bool = True,
+    packages: Mapping[str, str | os.PathLike] | None = None,
+) -> Visuals:
     """The visuals of every link of ``urdf_text``; ``source`` (a file path or "<string>") anchors relative
     file names and ``package://`` searches, ``packages`` maps ROS package names to folders (see
     :func:`kinengine.urdf.packages.resolve_uri`). ``meshes=False`` skips mesh files (primitives only)."""
     import yourdfpy
 
     try:
-        urdf = yourdfpy.URDF.load(io.BytesIO(urdf_text.encode("utf-8")), build_scene_graph=False,
-                                  load_meshes=False, build_collision_scene_graph=False,
-                                  load_collision_meshes=False)
+        urdf = yourdfpy.URDF.load(
+            io.BytesIO(urdf_text.encode("utf-8")),
+            build_scene_graph=False,
+            load_meshes=False,
+            build_collision_scene_graph=False,
+            load_collision_meshes=False,
+        )
     except Exception as exc:  # yourdfpy reports bad attributes with assorted builtin errors
         return Visuals(error=f"yourdfpy could not read them: {type(exc).__name__}: {exc}")
     named = {m.name: _rgb(m) for m in (urdf.robot.materials or []) if m.name}
@@ -82,8 +91,9 @@ def read_visuals(urdf_text: str, source: str, *, meshes: bool = True,
             if g.box is not None:
                 item = Visual("box", origin, tuple(float(s) for s in g.box.size), color=color)
             elif g.cylinder is not None:
-                item = Visual("cylinder", origin, (float(g.cylinder.radius), float(g.cylinder.length)),
-                              color=color)
+                item = Visual(
+                    "cylinder", origin, (float(g.cylinder.radius), float(g.cylinder.length)), color=color
+                )
             elif g.sphere is not None:
                 item = Visual("sphere", origin, (float(g.sphere.radius),), color=color)
             elif g.mesh is not None and meshes:
@@ -107,8 +117,9 @@ def _rgb(material: object) -> tuple[int, int, int] | None:
     return (r, g, b)
 
 
-def _load_mesh(filename: str, scale: object, start: Path | None,
-               packages: Mapping[str, str | os.PathLike] | None) -> tuple[object, str]:
+def _load_mesh(
+    filename: str, scale: object, start: Path | None, packages: Mapping[str, str | os.PathLike] | None
+) -> tuple[object, str]:
     """(trimesh.Trimesh scaled, "") or (None, why not)."""
     import trimesh
 
@@ -169,8 +180,9 @@ def camera(points: np.ndarray, fov: float) -> tuple[np.ndarray, np.ndarray]:
     return look_at + distance * direction, look_at
 
 
-def project(points: np.ndarray, position: np.ndarray, look_at: np.ndarray, fov: float,
-            width: int, height: int) -> np.ndarray:
+def project(
+    points: np.ndarray, position: np.ndarray, look_at: np.ndarray, fov: float, width: int, height: int
+) -> np.ndarray:
     """Pixel (column, row) (N, 2) of points (N, 3) [m] for a pinhole camera at ``position`` looking at
     ``look_at`` with z up and vertical field of view ``fov`` [rad] (three.js' PerspectiveCamera)."""
     forward = np.asarray(look_at, float) - np.asarray(position, float)
