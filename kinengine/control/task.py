@@ -139,6 +139,8 @@ class Task:
                 "JAdot": self._JAdot[rows_i],
                 "chi_dot": self._chi_dot[rows_i],
             }
+            if b is None and not a.adopted:
+                a.adopt(out["J"], out["Jdot"], out["twist"])
             block = FrameBlock(spec, pm, a, b, n, out, row, part)
             self._blocks.append(block)
             row, part = row + pm.size, part + len(pm.parts)

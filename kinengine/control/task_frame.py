@@ -47,7 +47,13 @@ class FrameKinematics:
         self.folded, self.folded_dot = np.empty((6, dof)), np.empty((6, dof))
         self.tmp = np.empty((3, dof))
         self.J, self.Jdot, self.twist = np.zeros((6, dof)), np.zeros((6, dof)), np.zeros(6)
+        self.adopted = False
         self.Jw = self.folded  # J_w of this frame's joints, folded (set by update)
+
+    def adopt(self, J: np.ndarray, Jdot: np.ndarray, twist: np.ndarray) -> None:
+        """Write J, J̇ and the twist straight into these views (an absolute block's slices of the Task's
+        arrays) instead of private buffers: that block then copies nothing."""
+        self.J, self.Jdot, self.twist, self.adopted = J, Jdot, twist, True
 
     def update(self, Jw: np.ndarray, dJw: np.ndarray, qdot: np.ndarray | None) -> None:
         pin.updateFramePlacement(self.model, self.data, self.fid)
@@ -79,6 +85,10 @@ class FrameKinematics:
         S[0, 1], S[0, 2], S[1, 0], S[1, 2], S[2, 0], S[2, 1] = vz, -vy, -vz, vx, vy, -vx
         np.dot(S, Jw[3:], out=self.tmp)
         np.add(Jdot[:3], self.tmp, out=Jdot[:3])
+
+
+_POSE_ROWS = struct.Struct("12d")
+"""The first three rows of a (4, 4) pose (C-contiguous float64): 12 doubles in one call."""
 
 
 def _skew(S: np.ndarray, x: float, y: float, z: float) -> None:
@@ -188,18 +198,16 @@ class FrameBlock:
         if self.b is None:
             a = self.a
             C, p = a.C, a.pos
-            np.copyto(self.J, a.J)
-            if qdot is not None:
-                np.copyto(self.Jdot, a.Jdot)
-                np.copyto(self.twist, a.twist)
+            if a.J is not self.J:  # another block adopted this frame's kinematics
+                np.copyto(self.J, a.J)
+                if qdot is not None:
+                    np.copyto(self.Jdot, a.Jdot)
+                    np.copyto(self.twist, a.twist)
         else:
             C, p = self._relative(qdot)
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
         px, py, pz = p
-        pose = self.pose
-        pose[0, 0], pose[0, 1], pose[0, 2], pose[0, 3] = c00, c01, c02, px
-        pose[1, 0], pose[1, 1], pose[1, 2], pose[1, 3] = c10, c11, c12, py
-        pose[2, 0], pose[2, 1], pose[2, 2], pose[2, 3] = c20, c21, c22, pz
+        _POSE_ROWS.pack_into(self.pose, 0, c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
         values: list[float] = []
         entries: tuple[float, ...] = ()
         previous, error, flags = self.previous, None, []
