@@ -19,7 +19,6 @@ from .errors import (
 from .control.ik import IKResult
 from .control.manipulability import SingularityReport
 from .control.frame_task import FrameTask
-from .control.frame_task import FrameTask
 from .control.pose_error import pose_error
 from .control.qp import DifferentialIK, PoseTarget, PostureTarget
 from .control.task import Task
@@ -33,7 +32,6 @@ __all__ = [
     "ConfigurationError",
     "DifferentialIK",
     "FrameNotFoundError",
-    "FrameTask",
     "FrameTask",
     "IKResult",
     "KinematicSingularityError",
