@@ -245,6 +245,7 @@ class Viewer:
     def show_robot(self, visible: bool = True) -> None:
         """Show or hide the robot (visuals and skeleton); frames and the ellipsoid stay."""
         self._root.visible = bool(visible)
+        self._robot_visible.value = bool(visible)  # the page's checkbox follows (no-op if it is the caller)
 
     # -- lifetime ----------------------------------------------------------------------------
     def close(self) -> None:
