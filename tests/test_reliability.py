@@ -387,6 +387,9 @@ def test_only_reference_names_and_pinocchio_enums_are_references(R, reference):
     calls = [lambda: R.jacobian(q, reference=reference), lambda: R.jacobian(np.tile(q, (2, 1)), reference=reference),
              lambda: R.kinematics(q, reference=reference), lambda: R.jacobian_time_variation(q, q, reference=reference),
              lambda: R.kinematic_hessian(q, reference=reference)]
+    if hasattr(R, "frame"):  # the hot-loop frame handle
+        handle = R.frame()
+        calls += [lambda: handle.jacobian(q, reference=reference), lambda: handle.kinematics(q, reference=reference)]
     for call in calls:
         with pytest.raises(OptionError, match="unknown reference") as info:
             call()
