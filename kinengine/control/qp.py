@@ -32,7 +32,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
-import qpsolvers
 
 from ..errors import OptionError
 from ..kinematics.relative import relative_terms
@@ -245,6 +244,8 @@ class DifferentialIK:
             step = None
         if step is None or not ((step >= lb).all() and (step <= ub).all()):
             self.qp_calls += 1
+            import qpsolvers  # only when a bound is active: keeps `import kinengine` light
+
             step = qpsolvers.solve_qp(
                 H, c, lb=np.clip(lb, -_BIG, _BIG), ub=np.clip(ub, -_BIG, _BIG), solver=self.solver
             )
