@@ -479,3 +479,11 @@ def test_a_large_batch_from_an_atexit_handler_runs():
     ''')
     assert child.returncode == 0 and child.stderr == "", child.stderr
     assert child.stdout.strip() == "ok (200000, 4, 4) True"
+
+
+def test_a_robot_with_locked_joints_pickles_as_it_is():
+    robot = kinengine.load("panda_arm")  # the Panda with its finger locked: an edited description
+    again = pickle.loads(pickle.dumps(robot))
+    q = robot.random_configuration(5)
+    assert again.dof == robot.dof == 7 and again.joint_names == robot.joint_names
+    np.testing.assert_array_equal(again.kinematics(q)[1], robot.kinematics(q)[1])
