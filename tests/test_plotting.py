@@ -89,8 +89,6 @@ def test_show_defaults_to_robot_name_png_in_cwd(tmp_path, monkeypatch, capsys):
     (["--frames", "ee,tool9"], "unknown frame 'tool9'"),
     (["--ellipsoid", "eee"], "unknown frame 'eee'. Did you mean 'ee'"),
     (["--view", "10"], "--view takes two angles ELEV,AZIM"),
-    (["--dpi", "0"], "--dpi must be a positive number"),
-    (["-o", "no/such/dir/x.png"], "choose another -o PATH"),
     (["-o", "picture.xyz"], "choose another -o PATH"),
 ])
 def test_show_bad_input_exits_2_with_a_message(args, message, tmp_path, monkeypatch, capsys):
@@ -101,11 +99,17 @@ def test_show_bad_input_exits_2_with_a_message(args, message, tmp_path, monkeypa
     assert not list(tmp_path.iterdir())
 
 
-def test_show_non_numeric_q_is_an_argparse_error(capsys):
+@pytest.mark.parametrize("args, message", [
+    (["--q", "0.1,a,0.2"], "argument --q: expected comma-separated numbers such as 0.1,-0.3,2e-3; entry 2 is 'a'"),
+    (["--dpi", "0"], "argument --dpi: expected a whole number in [1, 600], got 0"),
+    (["-o", "no/such/dir/x.png"], "folder 'no/such/dir' does not exist"),
+])
+def test_show_bad_arguments_are_argparse_errors_before_any_work(args, message, capsys):
     with pytest.raises(SystemExit) as exc:
-        main(["show", "planar_3dof", "--q", "0.1,a,0.2"])
+        main(["show", "planar_3dof", *args])
     assert exc.value.code == 2
-    assert "expected comma-separated numbers, got '0.1,a,0.2'" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and message in err
 
 
 def test_importing_kinengine_and_its_cli_does_not_import_matplotlib():
