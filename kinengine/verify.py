@@ -144,7 +144,8 @@ def _box(robot) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _check_count(value: object, name: str, most: int) -> None:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or not 0 <= value <= most:
+    whole = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
+    if not whole or not 0 <= value <= most:
         raise OptionError(f"{name} must be a whole number in [0, {most}], got {value!r:.40}")
 
 

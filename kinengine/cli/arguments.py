@@ -46,8 +46,8 @@ def parse_vector(text: str) -> list[float]:
         stripped = entry.strip(_SPACE)
         if not _FLOAT.fullmatch(stripped):
             what = "an empty entry" if not stripped else f"{printable(stripped)!r}"
-            raise argparse.ArgumentTypeError(f"expected comma-separated numbers such as 0.1,-0.3,2e-3; entry {i + 1} "
-                                             f"is {what}")
+            raise argparse.ArgumentTypeError("expected comma-separated numbers such as 0.1,-0.3,2e-3; "
+                                             f"entry {i + 1} is {what}")
         values.append(float(stripped))
     return values
 
@@ -102,13 +102,13 @@ def output_path(text: str) -> Path:
             raise argparse.ArgumentTypeError(f"cannot write {shown!r}: folder {printable(str(folder))!r} "
                                              "does not exist")
         if not os.access(folder, os.W_OK | os.X_OK):
-            raise argparse.ArgumentTypeError(f"cannot write {shown!r}: folder {printable(str(folder))!r} is not "
-                                             "writable")
+            raise argparse.ArgumentTypeError(f"cannot write {shown!r}: folder {printable(str(folder))!r} "
+                                             "is not writable")
         if path.exists():
             mode = path.stat().st_mode
             if not stat.S_ISREG(mode) and os.path.realpath(path) != os.devnull:
-                raise argparse.ArgumentTypeError(f"cannot write {shown!r}: not a regular file (a device, FIFO "
-                                                 "or socket)")
+                raise argparse.ArgumentTypeError(f"cannot write {shown!r}: not a regular file "
+                                                 "(a device, FIFO or socket)")
             if not os.access(path, os.W_OK) or not mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH):
                 # the mode bits too: root could write a file marked read-only, but should not overwrite it
                 raise argparse.ArgumentTypeError(f"cannot write {shown!r}: the file is read-only")

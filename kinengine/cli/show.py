@@ -12,7 +12,8 @@ import argparse
 from pathlib import Path
 import re
 
-from .arguments import add_robot_arguments, bounded_int, load_robot, name_argument, output_path, parse_vector, summary
+from .arguments import (add_robot_arguments, bounded_int, load_robot, name_argument, output_path,
+                        parse_vector, summary)
 from ..errors import KinematicsError
 from ..presentation.plotting import plot_robot
 

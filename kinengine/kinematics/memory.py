@@ -13,8 +13,8 @@ Data it makes, that the peak fits in the memory left with :data:`RESERVE` to spa
 :class:`~kinengine.errors.ResourceLimitError` (one line: the size, the memory left, the fix)
 otherwise; a ``MemoryError`` from Pinocchio becomes the same error. The check reads a few
 ``/proc`` and cgroup files (Linux; elsewhere only the MemoryError is translated) and is skipped for
-models whose Data is smaller than :data:`CHECK_FROM` — the 6-dof arms never pay for it. It runs once per thread
-and model, never on the hot path.
+models whose Data is smaller than :data:`CHECK_FROM` — the 6-dof arms never pay for it. It runs once per
+thread and model, never on the hot path.
 """
 
 from __future__ import annotations
@@ -83,7 +83,8 @@ def _too_big(what: str, nv: int, need: int, left: int | None) -> ResourceLimitEr
     mib = 1024**2
     room = "an unknown amount" if left is None else f"{max(left, 0) / mib:.0f} MiB"
     return ResourceLimitError(
-        f"{what} ({nv} joint coordinates) needs ~{need / mib:.0f} MiB of Pinocchio Data per thread that uses it "
+        f"{what} ({nv} joint coordinates) needs ~{need / mib:.0f} MiB of Pinocchio Data per thread that uses "
+        "it "
         f"(~{2 * need / mib:.0f} MiB while it is made, plus {RESERVE // mib} MiB kept free) but only {room} "
         "of memory is left: use it from fewer threads (e.g. a pool of a few workers), a smaller model, "
         "or raise the memory limit")

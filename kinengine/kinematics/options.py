@@ -76,13 +76,14 @@ def checked_parameterization(position: object, rotation: object, rows: object) -
     if isinstance(rows, str):
         return position, rotation, (rows,)
     if isinstance(rows, (bytes, dict)) or not hasattr(rows, "__iter__"):
-        raise ParameterizationError(f"rows must be None, a row label or a sequence of labels (str) and indices "
-                                    f"(int), got {type(rows).__name__} {_short(rows)}")
+        raise ParameterizationError("rows must be None, a row label or a sequence of labels (str) and "
+                                    f"indices (int), got {type(rows).__name__} {_short(rows)}")
     selected = tuple(rows)
     for row in selected:
-        if not (type(row) is str or (isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_)))):
-            raise ParameterizationError(f"rows must hold labels (str) and indices (int), got {type(row).__name__} "
-                                        f"{_short(row)}")
+        index = isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_))
+        if not (type(row) is str or index):
+            raise ParameterizationError(f"rows must hold labels (str) and indices (int), got "
+                                        f"{type(row).__name__} {_short(row)}")
     return position, rotation, selected
 
 
@@ -91,5 +92,5 @@ def _short(value: object) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-__all__ = ["checked_flag", "checked_nonnegative", "checked_parameterization", "checked_rng", "checked_threshold",
-           "checked_tolerance"]
+__all__ = ["checked_flag", "checked_nonnegative", "checked_parameterization", "checked_rng",
+           "checked_threshold", "checked_tolerance"]

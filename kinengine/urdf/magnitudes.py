@@ -26,14 +26,14 @@ def check_magnitudes(links: Sequence[Link], joints: Sequence[Joint], *, source: 
         where = f"joint {joint.name!r}"
         _bounded(joint.xyz, offset, "origin xyz", "max_offset", "m", where, joint.line, source)
         if joint.mimic is not None:
-            _bounded((joint.mimic.offset,), offset, "mimic offset", "max_offset", "m or rad", where, joint.line,
-                     source)
+            _bounded((joint.mimic.offset,), offset, "mimic offset", "max_offset", "m or rad", where,
+                     joint.line, source)
             _bounded((joint.mimic.multiplier,), factor, "mimic multiplier", "max_multiplier", "", where,
                      joint.line, source)
     for link in links:
         if link.inertial is not None:
-            _bounded(link.inertial.xyz, offset, "inertial origin xyz", "max_offset", "m", f"link {link.name!r}",
-                     link.line, source)
+            _bounded(link.inertial.xyz, offset, "inertial origin xyz", "max_offset", "m",
+                     f"link {link.name!r}", link.line, source)
 
 
 def _bounded(values: Sequence[float], bound: float, what: str, field: str, unit: str, where: str,

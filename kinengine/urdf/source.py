@@ -49,8 +49,8 @@ def read_bytes_once(path: str | os.PathLike[str], limits: Limits = LIMITS) -> tu
             kind = "a directory" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
             raise URDFError(f"not a regular file ({kind})", source=source)
         if info.st_size > limits.max_bytes:
-            raise URDFError(f"the file is {info.st_size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
-                            source=source)
+            raise URDFError(f"the file is {info.st_size} bytes, more than Limits.max_bytes = "
+                            f"{limits.max_bytes}", source=source)
         chunks, left = [], limits.max_bytes + 1
         while left > 0:
             chunk = os.read(fd, min(left, 1 << 20))
