@@ -17,8 +17,17 @@ class KinematicsError(Exception):
 
     Every kinengine error pickles (so it crosses process boundaries, e.g. out of a
     ``multiprocessing.Pool`` worker) and deep-copies: it is rebuilt with the arguments its
-    constructor was given, then its attributes are restored.
+    constructor was given, then its attributes are restored. Its message is one line: line breaks in a
+    message (e.g. the repr of an array that was passed where a name belongs) become spaces; only
+    :class:`KinematicSingularityError`, whose message is the singularity report, keeps its lines.
     """
+
+    multiline = False
+
+    def __init__(self, *args: object) -> None:
+        if not self.multiline and len(args) == 1 and isinstance(args[0], str) and "\n" in args[0]:
+            args = (re.sub(r"\s*[\r\n]+\s*", " ", args[0]),)
+        super().__init__(*args)
 
     def __reduce__(self) -> tuple:
         args, kwargs = self.__dict__.get("_init", (self.args, {}))
@@ -134,6 +143,8 @@ class RepresentationSingularityError(KinematicsError, ValueError):
 
 class KinematicSingularityError(KinematicsError, ValueError):
     """The geometric Jacobian J_e0(q) loses rank: the robot cannot move its frame in some direction."""
+
+    multiline = True  # the message is the SingularityReport, one line per lost direction
 
 
 class ResourceLimitError(KinematicsError, MemoryError):
