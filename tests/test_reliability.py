@@ -88,6 +88,19 @@ def test_deepest_admitted_chain_loads_and_computes_in_a_128_KiB_thread():
     assert lateral == 0.0  # every axis along z through the same line: no x/y velocity
 
 
+def test_deepest_admitted_chain_loads_in_a_main_thread_with_a_256_KiB_stack_limit():
+    # the main thread builds in place only when RLIMIT_STACK is at least twice what the tree needs
+    child = run_child('''
+        resource.setrlimit(resource.RLIMIT_STACK, (256 * 1024, resource.getrlimit(resource.RLIMIT_STACK)[1]))
+        import kinengine
+        robot = kinengine.load_urdf_string(chain(128))
+        print(robot.dof, float(robot.frame_pose(robot.neutral(), "l128")[2, 3]))
+    ''')
+    assert child.returncode == 0, child.stderr
+    dof, z = child.stdout.split()
+    assert dof == "128" and float(z) == pytest.approx(1.28, abs=1e-12)
+
+
 def test_raised_tree_depth_gets_a_bigger_build_stack():
     # 9,000 fixed levels need ~20 MiB of Pinocchio stack: more than the 16 MiB default build thread
     child = run_child('''

@@ -17,7 +17,7 @@ import pinocchio as pin
 
 from ..errors import URDFError
 from ..urdf import RobotDescription
-from .stack import call_with_big_stack, stack_for_depth
+from .stack import call_with_big_stack, stack_for_depth, stack_needed
 
 _UNBOUNDED = float(np.finfo(np.float64).max)
 
@@ -95,7 +95,8 @@ def _build(xml: str, depth: int) -> pin.Model:
     """``pin.buildModelFromXML(xml)`` on a thread with a known stack, big enough for a tree ``depth`` levels
     deep: Pinocchio's parser recurses once per level and a small thread stack would overflow (see
     :mod:`kinengine.model.stack`)."""
-    return call_with_big_stack(lambda: pin.buildModelFromXML(xml), stack_for_depth(depth))
+    build = lambda: pin.buildModelFromXML(xml)  # noqa: E731
+    return call_with_big_stack(build, stack_for_depth(depth), stack_needed(depth))
 
 
 def _depth(description: RobotDescription) -> int:

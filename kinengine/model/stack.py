@@ -3,11 +3,14 @@
 Pinocchio's URDF model builder recurses once per level of the kinematic tree (~2 KiB of stack per
 level, measured on pin 4.1), and Python cannot tell how much stack the calling thread has left: a
 thread made with ``threading.stack_size(128 * 1024)`` crashes (SIGSEGV) on a 120-level chain that the
-default :class:`~kinengine.urdf.Limits` admit. So every Pinocchio model build runs on a fresh,
-short-lived thread made with :data:`BUILD_STACK` bytes of stack, whatever thread called ``load``;
-the calling thread waits for it. ``threading.stack_size`` is process-wide, so it is set and restored
-under a lock, only around ``Thread.start``. When no thread can be started (interpreter shutdown) the
-work runs on the calling thread, as it would without this module.
+default :class:`~kinengine.urdf.Limits` admit. So a Pinocchio model build runs on a fresh,
+short-lived thread made with :data:`BUILD_STACK` bytes of stack (more for deeper trees, see
+:func:`stack_for_depth`), and the calling thread waits for it — unless the caller is the main thread
+and its stack limit (``RLIMIT_STACK``, the main thread's stack on Linux) is at least twice what the
+tree needs: then the build runs in place and costs no thread (~1 ms). ``threading.stack_size`` is
+process-wide, so it is set and restored under a lock, only around ``Thread.start``. When no thread
+can be started (interpreter shutdown) the work runs on the calling thread, as it would without this
+module.
 """
 
 from __future__ import annotations
@@ -15,6 +18,11 @@ from __future__ import annotations
 from collections.abc import Callable
 import threading
 from typing import TypeVar
+
+try:
+    import resource
+except ImportError:  # not on Windows: always use the build thread
+    resource = None  # type: ignore[assignment]
 
 from ..errors import ResourceLimitError
 
@@ -32,13 +40,25 @@ _START_LOCK = threading.Lock()
 def stack_for_depth(depth: int) -> int:
     """[bytes] the build stack for a tree ``depth`` levels deep: :data:`BUILD_STACK`, or ~4 KiB per level
     (twice the measured ~2 KiB) plus 1 MiB when that is more."""
-    return max(BUILD_STACK, depth * PER_LEVEL + 1024 * 1024)
+    return max(BUILD_STACK, stack_needed(depth))
 
 
-def call_with_big_stack(function: Callable[[], T], stack: int = BUILD_STACK) -> T:
+def main_thread_has(stack: int) -> bool:
+    """Whether the calling thread is the main thread and its stack limit is at least twice ``stack``."""
+    if resource is None or threading.current_thread() is not threading.main_thread():
+        return False
+    soft, _ = resource.getrlimit(resource.RLIMIT_STACK)
+    return soft == resource.RLIM_INFINITY or soft >= 2 * stack
+
+
+def call_with_big_stack(function: Callable[[], T], stack: int = BUILD_STACK, need: int | None = None) -> T:
     """``function()`` run on a thread with ``stack`` bytes of stack; its result, or its exception
-    re-raised in the calling thread. When the thread cannot be started, a small job (``stack`` at most
-    :data:`BUILD_STACK`) runs on the calling thread; a larger one is a ResourceLimitError."""
+    re-raised in the calling thread. ``need`` [bytes]: what the job needs; when given and the main thread
+    has twice that (:func:`main_thread_has`), the job runs in place. When the thread cannot be started,
+    a small job (``stack`` at most :data:`BUILD_STACK`) runs on the calling thread; a larger one is a
+    ResourceLimitError."""
+    if need is not None and main_thread_has(need):
+        return function()
     box: list[tuple[bool, object]] = []
 
     def run() -> None:
@@ -71,4 +91,10 @@ def call_with_big_stack(function: Callable[[], T], stack: int = BUILD_STACK) -> 
     return value  # type: ignore[return-value]
 
 
-__all__ = ["BUILD_STACK", "PER_LEVEL", "call_with_big_stack", "stack_for_depth"]
+def stack_needed(depth: int) -> int:
+    """[bytes] what building a tree ``depth`` levels deep needs: ~4 KiB per level plus 1 MiB for the rest."""
+    return depth * PER_LEVEL + 1024 * 1024
+
+
+__all__ = ["BUILD_STACK", "PER_LEVEL", "call_with_big_stack", "main_thread_has", "stack_for_depth",
+           "stack_needed"]
