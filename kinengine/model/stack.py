@@ -34,6 +34,11 @@ BUILD_STACK = 16 * 1024 * 1024
 """[bytes] stack of the build thread: 4x what the deepest admitted tree (Limits.max_tree_depth = 128,
 ~300 KiB) needs, and 2x a Linux main thread's default; only the pages it touches are ever resident."""
 
+IN_PLACE_MAX = 4 * 1024 * 1024
+"""[bytes] the most stack a build may need to run in place on the main thread (~750 levels): the space
+below the main stack is reserved from the limit at program start, so a limit raised later is not
+trusted for more."""
+
 _START_LOCK = threading.Lock()
 
 
@@ -57,7 +62,7 @@ def call_with_big_stack(function: Callable[[], T], stack: int = BUILD_STACK, nee
     has twice that (:func:`main_thread_has`), the job runs in place. When the thread cannot be started,
     a small job (``stack`` at most :data:`BUILD_STACK`) runs on the calling thread; a larger one is a
     ResourceLimitError."""
-    if need is not None and main_thread_has(need):
+    if need is not None and need <= IN_PLACE_MAX and main_thread_has(need):
         return function()
     box: list[tuple[bool, object]] = []
 
@@ -96,5 +101,5 @@ def stack_needed(depth: int) -> int:
     return depth * PER_LEVEL + 1024 * 1024
 
 
-__all__ = ["BUILD_STACK", "PER_LEVEL", "call_with_big_stack", "main_thread_has", "stack_for_depth",
+__all__ = ["BUILD_STACK", "IN_PLACE_MAX", "PER_LEVEL", "call_with_big_stack", "main_thread_has", "stack_for_depth",
            "stack_needed"]
