@@ -2,9 +2,9 @@
 
 A module may import modules of its own layer or of lower layers, never of a higher one; the
 command line imports only the public API. Layers above the kinematics take a Robot object as an
-argument and use its public methods; only the facade (``kinengine.robot``) constructs one. ``tests/test_architecture.py`` reads every module's
-imports from the source (ast) and enforces these rules, no import cycles, and no import of
-another module's private (underscore) names.
+argument and use its public methods; only the facade (``kinengine.robot``) constructs one.
+``tests/test_architecture.py`` reads every module's imports from the source (ast) and enforces these
+rules, no import cycles, and no import of another module's private (underscore) names.
 """
 
 from __future__ import annotations
@@ -24,8 +24,15 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 """(layer name, module prefixes) from the bottom up; a module belongs to the longest prefix it matches."""
 
 PUBLIC_API: tuple[str, ...] = (
-    "kinengine", "kinengine.errors", "kinengine.parameterizations", "kinengine.urdf", "kinengine.verify",
-    "kinengine.reference", "kinengine.presentation", "kinengine.loading", "kinengine.robot",
+    "kinengine",
+    "kinengine.errors",
+    "kinengine.parameterizations",
+    "kinengine.urdf",
+    "kinengine.verify",
+    "kinengine.reference",
+    "kinengine.presentation",
+    "kinengine.loading",
+    "kinengine.robot",
 )
 """What the command line may import (besides its own modules)."""
 

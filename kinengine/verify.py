@@ -16,11 +16,11 @@ usable range (continuous, or lower >= upper as in some exported files) spans [-�
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
 import itertools
 import math
 import sys
 import warnings
+from dataclasses import asdict, dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -39,7 +39,7 @@ MAX_CORNERS = 64
 MAX_SAMPLES = 100_000
 """The most random configurations one verify run takes (each costs a finite-difference Jacobian per frame)."""
 BOX = 100.0
-"""[m or rad] joint limits beyond ±BOX are sampled within ±BOX (limits of ±1e308 would overflow the sampler)."""
+"""[m or rad] joint limits beyond ±BOX are sampled within ±BOX (±1e308 would overflow the sampler)."""
 
 
 @dataclass(frozen=True)
@@ -49,7 +49,7 @@ class CheckResult:
     check: str
     max_error: float
     tolerance: float
-    compared: int          # number of (frame, configuration) pairs or samples compared
+    compared: int  # number of (frame, configuration) pairs or samples compared
     note: str = ""
 
     @property
@@ -74,18 +74,25 @@ class VerifyReport:
     def table(self) -> str:
         """The report as a fixed-width text table: check, max error, tolerance, pass."""
         width = max(len(c.check) for c in self.checks)
-        lines = [f"{self.robot}: {self.dof} dof, {self.frames} frames, {self.configurations} configurations",
-                 f"{'check':<{width}}  {'max error':>10}  {'tolerance':>9}  pass"]
+        lines = [
+            f"{self.robot}: {self.dof} dof, {self.frames} frames, {self.configurations} configurations",
+            f"{'check':<{width}}  {'max error':>10}  {'tolerance':>9}  pass",
+        ]
         for c in self.checks:
             verdict = "NO  " if not c.passed else "skip" if c.compared == 0 else "yes "
-            lines.append(f"{c.check:<{width}}  {c.max_error:>10.2e}  {c.tolerance:>9.0e}  {verdict}"
-                         + (f"  ({c.note})" if c.note else ""))
+            lines.append(
+                f"{c.check:<{width}}  {c.max_error:>10.2e}  {c.tolerance:>9.0e}  {verdict}"
+                + (f"  ({c.note})" if c.note else "")
+            )
         lines.append("PASSED" if self.passed else "FAILED")
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
-        return {**asdict(self), "passed": self.passed,
-                "checks": [{**asdict(c), "passed": c.passed} for c in self.checks]}
+        return {
+            **asdict(self),
+            "passed": self.passed,
+            "checks": [{**asdict(c), "passed": c.passed} for c in self.checks],
+        }
 
 
 def verify(robot, samples: int = 20, seed: int = 0, progress: bool = False) -> VerifyReport:
@@ -97,8 +104,9 @@ def verify(robot, samples: int = 20, seed: int = 0, progress: bool = False) -> V
     _check_count(samples, "samples", MAX_SAMPLES)
     _check_count(seed, "seed", 2**63 - 1)
     rng = np.random.default_rng(seed)
-    ref = ReferenceKinematics.from_urdf_string(robot.urdf_text, joint_names=robot.joint_names,
-                                               source=robot.source)
+    ref = ReferenceKinematics.from_urdf_string(
+        robot.urdf_text, joint_names=robot.joint_names, source=robot.source
+    )
     lower, upper = _box(robot)
     q_smooth = np.vstack([np.zeros((1, robot.dof)), rng.uniform(lower, upper, size=(samples, robot.dof))])
     q_all = np.vstack([q_smooth, _corners(lower, upper, rng)])
@@ -107,27 +115,42 @@ def verify(robot, samples: int = 20, seed: int = 0, progress: bool = False) -> V
     bar = _progress_bar(progress, len(frames) + 1 + len(params or ()), robot.name)
 
     missing = sorted(set(robot.frame_names) ^ set(ref.frame_names))
-    checks = [CheckResult("frame names match the reference", float(len(missing)), 0.0,
-                          len(set(robot.frame_names) | set(ref.frame_names)),
-                          f"only on one side: {', '.join(missing[:5])}" if missing else "")]
+    checks = [
+        CheckResult(
+            "frame names match the reference",
+            float(len(missing)),
+            0.0,
+            len(set(robot.frame_names) | set(ref.frame_names)),
+            f"only on one side: {', '.join(missing[:5])}" if missing else "",
+        )
+    ]
     pose_err, jac_err, fd_err = 0.0, dict.fromkeys(REFERENCES, 0.0), dict.fromkeys(REFERENCES, 0.0)
     for frame in frames:
         pose_err = max(pose_err, _max_abs(robot.frame_pose(q_all, frame) - ref.frame_pose(q_all, frame)))
         for r in REFERENCES:
             J = robot.jacobian(q_all, frame, r)
             jac_err[r] = max(jac_err[r], _max_abs(J - ref.jacobian(q_all, frame, r)))
-            fd_err[r] = max(fd_err[r], _relative(J[:len(q_smooth)], _fd_jacobian(robot, q_smooth, frame, r)))
+            fd_err[r] = max(fd_err[r], _relative(J[: len(q_smooth)], _fd_jacobian(robot, q_smooth, frame, r)))
         bar.update()
     n = len(frames) * len(q_all)
     checks.append(CheckResult("pose vs reference", pose_err, REFERENCE_ATOL, n))
     checks += [CheckResult(f"jacobian {r} vs reference", jac_err[r], REFERENCE_ATOL, n) for r in REFERENCES]
     checks.append(_yourdfpy_check(robot, q_smooth))
     bar.update()
-    checks += [CheckResult(f"jacobian {r} vs finite differences", fd_err[r], FD_RTOL,
-                           len(frames) * len(q_smooth)) for r in REFERENCES]
+    checks += [
+        CheckResult(f"jacobian {r} vs finite differences", fd_err[r], FD_RTOL, len(frames) * len(q_smooth))
+        for r in REFERENCES
+    ]
     if params is None:
-        checks.append(CheckResult("analytic jacobians vs finite differences", 0.0, FD_RTOL, 0,
-                                  "skipped: robot has no analytic_jacobian"))
+        checks.append(
+            CheckResult(
+                "analytic jacobians vs finite differences",
+                0.0,
+                FD_RTOL,
+                0,
+                "skipped: robot has no analytic_jacobian",
+            )
+        )
     for kind, name, param in params or ():
         checks.append(_analytic_check(robot, q_smooth[1:], kind, name, param))
         bar.update()
@@ -153,7 +176,7 @@ def _corners(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> 
     """Corners of the joint box: all 2^dof if dof <= 8, else MAX_CORNERS drawn at random."""
     dof = len(lower)
     if dof <= 8:
-        pick = np.array(list(itertools.product((0, 1), repeat=dof)), dtype=bool).reshape(2 ** dof, dof)
+        pick = np.array(list(itertools.product((0, 1), repeat=dof)), dtype=bool).reshape(2**dof, dof)
     else:
         pick = rng.integers(0, 2, size=(MAX_CORNERS, dof)).astype(bool)
     return np.where(pick, upper, lower)
@@ -189,7 +212,9 @@ def _yourdfpy_check(robot, q: np.ndarray) -> CheckResult:
         if joint.type == "prismatic":
             joint.axis = joint.axis / np.linalg.norm(joint.axis)
     mimics = {j.name: j.mimic for j in urdf.robot.joints if j.mimic is not None}
-    for joint in urdf.robot.joints:  # yourdfpy follows one level of mimic: compose chains to their root leader
+    for (
+        joint
+    ) in urdf.robot.joints:  # yourdfpy follows one level of mimic: compose chains to their root leader
         m = joint.mimic
         while m is not None and m.joint in mimics:
             inner = mimics[m.joint]
@@ -217,8 +242,10 @@ def _parameterizations(robot) -> list[tuple[str, str, object]] | None:
     if not (hasattr(robot, "analytic_jacobian") and hasattr(robot, "pose_parameters")):
         return None
     from .parameterizations import POSITION_PARAMETERIZATIONS, ROTATION_PARAMETERIZATIONS
-    return ([("position", n, p) for n, p in POSITION_PARAMETERIZATIONS.items()]
-            + [("rotation", n, p) for n, p in ROTATION_PARAMETERIZATIONS.items()])
+
+    return [("position", n, p) for n, p in POSITION_PARAMETERIZATIONS.items()] + [
+        ("rotation", n, p) for n, p in ROTATION_PARAMETERIZATIONS.items()
+    ]
 
 
 def _analytic_check(robot, q: np.ndarray, kind: str, name: str, param) -> CheckResult:
@@ -250,8 +277,9 @@ def _analytic_check(robot, q: np.ndarray, kind: str, name: str, param) -> CheckR
     err = np.where(smooth, np.abs(robot.analytic_jacobian(q, frame, **choice) - J_fd) / scale, 0.0)
     skipped = [f"{int(np.sum(~regular))} samples near a singularity"] if not regular.all() else []
     skipped += [f"{int(np.sum(~smooth))} columns at a branch cut"] if not smooth.all() else []
-    return CheckResult(row, float(np.max(err, initial=0.0)), FD_RTOL, M,
-                       "skipped " + ", ".join(skipped) if skipped else "")
+    return CheckResult(
+        row, float(np.max(err, initial=0.0)), FD_RTOL, M, "skipped " + ", ".join(skipped) if skipped else ""
+    )
 
 
 def _max_abs(a: np.ndarray) -> float:
@@ -275,6 +303,7 @@ def _progress_bar(enabled: bool, total: int, name: str):
     if not enabled:
         return _NoBar()
     from tqdm import tqdm
+
     return tqdm(total=total, desc=f"verify {name}", unit="step", file=sys.stderr, leave=False)
 
 

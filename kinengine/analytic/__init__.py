@@ -4,5 +4,13 @@ lecture notes, ETH Zurich, section 2.8) on top of the kinematics layer."""
 from .evaluate import analytic_at, analytic_batch, analytic_single, frame_views
 from .pose_map import DEFAULT_SINGULARITY_THRESHOLD, PoseMap, as_rows, pose_map
 
-__all__ = ["DEFAULT_SINGULARITY_THRESHOLD", "PoseMap", "analytic_at", "analytic_batch", "analytic_single",
-           "as_rows", "frame_views", "pose_map"]
+__all__ = [
+    "DEFAULT_SINGULARITY_THRESHOLD",
+    "PoseMap",
+    "analytic_at",
+    "analytic_batch",
+    "analytic_single",
+    "as_rows",
+    "frame_views",
+    "pose_map",
+]

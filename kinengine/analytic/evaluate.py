@@ -26,29 +26,40 @@ def frame_views(data: pin.Data, fid: int) -> tuple[np.ndarray, np.ndarray]:
     return placement.rotation, placement.translation
 
 
-def analytic_at(kin: Kinematics, q: np.ndarray, fid: int, views: tuple[np.ndarray, np.ndarray], pmap: PoseMap,
-                threshold: float, row: int | None = None, nan: bool = False) -> np.ndarray:
+def analytic_at(
+    kin: Kinematics,
+    q: np.ndarray,
+    fid: int,
+    views: tuple[np.ndarray, np.ndarray],
+    pmap: PoseMap,
+    threshold: float,
+    row: int | None = None,
+    nan: bool = False,
+) -> np.ndarray:
     """J_A (m, dof) at one checked q (dof,). ``views``: :func:`frame_views` of this thread's Data and frame.
     ``nan``: NaN rows for a parameterization within ``threshold`` of its singular set instead of the error."""
     if kin.dof == 0:
         kin.pose(q, fid)  # places the frame for the views; a 0-dof Jacobian is (6, 0)
         J = np.zeros((6, 0))
     else:  # in LOCAL_WORLD_ALIGNED, computeFrameJacobian also places the frame (data.oMf[fid])
-        J = pin.computeFrameJacobian(kin.model, kin.data(), kin.coordinates.to_pinocchio(q), fid,
-                                     pin.LOCAL_WORLD_ALIGNED)
+        J = pin.computeFrameJacobian(
+            kin.model, kin.data(), kin.coordinates.to_pinocchio(q), fid, pin.LOCAL_WORLD_ALIGNED
+        )
         J = kin.coordinates.fold(J.reshape(6, -1))  # eigenpy returns a (6, 1) matrix as (6,)
     return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, row, nan)
 
 
-def analytic_single(kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float,
-                    nan: bool = False) -> np.ndarray:
+def analytic_single(
+    kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float, nan: bool = False
+) -> np.ndarray:
     """J_A (m, dof) at one checked q, with this thread's cached views of the frame."""
     views = kin.per_thread(("frame views", fid), lambda: frame_views(kin.data(), fid))
     return analytic_at(kin, q, fid, views, pmap, threshold, nan=nan)
 
 
-def analytic_batch(kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, threshold: float,
-                   nan: bool = False) -> np.ndarray:
+def analytic_batch(
+    kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, threshold: float, nan: bool = False
+) -> np.ndarray:
     """J_A = E(χ)·J_e0 for every row of a checked Q (N, dof) -> (N, m, dof).
 
     Small batches take the single-call path row by row; larger ones evaluate χ, E and E·J_e0 with numpy
@@ -58,8 +69,11 @@ def analytic_batch(kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, thre
     """
     n = len(Q)
     out = np.empty((n, pmap.size, kin.dof))
-    chain = (batch.numpy_chain(kin, fid, n, True, ANALYTIC_CALLS, row_cost=2) if kin.dof
-             else batch.compiled_chain(kin, fid))
+    chain = (
+        batch.numpy_chain(kin, fid, n, True, ANALYTIC_CALLS, row_cost=2)
+        if kin.dof
+        else batch.compiled_chain(kin, fid)
+    )
     if chain is None:
         return _analytic_loop(kin, Q, fid, pmap, threshold, out, nan)
     distances = np.empty((n, len(pmap.parts)))
@@ -67,14 +81,18 @@ def analytic_batch(kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, thre
     if nan:
         pmap.nan_where_singular(distances, threshold, out)
         return out
-    pmap.raise_if_singular(distances, threshold,
-                           lambda row: batch.evaluate(kin, Q[row:row + 1], fid, None, jacobian=False)[0][0],
-                           lambda row: kin.jacobian(Q[row], fid, pin.LOCAL_WORLD_ALIGNED))
+    pmap.raise_if_singular(
+        distances,
+        threshold,
+        lambda row: batch.evaluate(kin, Q[row : row + 1], fid, None, jacobian=False)[0][0],
+        lambda row: kin.jacobian(Q[row], fid, pin.LOCAL_WORLD_ALIGNED),
+    )
     return out
 
 
-def analytic_relative(kin: Kinematics, q: np.ndarray, fa: int, fb: int, pmap: PoseMap, threshold: float,
-                      nan: bool = False) -> np.ndarray:
+def analytic_relative(
+    kin: Kinematics, q: np.ndarray, fa: int, fb: int, pmap: PoseMap, threshold: float, nan: bool = False
+) -> np.ndarray:
     """J_A of frame A relative to frame B: E(χ(T_BA))·J_rel with J_rel the relative Jacobian expressed in B
     (see :mod:`kinengine.kinematics.relative`); q (dof,) -> (m, dof), q (N, dof) -> (N, m, dof)."""
     T = relative.relative_pose(kin, q, fa, fb)
@@ -96,13 +114,26 @@ def analytic_relative(kin: Kinematics, q: np.ndarray, fa: int, fb: int, pmap: Po
     return out
 
 
-def _analytic_loop(kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, threshold: float,
-                   out: np.ndarray, nan: bool = False) -> np.ndarray:
+def _analytic_loop(
+    kin: Kinematics,
+    Q: np.ndarray,
+    fid: int,
+    pmap: PoseMap,
+    threshold: float,
+    out: np.ndarray,
+    nan: bool = False,
+) -> np.ndarray:
     views = frame_views(kin.data(), fid)
     for i, qi in enumerate(Q):
         out[i] = analytic_at(kin, qi, fid, views, pmap, threshold, i, nan)
     return out
 
 
-__all__ = ["ANALYTIC_CALLS", "analytic_at", "analytic_batch", "analytic_relative", "analytic_single",
-           "frame_views"]
+__all__ = [
+    "ANALYTIC_CALLS",
+    "analytic_at",
+    "analytic_batch",
+    "analytic_relative",
+    "analytic_single",
+    "frame_views",
+]

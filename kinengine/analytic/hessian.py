@@ -18,7 +18,7 @@ def analytic_hessian(kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, th
     """∂J_A/∂q, (m, dof, dof) with [:, :, k] = ∂J_A/∂q_k, at a checked q. Raises
     RepresentationSingularityError where J_A itself would."""
     T, J = kin.pose(q, fid), kin.jacobian(q, fid, pin.LOCAL_WORLD_ALIGNED)
-    pmap.jacobian(T, J, threshold)        # raises at a representation singularity
+    pmap.jacobian(T, J, threshold)  # raises at a representation singularity
     H = kinematic_hessian(kin, q, fid, pin.LOCAL_WORLD_ALIGNED)
     blocks = []
     parts = ((pmap.position, slice(0, 3), T[:3, 3]), (pmap.rotation, slice(3, 6), T[:3, :3]))
@@ -28,10 +28,13 @@ def analytic_hessian(kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, th
         if param.name == "cartesian":
             blocks.append(H[block])
             continue
-        chi = param.from_position(value) if param.kind == "position" else param.from_rotation(value, warn=False)
+        chi = (
+            param.from_position(value) if param.kind == "position" else param.from_rotation(value, warn=False)
+        )
         Edot = param.E_dot(np.broadcast_to(chi, (kin.dof, chi.size)), J[block].T)  # (dof, m, 3): one per k
-        blocks.append(np.einsum("kmi,ij->mjk", Edot, J[block])
-                      + np.einsum("mi,ijk->mjk", param.E(chi), H[block]))
+        blocks.append(
+            np.einsum("kmi,ij->mjk", Edot, J[block]) + np.einsum("mi,ijk->mjk", param.E(chi), H[block])
+        )
     HA = np.concatenate(blocks, axis=0)
     return HA if pmap.rows is None else HA[list(pmap.rows)]
 

@@ -1,4 +1,6 @@
-"""Pose parameters χ_e(q) and analytic Jacobians J_eA = E_e(χ_e) · J_e0 (Robot Dynamics lecture notes, ETH Zurich, section 2.8, eqs. 2.180–2.181).
+"""Pose parameters χ_e(q) and analytic Jacobians J_eA = E_e(χ_e) · J_e0.
+
+Robot Dynamics lecture notes, ETH Zurich, section 2.8 (Kinematics of Systems of Bodies), eqs. 2.180–2.181.
 
 J_e0 is the geometric Jacobian in the inertial frame ("local_world_aligned": origin velocity
 and angular velocity in I) and E_e = blockdiag(E_P(χ_P), E_R(χ_R)) maps that twist to χ̇_e.
@@ -32,14 +34,15 @@ DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 (e.g. |cos χ2| for Tait–Bryan angles, ρ for cylindrical) is below this; E's entries grow like
 1/distance, so 1e-6 admits entries up to about 1e6."""
 
+
 @dataclass(frozen=True)
 class PoseMap:
     """χ_e = (χ_P, χ_R)[rows]: which parameterizations, and which of their rows, make up χ."""
 
     position: object | None
     rotation: object | None
-    labels: tuple[str, ...]          # labels of the selected rows
-    rows: tuple[int, ...] | None     # indices into the full (χ_P, χ_R) stack; None: all rows
+    labels: tuple[str, ...]  # labels of the selected rows
+    rows: tuple[int, ...] | None  # indices into the full (χ_P, χ_R) stack; None: all rows
     layout: _Layout = field(init=False, repr=False, compare=False)
     part_rows: tuple[tuple[int, ...], ...] = field(init=False, repr=False, compare=False)
     """Per part (in :attr:`parts` order), the indices of its rows among the selected rows."""
@@ -62,8 +65,13 @@ class PoseMap:
         """The parameterizations in χ's order (position first), without the absent one."""
         return tuple(p for p in (self.position, self.rotation) if p is not None)
 
-    def parameters(self, T: np.ndarray, threshold: float | None = None, nan: bool = False,
-                   J: Callable[[int | None], np.ndarray] | None = None) -> np.ndarray:
+    def parameters(
+        self,
+        T: np.ndarray,
+        threshold: float | None = None,
+        nan: bool = False,
+        J: Callable[[int | None], np.ndarray] | None = None,
+    ) -> np.ndarray:
         """χ from poses T_IF, (4, 4) -> (m,) or (N, 4, 4) -> (N, m).
 
         ``threshold`` None: χ everywhere (a UserWarning at gimbal lock). Otherwise a pose within
@@ -88,11 +96,16 @@ class PoseMap:
         if nan:
             below = ~(distances >= threshold) | (distances == 0.0)
             for k, rows in enumerate(self.part_rows):
-                chi[..., list(rows)] = np.where(below[..., k:k + 1], np.nan, chi[..., list(rows)])
+                chi[..., list(rows)] = np.where(below[..., k : k + 1], np.nan, chi[..., list(rows)])
             return chi
         if T.ndim == 2:
-            self.raise_if_singular(distances[None], threshold, lambda row: T, None if J is None else
-                                   (lambda row: J(None)), single=True)
+            self.raise_if_singular(
+                distances[None],
+                threshold,
+                lambda row: T,
+                None if J is None else (lambda row: J(None)),
+                single=True,
+            )
         else:
             self.raise_if_singular(distances, threshold, lambda row: T[row], J)
         return chi
@@ -105,11 +118,19 @@ class PoseMap:
         Batches: :func:`kinengine.batch.analytic_jacobian` (with :meth:`fill_columns`).
         """
         (c0, c1, c2, px), (c3, c4, c5, py), (c6, c7, c8, pz), _ = T.tolist()
-        return self.jacobian_single(((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J, threshold,
-                                    nan=nan)
+        return self.jacobian_single(
+            ((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J, threshold, nan=nan
+        )
 
-    def jacobian_single(self, C: Sequence[Sequence[float]], p: Sequence[float], J: np.ndarray,
-                        threshold: float, row: int | None = None, nan: bool = False) -> np.ndarray:
+    def jacobian_single(
+        self,
+        C: Sequence[Sequence[float]],
+        p: Sequence[float],
+        J: np.ndarray,
+        threshold: float,
+        row: int | None = None,
+        nan: bool = False,
+    ) -> np.ndarray:
         """J_A for C_IF and p [m] given as Python floats (the fast path of one configuration).
 
         Scalar math gives E's entries, packed straight into an (m, 6) array (zeros and the identity
@@ -150,8 +171,9 @@ class PoseMap:
         JA = np.ndarray(shape, _F64, buffer).dot(J)
         return JA if self.rows is None else JA[self.rows, :]
 
-    def fill_columns(self, p: Sequence[np.ndarray], C: Sequence[np.ndarray], J: np.ndarray,
-                     out: np.ndarray) -> list[np.ndarray | float]:
+    def fill_columns(
+        self, p: Sequence[np.ndarray], C: Sequence[np.ndarray], J: np.ndarray, out: np.ndarray
+    ) -> list[np.ndarray | float]:
         """The batch kernel, on n configurations laid out sample-last (contiguous over the batch).
 
         p: 3 arrays (n,) [m]; C: the 9 entries of C_IF row-major, arrays (n,); J: J_e0 (6, dof, n) in
@@ -169,15 +191,20 @@ class PoseMap:
                     chi = param._from_rotation(np, False, *C)
                 distances.append(param._distance(np, *chi))
                 E = param._E(np, *chi)
-                E_rows += [(E[k:k + 3], block) for k in range(0, len(E), 3)]
+                E_rows += [(E[k : k + 3], block) for k in range(0, len(E), 3)]
             scratch = np.empty(out.shape[1:])
             for target, source in enumerate(range(len(E_rows)) if self.rows is None else self.rows):
                 _combine(*E_rows[source], out[target], scratch)
         return distances
 
-    def raise_if_singular(self, distances: np.ndarray, threshold: float,
-                          pose: Callable[[int], np.ndarray],
-                          jacobian: Callable[[int], np.ndarray] | None = None, single: bool = False) -> None:
+    def raise_if_singular(
+        self,
+        distances: np.ndarray,
+        threshold: float,
+        pose: Callable[[int], np.ndarray],
+        jacobian: Callable[[int], np.ndarray] | None = None,
+        single: bool = False,
+    ) -> None:
         """RepresentationSingularityError for the first batch row closer than ``threshold`` to a singular set.
 
         distances: (N, len(parts)) from :meth:`fill_columns`; pose(row) gives that row's T_IF (4, 4) and
@@ -188,8 +215,14 @@ class PoseMap:
         if below.any():
             row = int(np.argmax(below.any(axis=1)))
             part = int(np.argmax(below[row]))
-            raise singularity_error(self.parts[part], float(distances[row, part]), threshold, pose(row),
-                                     None if single else row, None if jacobian is None else jacobian(row))
+            raise singularity_error(
+                self.parts[part],
+                float(distances[row, part]),
+                threshold,
+                pose(row),
+                None if single else row,
+                None if jacobian is None else jacobian(row),
+            )
 
     def nan_where_singular(self, distances: np.ndarray, threshold: float, out: np.ndarray) -> None:
         """NaN in out (N, m, dof)'s rows of every part within ``threshold`` of its singular set, per row."""
@@ -216,14 +249,25 @@ class _Layout:
             template[:3, :3] = np.eye(3)
         self.template = template.tobytes()
         self.offset = 0 if self.position_formula else 48 * (rows - (rotation.size if rotation else 0))
-        self.pack_into = struct.Struct("<" + "3d24x" * (position.size if self.position_formula else 0)
-                                       + "24x3d" * (rotation.size if rotation is not None else 0)).pack_into
-        self.fast = (self.position_formula, position, rotation, self.template, self.pack_into, self.offset,
-                     self.shape)  # what jacobian_single reads, in one attribute lookup
+        self.pack_into = struct.Struct(
+            "<"
+            + "3d24x" * (position.size if self.position_formula else 0)
+            + "24x3d" * (rotation.size if rotation is not None else 0)
+        ).pack_into
+        self.fast = (
+            self.position_formula,
+            position,
+            rotation,
+            self.template,
+            self.pack_into,
+            self.offset,
+            self.shape,
+        )  # what jacobian_single reads, in one attribute lookup
 
 
-def _combine(entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.ndarray,
-             scratch: np.ndarray) -> None:
+def _combine(
+    entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.ndarray, scratch: np.ndarray
+) -> None:
     """out = Σ_k entries[k] · block[k]: a row of E (entries (n,) or constants) times J's rows (3, dof, n)."""
     terms = [(e, b) for e, b in zip(entries, block, strict=False) if not (isinstance(e, float) and e == 0.0)]
     if not terms:
@@ -241,11 +285,15 @@ _F64 = np.dtype(np.float64)
 
 
 @lru_cache(maxsize=256)
-def pose_map(position: str | None, rotation: str | None, rows: tuple[str | int, ...] | None = None) -> PoseMap:
+def pose_map(
+    position: str | None, rotation: str | None, rows: tuple[str | int, ...] | None = None
+) -> PoseMap:
     """Resolve parameterization names (and an optional row selection by label or index) once."""
     if position is None and rotation is None:
-        raise ParameterizationError("position and rotation are both None: choose at least one, e.g. "
-                                    "position='cartesian' or rotation='quaternion'")
+        raise ParameterizationError(
+            "position and rotation are both None: choose at least one, e.g. "
+            "position='cartesian' or rotation='quaternion'"
+        )
     p = None if position is None else _lookup(get_position, position)
     r = None if rotation is None else _lookup(get_rotation, rotation)
     labels = (tuple(p.labels) if p else ()) + (tuple(r.labels) if r else ())
@@ -260,7 +308,9 @@ def pose_map(position: str | None, rotation: str | None, rows: tuple[str | int, 
         elif row in labels:
             index.append(labels.index(row))
         else:
-            raise ParameterizationError(f"unknown row {row!r}; rows of this parameterization: {', '.join(labels)}")
+            raise ParameterizationError(
+                f"unknown row {row!r}; rows of this parameterization: {', '.join(labels)}"
+            )
     if len(set(index)) != len(index):
         raise ParameterizationError(f"rows {rows} select a row twice")
     return PoseMap(p, r, tuple(labels[i] for i in index), tuple(index))

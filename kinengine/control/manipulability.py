@@ -62,11 +62,17 @@ class SingularityReport:
     def __str__(self) -> str:
         what = f"J_e0 rows {' '.join(self.rows)}" + (f" of frame {self.frame!r}" if self.frame else "")
         sv = ", ".join(f"{s:.4g}" for s in self.singular_values)
-        head = (f"kinematic singularity: {what} has rank {self.rank} < {len(self.rows)}" if self.is_singular
-                else f"regular: {what} has full rank {self.rank}")
-        lines = [head, f"  singular values: {sv}",
-                 f"  manipulability sqrt(det(J Jᵀ)) = {self.manipulability:.4g}, "
-                 f"condition number = {self.condition_number:.4g}"]
+        head = (
+            f"kinematic singularity: {what} has rank {self.rank} < {len(self.rows)}"
+            if self.is_singular
+            else f"regular: {what} has full rank {self.rank}"
+        )
+        lines = [
+            head,
+            f"  singular values: {sv}",
+            f"  manipulability sqrt(det(J Jᵀ)) = {self.manipulability:.4g}, "
+            f"condition number = {self.condition_number:.4g}",
+        ]
         if self.lost_directions:
             lines.append(f"  lost twist directions in the root frame (σ <= {self.tolerance:.1e}):")
             lines += [f"    {d.description}  (gain {d.gain:.2e})" for d in self.lost_directions]
@@ -83,8 +89,9 @@ class VelocityEllipsoid:
     semi_axes: np.ndarray
 
 
-def analyze_jacobian(J: object, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE,
-                     frame: str | None = None) -> SingularityReport:
+def analyze_jacobian(
+    J: object, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE, frame: str | None = None
+) -> SingularityReport:
     """The :class:`SingularityReport` of a geometric Jacobian J_e0 (6, dof) in "local_world_aligned"."""
     tolerance = checked_tolerance(tolerance)
     index = _rows(rows)
@@ -106,8 +113,9 @@ def analyze_jacobian(J: object, rows: Rows = "all", *, tolerance: float = DEFAUL
     return SingularityReport(frame, labels, s, w, kappa, rank, tolerance, tuple(lost))
 
 
-def singularity_report(robot, q: object, frame: str | None = None, rows: Rows = "all", *,
-                       tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
+def singularity_report(
+    robot, q: object, frame: str | None = None, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE
+) -> SingularityReport:
     """The :class:`SingularityReport` of J_e0(q) of ``frame`` (default: end effector), q (dof,)."""
     frame = robot.end_effector if frame is None else frame
     q = robot.check_configuration(q, check_limits=False, batch=False)  # manipulability() takes batches
@@ -131,18 +139,20 @@ def velocity_ellipsoid(robot, q: object, frame: str | None = None) -> VelocityEl
     T = robot.frame_pose(q, frame)
     U, s, _ = np.linalg.svd(robot.jacobian(q, frame)[:3], full_matrices=True)
     semi = np.zeros(3)
-    semi[:s.size] = s
+    semi[: s.size] = s
     return VelocityEllipsoid(T[:3, 3].copy(), U, semi)
 
 
-def require_regular(robot, q: object, frame: str | None = None, rows: Rows = "all", *,
-                    tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
+def require_regular(
+    robot, q: object, frame: str | None = None, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE
+) -> SingularityReport:
     """The report if J_e0[rows] has full row rank; KinematicSingularityError (with ``.report``) otherwise."""
     report = singularity_report(robot, q, frame, rows, tolerance=tolerance)
     if report.is_singular:
         error = KinematicSingularityError(
             f"{report}\nThe robot itself cannot move its frame along these directions at this q; "
-            "no choice of pose parameterization changes that (unlike a representation singularity).")
+            "no choice of pose parameterization changes that (unlike a representation singularity)."
+        )
         error.report = report
         raise error
     return report
@@ -174,8 +184,10 @@ def _rows(rows: Rows) -> tuple[int, ...]:
             return ROW_SETS[rows]
         rows = (rows,)
     if isinstance(rows, (bytes, dict)) or not hasattr(rows, "__iter__"):
-        raise ParameterizationError(f"Expected `rows` to be 'all', 'linear', 'angular' or a sequence of labels "
-                                    f"from {ROW_LABELS} (or indices 0-5), got {type(rows).__name__}")
+        raise ParameterizationError(
+            f"Expected `rows` to be 'all', 'linear', 'angular' or a sequence of labels "
+            f"from {ROW_LABELS} (or indices 0-5), got {type(rows).__name__}"
+        )
     index = []
     for row in rows:
         if isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_)) and 0 <= row < 6:
@@ -183,11 +195,15 @@ def _rows(rows: Rows) -> tuple[int, ...]:
         elif type(row) is str and row in ROW_LABELS:
             index.append(ROW_LABELS.index(row))
         else:
-            raise ParameterizationError(f"Expected `rows` to be 'all', 'linear', 'angular' or labels from "
-                                        f"{ROW_LABELS} (or indices 0-5), got {' '.join(repr(row).split())[:40]}")
+            raise ParameterizationError(
+                f"Expected `rows` to be 'all', 'linear', 'angular' or labels from "
+                f"{ROW_LABELS} (or indices 0-5), got {' '.join(repr(row).split())[:40]}"
+            )
     if not index or len(set(index)) != len(index):
-        raise ParameterizationError(f"Expected `rows` to name each row at most once and at least one row, "
-                                    f"got {' '.join(repr(rows).split())[:60]}")
+        raise ParameterizationError(
+            f"Expected `rows` to name each row at most once and at least one row, "
+            f"got {' '.join(repr(rows).split())[:60]}"
+        )
     return tuple(index)
 
 
@@ -195,9 +211,9 @@ def _readable_basis(N: np.ndarray) -> np.ndarray:
     """The same subspace as N's orthonormal columns (m, r), rotated so that coordinate axes lying in it
     come out as basis vectors (pivoted QR of the projector picks the most axis-aligned first);
     each vector's largest entry is positive. Returns (r, m)."""
-    P = N @ N.T                         # its columns: the coordinate axes projected on the subspace
+    P = N @ N.T  # its columns: the coordinate axes projected on the subspace
     basis = np.zeros((N.shape[1], N.shape[0]))
-    for i in range(N.shape[1]):         # Gram–Schmidt on P's columns, longest remaining first
+    for i in range(N.shape[1]):  # Gram–Schmidt on P's columns, longest remaining first
         column = P[:, np.argmax(np.linalg.norm(P, axis=0))]
         b = column / np.linalg.norm(column)
         basis[i] = b * np.sign(b[np.argmax(np.abs(b))])

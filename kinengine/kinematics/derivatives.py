@@ -28,8 +28,9 @@ import pinocchio as pin
 from .engine import Kinematics
 
 
-def jacobian_time_variation(kin: Kinematics, q: np.ndarray, qdot: np.ndarray, fid: int,
-                            ref: pin.ReferenceFrame) -> np.ndarray:
+def jacobian_time_variation(
+    kin: Kinematics, q: np.ndarray, qdot: np.ndarray, fid: int, ref: pin.ReferenceFrame
+) -> np.ndarray:
     """J̇ = d/dt J(q(t), frame, reference) at checked q [rad | m] moving with q̇ [rad/s | m/s], (6, dof).
 
     In LOCAL_WORLD_ALIGNED this is d/dt(I J_e0) of the lecture notes: a_F = J_e0·q̈ + J̇_e0·q̇ is the
@@ -38,8 +39,12 @@ def jacobian_time_variation(kin: Kinematics, q: np.ndarray, qdot: np.ndarray, fi
     if kin.dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
         return np.zeros((6, 0))
     model, data, coords = kin.model, kin.data(), kin.coordinates
-    pin.computeJointJacobiansTimeVariation(model, data, coords.to_pinocchio(q), coords.velocity_to_pinocchio(qdot))
-    Jw = coords.fold(pin.getFrameJacobian(model, data, fid, pin.WORLD).reshape(6, -1))  # eigenpy: (6, 1) -> (6,)
+    pin.computeJointJacobiansTimeVariation(
+        model, data, coords.to_pinocchio(q), coords.velocity_to_pinocchio(qdot)
+    )
+    Jw = coords.fold(
+        pin.getFrameJacobian(model, data, fid, pin.WORLD).reshape(6, -1)
+    )  # eigenpy: (6, 1) -> (6,)
     dJw = coords.fold(pin.getFrameJacobianTimeVariation(model, data, fid, pin.WORLD).reshape(6, -1))
     M = pin.updateFramePlacement(model, data, fid)
     return _change_reference(Jw, dJw[:, :, None], qdot[:, None], M.rotation, M.translation, ref)[:, :, 0]
@@ -57,11 +62,11 @@ def kinematic_hessian(kin: Kinematics, q: np.ndarray, fid: int, ref: pin.Referen
     pin.computeJointJacobians(model, data, kin.coordinates.to_pinocchio(q))
     chain = kin.memoized(("hessian chain", fid), lambda: _Chain(kin, fid))
     S = data.J.reshape(6, model.nv)[:, chain.columns]  # (6, p) world axes of the supporting joints
-    v, w = S[:3].T, S[3:].T                            # (p, 3)
+    v, w = S[:3].T, S[3:].T  # (p, 3)
     bracket = np.empty((6, len(chain.columns), len(chain.columns)))  # [:, b, a] = ad(S_b)·S_a
     bracket[:3] = np.moveaxis(np.cross(w[:, None], v[None]) + np.cross(v[:, None], w[None]), -1, 0)
     bracket[3:] = np.moveaxis(np.cross(w[:, None], w[None]), -1, 0)
-    bracket *= chain.above                             # only joints b above a turn a
+    bracket *= chain.above  # only joints b above a turn a
     Hw = chain.A.T @ np.swapaxes(bracket, 1, 2) @ chain.A  # Σ_ab A[a,j]·bracket[:,b,a]·A[b,k]: O(6·p²·dof)
     Jw = S @ chain.A
     M = pin.updateFramePlacement(model, data, fid)
@@ -82,25 +87,32 @@ class _Chain:
         joints = [j for j in model.supports[model.frames[fid].parentJoint] if j > 0]
         self.columns = [model.joints[j].idx_v for j in joints]
         self.A = kin.coordinates.matrix[self.columns].reshape(len(joints), kin.dof)
-        self.above = np.array([[float(b != a and b in model.supports[a]) for a in joints] for b in joints],
-                              dtype=float).reshape(len(joints), len(joints))
+        self.above = np.array(
+            [[float(b != a and b in model.supports[a]) for a in joints] for b in joints], dtype=float
+        ).reshape(len(joints), len(joints))
 
 
-def _change_reference(Jw: np.ndarray, dJw: np.ndarray, directions: np.ndarray, C: np.ndarray, p: np.ndarray,
-                      ref: pin.ReferenceFrame) -> np.ndarray:
+def _change_reference(
+    Jw: np.ndarray,
+    dJw: np.ndarray,
+    directions: np.ndarray,
+    C: np.ndarray,
+    p: np.ndarray,
+    ref: pin.ReferenceFrame,
+) -> np.ndarray:
     """Derivatives dJw (6, dof, K) of the WORLD Jacobian Jw (6, dof) along K directions of q (dof, K)
     turned into derivatives of the Jacobian in ``ref`` (see the module doc), (6, dof, K)."""
     if ref == pin.WORLD:
         return dJw
     J = Jw.copy()
-    J[:3] += np.cross(Jw[3:].T, p).T                     # J_lwa: v_F = v_O + ω × p
-    twist = J @ directions                               # (6, K): (∂p, ω) of F along each direction
+    J[:3] += np.cross(Jw[3:].T, p).T  # J_lwa: v_F = v_O + ω × p
+    twist = J @ directions  # (6, K): (∂p, ω) of F along each direction
     out = dJw.copy()
     out[:3] += np.moveaxis(np.cross(np.moveaxis(dJw[3:], 0, -1), p), -1, 0)
     out[:3] += np.moveaxis(np.cross(Jw[3:].T[:, None, :], twist[:3].T[None, :, :]), -1, 0)
     if ref == pin.LOCAL_WORLD_ALIGNED:
         return out
-    for block in (slice(0, 3), slice(3, 6)):            # d(Cᵀ X) = Cᵀ (dX − ω × X)
+    for block in (slice(0, 3), slice(3, 6)):  # d(Cᵀ X) = Cᵀ (dX − ω × X)
         out[block] -= np.moveaxis(np.cross(twist[3:].T[None, :, :], J[block].T[:, None, :]), -1, 0)
         out[block] = np.einsum("ji,jnk->ink", C, out[block])
     return out

@@ -25,8 +25,14 @@ POSITION_PARAMETERIZATIONS: dict[str, PositionParameterization] = {
     p.name: p for p in (Cartesian(), Cylindrical(), Spherical())
 }
 ROTATION_PARAMETERIZATIONS: dict[str, RotationParameterization] = {
-    p.name: p for p in (*(EulerZYX() if seq == "zyx" else EulerAngles(seq) for seq in EULER_SEQUENCES),
-                        Quaternion(), AngleAxis(), RotationVector(), RotationMatrix())
+    p.name: p
+    for p in (
+        *(EulerZYX() if seq == "zyx" else EulerAngles(seq) for seq in EULER_SEQUENCES),
+        Quaternion(),
+        AngleAxis(),
+        RotationVector(),
+        RotationMatrix(),
+    )
 }
 
 

@@ -53,9 +53,17 @@ def rotation_entries(alpha, beta, x, y, z):
     u2 = x * x + y * y + z * z
     bxy, bxz, byz = beta * x * y, beta * x * z, beta * y * z
     ax, ay, az = alpha * x, alpha * y, alpha * z
-    return (1.0 + beta * (x * x - u2), bxy - az, bxz + ay,
-            bxy + az, 1.0 + beta * (y * y - u2), byz - ax,
-            bxz - ay, byz + ax, 1.0 + beta * (z * z - u2))
+    return (
+        1.0 + beta * (x * x - u2),
+        bxy - az,
+        bxz + ay,
+        bxy + az,
+        1.0 + beta * (y * y - u2),
+        byz - ax,
+        bxz - ay,
+        byz + ax,
+        1.0 + beta * (z * z - u2),
+    )
 
 
 def matrix_from_quaternion(w, x, y, z):

@@ -26,7 +26,7 @@ from .base import RotationParameterization, is_single, warn_where
 from .euler import GIMBAL_LOCK_TOLERANCE
 from .rotation_vector import PIN_LOG3_MAX_SQ
 
-_TINY_SQ = GIMBAL_LOCK_TOLERANCE ** 2
+_TINY_SQ = GIMBAL_LOCK_TOLERANCE**2
 
 
 class AngleAxis(RotationParameterization):
@@ -49,11 +49,15 @@ class AngleAxis(RotationParameterization):
 
     def _from_rotation(self, xp, warn, *C):
         w, x, y, z = quaternion_from_matrix(xp, *C)
-        s = xp.sqrt(x * x + y * y + z * z)              # sin(θ/2)
+        s = xp.sqrt(x * x + y * y + z * z)  # sin(θ/2)
         theta = 2.0 * xp.atan2(s, w)
         if warn:
-            warn_where(xp, theta <= GIMBAL_LOCK_TOLERANCE, f"{self.name}: rotation angle θ <= "
-                       f"{GIMBAL_LOCK_TOLERANCE:g} rad, the axis is ill-defined (n = (1, 0, 0) at θ = 0)")
+            warn_where(
+                xp,
+                theta <= GIMBAL_LOCK_TOLERANCE,
+                f"{self.name}: rotation angle θ <= "
+                f"{GIMBAL_LOCK_TOLERANCE:g} rad, the axis is ill-defined (n = (1, 0, 0) at θ = 0)",
+            )
         if xp is math:
             return (theta, x / s, y / s, z / s) if s > 0.0 else (theta, 1.0, 0.0, 0.0)
         zero = s == 0.0
@@ -66,30 +70,44 @@ class AngleAxis(RotationParameterization):
         return rotation_entries(xp.sin(theta) / xp.sqrt(n2), 2.0 * half * half / n2, nx, ny, nz)
 
     def _E(self, xp, theta, nx, ny, nz):
-        k = -0.5 / xp.tan(0.5 * theta)                  # −½ cot(θ/2)
-        M = rotation_entries(-0.5, k, nx, ny, nz)       # I − ½ [n]x − ½ cot(θ/2) [n]x²
+        k = -0.5 / xp.tan(0.5 * theta)  # −½ cot(θ/2)
+        M = rotation_entries(-0.5, k, nx, ny, nz)  # I − ½ [n]x − ½ cot(θ/2) [n]x²
         return (nx, ny, nz, M[0] - 1.0, M[1], M[2], M[3], M[4] - 1.0, M[5], M[6], M[7], M[8] - 1.0)
 
     def _E_inverse(self, xp, theta, nx, ny, nz):
         s, half = xp.sin(theta), xp.sin(0.5 * theta)
-        v = 2.0 * half * half                           # 1 − cos θ
-        return (nx, s * (1.0 - nx * nx), -s * nx * ny - v * nz, -s * nx * nz + v * ny,
-                ny, -s * nx * ny + v * nz, s * (1.0 - ny * ny), -s * ny * nz - v * nx,
-                nz, -s * nx * nz - v * ny, -s * ny * nz + v * nx, s * (1.0 - nz * nz))
+        v = 2.0 * half * half  # 1 − cos θ
+        return (
+            nx,
+            s * (1.0 - nx * nx),
+            -s * nx * ny - v * nz,
+            -s * nx * nz + v * ny,
+            ny,
+            -s * nx * ny + v * nz,
+            s * (1.0 - ny * ny),
+            -s * ny * nz - v * nx,
+            nz,
+            -s * nx * nz - v * ny,
+            -s * ny * nz + v * nx,
+            s * (1.0 - nz * nz),
+        )
 
     def _E_dot(self, xp, chi, u):
         theta, nx, ny, nz = chi
         a, b, c = u
         half = xp.sin(0.5 * theta)
-        k = xp.cos(0.5 * theta) / half                  # cot(θ/2)
-        n_dot_w = nx * a + ny * b + nz * c              # θ̇
+        k = xp.cos(0.5 * theta) / half  # cot(θ/2)
+        n_dot_w = nx * a + ny * b + nz * c  # θ̇
         k_dot = -n_dot_w / (2.0 * half * half)
         n = (nx, ny, nz)
         cross = (ny * c - nz * b, nz * a - nx * c, nx * b - ny * a)
-        nd = tuple(-0.5 * (cross[i] + k * (n[i] * n_dot_w - u[i])) for i in range(3))   # ṅ
+        nd = tuple(-0.5 * (cross[i] + k * (n[i] * n_dot_w - u[i])) for i in range(3))  # ṅ
         skew = cross_matrix(*nd)
-        rows = tuple(-0.5 * (skew[3 * i + j] + k_dot * (n[i] * n[j] - (i == j))
-                             + k * (nd[i] * n[j] + n[i] * nd[j])) for i in range(3) for j in range(3))
+        rows = tuple(
+            -0.5 * (skew[3 * i + j] + k_dot * (n[i] * n[j] - (i == j)) + k * (nd[i] * n[j] + n[i] * nd[j]))
+            for i in range(3)
+            for j in range(3)
+        )
         return (*nd, *rows)
 
     def _distance(self, xp, theta, nx, ny, nz):

@@ -43,11 +43,12 @@ def as_float_array(value: object, tail: tuple[int, ...], what: str) -> np.ndarra
     """``value`` as a float64 array of shape tail or (..., *tail); ParameterizationError otherwise."""
     array = np.asarray(value, dtype=np.float64)
     n = len(tail)
-    if array.ndim < n or array.shape[array.ndim - n:] != tail:
+    if array.ndim < n or array.shape[array.ndim - n :] != tail:
         expected = str(tail) if n > 1 else f"({tail[0]},)"
         batched = "(..., " + ", ".join(str(t) for t in tail) + ")"
         raise ParameterizationError(
-            f"Expected `{what}` to have shape {expected} or {batched}, got {array.shape}")
+            f"Expected `{what}` to have shape {expected} or {batched}, got {array.shape}"
+        )
     return array
 
 
@@ -66,7 +67,7 @@ def stack(entries: Sequence[object], batch: tuple[int, ...], shape: tuple[int, .
 
 def warn_where(xp, condition, message: str) -> None:
     """UserWarning if ``condition`` holds for any sample, attributed to the first caller outside kinengine."""
-    if (condition if xp is math else bool(np.any(condition))):
+    if condition if xp is math else bool(np.any(condition)):
         frame, level = sys._getframe(1), 2  # level 1 is this function, 2 its caller
         while frame is not None and frame.f_code.co_filename.startswith(_KINENGINE_DIR):
             frame, level = frame.f_back, level + 1
@@ -150,8 +151,9 @@ class Parameterization(ABC):
             return float(self._distance(math, *chi.tolist()))
         return np.broadcast_to(self._distance(np, *columns(chi, chi.shape[-1])), chi.shape[:-1]).copy()
 
-    def _general(self, formula: Callable[..., Sequence[object]], chi: object,
-                 shape: tuple[int, int]) -> np.ndarray:
+    def _general(
+        self, formula: Callable[..., Sequence[object]], chi: object, shape: tuple[int, int]
+    ) -> np.ndarray:
         """formula for any input: a single sample of another type, or a batch (..., m) -> (..., *shape)."""
         m = len(self.labels)
         chi = as_float_array(chi, (m,), "chi")

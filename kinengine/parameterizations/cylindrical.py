@@ -41,9 +41,17 @@ class Cylindrical(PositionParameterization):
         c, s = xp.cos(theta), xp.sin(theta)
         rho_dot = c * vx + s * vy
         theta_dot = (c * vy - s * vx) / rho
-        return (-s * theta_dot, c * theta_dot, 0.0,
-                (s * rho_dot / rho - c * theta_dot) / rho, (-s * theta_dot - c * rho_dot / rho) / rho, 0.0,
-                0.0, 0.0, 0.0)
+        return (
+            -s * theta_dot,
+            c * theta_dot,
+            0.0,
+            (s * rho_dot / rho - c * theta_dot) / rho,
+            (-s * theta_dot - c * rho_dot / rho) / rho,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        )
 
     def _distance(self, xp, rho, theta, z):
         return abs(rho)

@@ -47,9 +47,17 @@ def _matmul(A, B):
     """Row-major entries of A·B for 3x3 matrices given by row-major entries."""
     a0, a1, a2, a3, a4, a5, a6, a7, a8 = A
     b0, b1, b2, b3, b4, b5, b6, b7, b8 = B
-    return (a0 * b0 + a1 * b3 + a2 * b6, a0 * b1 + a1 * b4 + a2 * b7, a0 * b2 + a1 * b5 + a2 * b8,
-            a3 * b0 + a4 * b3 + a5 * b6, a3 * b1 + a4 * b4 + a5 * b7, a3 * b2 + a4 * b5 + a5 * b8,
-            a6 * b0 + a7 * b3 + a8 * b6, a6 * b1 + a7 * b4 + a8 * b7, a6 * b2 + a7 * b5 + a8 * b8)
+    return (
+        a0 * b0 + a1 * b3 + a2 * b6,
+        a0 * b1 + a1 * b4 + a2 * b7,
+        a0 * b2 + a1 * b5 + a2 * b8,
+        a3 * b0 + a4 * b3 + a5 * b6,
+        a3 * b1 + a4 * b4 + a5 * b7,
+        a3 * b2 + a4 * b5 + a5 * b8,
+        a6 * b0 + a7 * b3 + a8 * b6,
+        a6 * b1 + a7 * b4 + a8 * b7,
+        a6 * b2 + a7 * b5 + a8 * b8,
+    )
 
 
 class EulerAngles(RotationParameterization):
@@ -57,7 +65,9 @@ class EulerAngles(RotationParameterization):
 
     def __init__(self, seq: str) -> None:
         if seq not in EULER_SEQUENCES:
-            raise ParameterizationError(f"Expected `seq` to be one of {', '.join(EULER_SEQUENCES)}, got {seq!r}")
+            raise ParameterizationError(
+                f"Expected `seq` to be one of {', '.join(EULER_SEQUENCES)}, got {seq!r}"
+            )
         a, b, c = ("xyz".index(axis) for axis in seq)
         t = 3 - a - b
         self.seq = seq
@@ -95,11 +105,18 @@ class EulerAngles(RotationParameterization):
             locked = abs(abs(chi2) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE
         if xp is np or locked:
             if warn:
-                warn_where(xp, locked, f"{self.name}: gimbal lock detected. Setting third angle to zero "
-                                       "since it is not possible to uniquely determine all angles.")
+                warn_where(
+                    xp,
+                    locked,
+                    f"{self.name}: gimbal lock detected. Setting third angle to zero "
+                    "since it is not possible to uniquely determine all angles.",
+                )
             # χ3 = 0: C = R_a(χ1) R_b(χ2), whose column b is R_a(χ1) e_b = c1 e_b + ε s1 e_t
-            chi1 = xp.atan2(eps * C[tb], C[bb]) if xp is math else np.where(
-                locked, np.atan2(eps * C[tb], C[bb]), chi1)
+            chi1 = (
+                xp.atan2(eps * C[tb], C[bb])
+                if xp is math
+                else np.where(locked, np.atan2(eps * C[tb], C[bb]), chi1)
+            )
         # χ3 from row b of R_a(χ1)^T C = R_b(χ2) R_c(χ3), with the χ1 just chosen (as Eigen's eulerAngles):
         # near gimbal lock χ1 is ill-conditioned, but then χ3 compensates and χ -> C stays accurate.
         c1, s1 = xp.cos(chi1), xp.sin(chi1)
@@ -135,22 +152,40 @@ class EulerAngles(RotationParameterization):
         chi1, chi2, _ = chi
         c1, s1, c2, s2, e = xp.cos(chi1), xp.sin(chi1), xp.cos(chi2), xp.sin(chi2), self._eps
         wa, wb, wt = (u[axis] for axis in self._perm)
-        d2 = c1 * wb + e * s1 * wt                       # χ̇2 (row 2 of E is the same for both kinds)
+        d2 = c1 * wb + e * s1 * wt  # χ̇2 (row 2 of E is the same for both kinds)
         if self._proper:
             r = 1.0 / s2
             k = c2 * r
-            d1 = wa - s1 * k * wb + e * c1 * k * wt       # χ̇1
-            return self._to_columns((
-                0.0, -c1 * k * d1 + s1 * r * r * d2, -e * (s1 * k * d1 + c1 * r * r * d2),
-                0.0, -s1 * d1, e * c1 * d1,
-                0.0, c1 * r * d1 - s1 * k * r * d2, e * (s1 * r * d1 + c1 * k * r * d2)))
+            d1 = wa - s1 * k * wb + e * c1 * k * wt  # χ̇1
+            return self._to_columns(
+                (
+                    0.0,
+                    -c1 * k * d1 + s1 * r * r * d2,
+                    -e * (s1 * k * d1 + c1 * r * r * d2),
+                    0.0,
+                    -s1 * d1,
+                    e * c1 * d1,
+                    0.0,
+                    c1 * r * d1 - s1 * k * r * d2,
+                    e * (s1 * r * d1 + c1 * k * r * d2),
+                )
+            )
         r = 1.0 / c2
         t = s2 * r
         d1 = wa + s1 * t * wb - e * c1 * t * wt
-        return self._to_columns((
-            0.0, c1 * t * d1 + s1 * r * r * d2, e * (s1 * t * d1 - c1 * r * r * d2),
-            0.0, -s1 * d1, e * c1 * d1,
-            0.0, -e * (c1 * r * d1 + s1 * t * r * d2), -s1 * r * d1 + c1 * t * r * d2))
+        return self._to_columns(
+            (
+                0.0,
+                c1 * t * d1 + s1 * r * r * d2,
+                e * (s1 * t * d1 - c1 * r * r * d2),
+                0.0,
+                -s1 * d1,
+                e * c1 * d1,
+                0.0,
+                -e * (c1 * r * d1 + s1 * t * r * d2),
+                -s1 * r * d1 + c1 * t * r * d2,
+            )
+        )
 
     def _distance(self, xp, chi1, chi2, chi3):
         return abs(xp.sin(chi2)) if self._proper else abs(xp.cos(chi2))

@@ -22,10 +22,7 @@ from .base import RotationParameterization
 def _half_H(w, x, y, z):
     """Row-major entries of ½ [−v^T; w I − [v]x] for q = (w, v)."""
     w, x, y, z = 0.5 * w, 0.5 * x, 0.5 * y, 0.5 * z
-    return (-x, -y, -z,
-            w, z, -y,
-            -z, w, x,
-            y, -x, w)
+    return (-x, -y, -z, w, z, -y, -z, w, x, y, -x, w)
 
 
 class Quaternion(RotationParameterization):
@@ -47,15 +44,17 @@ class Quaternion(RotationParameterization):
 
     def _E_inverse(self, xp, w, x, y, z):
         w, x, y, z = 2.0 * w, 2.0 * x, 2.0 * y, 2.0 * z
-        return (-x, w, -z, y,
-                -y, z, w, -x,
-                -z, -y, x, w)
+        return (-x, w, -z, y, -y, z, w, -x, -z, -y, x, w)
 
     def _E_dot(self, xp, chi, u):
         a, b, c = u
         w, x, y, z = chi
-        q_dot = (0.5 * (-x * a - y * b - z * c), 0.5 * (w * a + z * b - y * c),
-                 0.5 * (-z * a + w * b + x * c), 0.5 * (y * a - x * b + w * c))
+        q_dot = (
+            0.5 * (-x * a - y * b - z * c),
+            0.5 * (w * a + z * b - y * c),
+            0.5 * (-z * a + w * b + x * c),
+            0.5 * (y * a - x * b + w * c),
+        )
         return _half_H(*q_dot)
 
     def _distance(self, xp, w, x, y, z):

@@ -15,9 +15,35 @@ from .base import RotationParameterization
 
 def _rate_map(c00, c01, c02, c10, c11, c12, c20, c21, c22):
     """Row-major entries of the 9x3 E with vec(Ċ) = E·ω (row 3i + j is row i of −[C[:, j]]x)."""
-    return (0.0, c20, -c10, 0.0, c21, -c11, 0.0, c22, -c12,
-            -c20, 0.0, c00, -c21, 0.0, c01, -c22, 0.0, c02,
-            c10, -c00, 0.0, c11, -c01, 0.0, c12, -c02, 0.0)
+    return (
+        0.0,
+        c20,
+        -c10,
+        0.0,
+        c21,
+        -c11,
+        0.0,
+        c22,
+        -c12,
+        -c20,
+        0.0,
+        c00,
+        -c21,
+        0.0,
+        c01,
+        -c22,
+        0.0,
+        c02,
+        c10,
+        -c00,
+        0.0,
+        c11,
+        -c01,
+        0.0,
+        c12,
+        -c02,
+        0.0,
+    )
 
 
 class RotationMatrix(RotationParameterization):
@@ -39,9 +65,35 @@ class RotationMatrix(RotationParameterization):
 
     def _E_inverse(self, xp, *chi):
         c00, c01, c02, c10, c11, c12, c20, c21, c22 = (0.5 * c for c in chi)
-        return (0.0, 0.0, 0.0, -c20, -c21, -c22, c10, c11, c12,
-                c20, c21, c22, 0.0, 0.0, 0.0, -c00, -c01, -c02,
-                -c10, -c11, -c12, c00, c01, c02, 0.0, 0.0, 0.0)
+        return (
+            0.0,
+            0.0,
+            0.0,
+            -c20,
+            -c21,
+            -c22,
+            c10,
+            c11,
+            c12,
+            c20,
+            c21,
+            c22,
+            0.0,
+            0.0,
+            0.0,
+            -c00,
+            -c01,
+            -c02,
+            -c10,
+            -c11,
+            -c12,
+            c00,
+            c01,
+            c02,
+            0.0,
+            0.0,
+            0.0,
+        )
 
     def _E_dot(self, xp, chi, u):
         a, b, c = u

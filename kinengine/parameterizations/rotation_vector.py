@@ -96,10 +96,13 @@ class RotationVector(RotationParameterization):
 
     def _from_rotation(self, xp, warn, *C):
         w, x, y, z = quaternion_from_matrix(xp, *C)
-        s2 = x * x + y * y + z * z                      # sin²(θ/2)
+        s2 = x * x + y * y + z * z  # sin²(θ/2)
         if xp is math:
-            scale = 2.0 / w * (1.0 - s2 / (3.0 * w * w)) if s2 < _TINY_SIN2 else 2.0 * math.atan2(
-                math.sqrt(s2), w) / math.sqrt(s2)
+            scale = (
+                2.0 / w * (1.0 - s2 / (3.0 * w * w))
+                if s2 < _TINY_SIN2
+                else 2.0 * math.atan2(math.sqrt(s2), w) / math.sqrt(s2)
+            )
         else:
             small = s2 < _TINY_SIN2
             s = np.sqrt(np.where(small, 1.0, s2))
@@ -108,8 +111,13 @@ class RotationVector(RotationParameterization):
 
     def _to_rotation(self, xp, x, y, z):
         t = x * x + y * y + z * z
-        return rotation_entries(series_or_closed(xp, t, _sinc_series, _sinc_closed),
-                                series_or_closed(xp, t, _versine_series, _versine_closed), x, y, z)
+        return rotation_entries(
+            series_or_closed(xp, t, _sinc_series, _sinc_closed),
+            series_or_closed(xp, t, _versine_series, _versine_closed),
+            x,
+            y,
+            z,
+        )
 
     def _E(self, xp, x, y, z):
         b = series_or_closed(xp, x * x + y * y + z * z, _b_series, _b_closed)
@@ -130,9 +138,13 @@ class RotationVector(RotationParameterization):
         p_pd = x * phi_dot[0] + y * phi_dot[1] + z * phi_dot[2]
         b_dot = series_or_closed(xp, t, _b_prime_over_theta_series, _b_prime_over_theta_closed) * p_pd
         skew = cross_matrix(*phi_dot)
-        return tuple(-0.5 * skew[3 * i + j] + b_dot * (chi[i] * chi[j] - t * (i == j))
-                     + b * (chi[i] * phi_dot[j] + phi_dot[i] * chi[j] - 2.0 * p_pd * (i == j))
-                     for i in range(3) for j in range(3))
+        return tuple(
+            -0.5 * skew[3 * i + j]
+            + b_dot * (chi[i] * chi[j] - t * (i == j))
+            + b * (chi[i] * phi_dot[j] + phi_dot[i] * chi[j] - 2.0 * p_pd * (i == j))
+            for i in range(3)
+            for j in range(3)
+        )
 
     def _distance(self, xp, x, y, z):
         theta = xp.sqrt(x * x + y * y + z * z)

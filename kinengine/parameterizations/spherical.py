@@ -33,15 +33,11 @@ class Spherical(PositionParameterization):
     def _E(self, xp, r, theta, phi):
         ct, st, cp, sp = xp.cos(theta), xp.sin(theta), xp.cos(phi), xp.sin(phi)
         rs = r * sp
-        return (ct * sp, st * sp, cp,
-                -st / rs, ct / rs, 0.0,
-                ct * cp / r, st * cp / r, -sp / r)
+        return (ct * sp, st * sp, cp, -st / rs, ct / rs, 0.0, ct * cp / r, st * cp / r, -sp / r)
 
     def _E_inverse(self, xp, r, theta, phi):
         ct, st, cp, sp = xp.cos(theta), xp.sin(theta), xp.cos(phi), xp.sin(phi)
-        return (ct * sp, -r * st * sp, r * ct * cp,
-                st * sp, r * ct * sp, r * st * cp,
-                cp, 0.0, -r * sp)
+        return (ct * sp, -r * st * sp, r * ct * cp, st * sp, r * ct * sp, r * st * cp, cp, 0.0, -r * sp)
 
     def _E_dot(self, xp, chi, u):
         # rows' rates: ė_r = θ̇ sin φ e_θ + φ̇ e_φ, ė_θ = −θ̇ (sin φ e_r + cos φ e_φ), ė_φ = θ̇ cos φ e_θ − φ̇ e_r
@@ -55,10 +51,13 @@ class Spherical(PositionParameterization):
         r_dot = e_r[0] * vx + e_r[1] * vy + e_r[2] * vz
         t_dot = (e_t[0] * vx + e_t[1] * vy) / rs
         p_dot = (e_p[0] * vx + e_p[1] * vy + e_p[2] * vz) / r
-        row_r = [t_dot * sp * a + p_dot * b for a, b in zip(e_t, e_p)]
+        row_r = [t_dot * sp * a + p_dot * b for a, b in zip(e_t, e_p, strict=True)]
         scale = (r_dot * sp + r * cp * p_dot) / (rs * rs)
-        row_t = [-t_dot * (sp * a + cp * b) / rs - scale * c for a, b, c in zip(e_r, e_p, e_t)]
-        row_p = [(t_dot * cp * a - p_dot * b) / r - r_dot * c / (r * r) for a, b, c in zip(e_t, e_r, e_p)]
+        row_t = [-t_dot * (sp * a + cp * b) / rs - scale * c for a, b, c in zip(e_r, e_p, e_t, strict=True)]
+        row_p = [
+            (t_dot * cp * a - p_dot * b) / r - r_dot * c / (r * r)
+            for a, b, c in zip(e_t, e_r, e_p, strict=True)
+        ]
         return (*row_r, *row_t, *row_p)
 
     def _distance(self, xp, r, theta, phi):

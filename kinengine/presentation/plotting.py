@@ -14,15 +14,15 @@ matplotlib is imported lazily, so that ``import kinengine`` and the other comman
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from numbers import Real
-import textwrap
 
 import numpy as np
 
-from ..errors import KinematicsError
 from ..control.manipulability import VelocityEllipsoid
+from ..errors import KinematicsError
 
 AXIS_FRACTION = 0.15
 """Default arrow and triad length as a fraction of the skeleton's largest extent."""
@@ -55,8 +55,14 @@ class Drawing:
     title: str
 
 
-def drawing(robot, q: object = None, *, frames: Sequence[str] = (), ellipsoid: str | None = None,
-            axis_length: float | None = None) -> Drawing:
+def drawing(
+    robot,
+    q: object = None,
+    *,
+    frames: Sequence[str] = (),
+    ellipsoid: str | None = None,
+    axis_length: float | None = None,
+) -> Drawing:
     """The :class:`Drawing` of ``robot`` at q (dof,) (None: neutral), without drawing anything."""
     q = robot.neutral() if q is None else robot.check_configuration(q, check_limits=False, batch=False)
     frames = (frames,) if isinstance(frames, str) else tuple(frames or ())
@@ -66,8 +72,11 @@ def drawing(robot, q: object = None, *, frames: Sequence[str] = (), ellipsoid: s
     link_pose.update((j.child, robot.frame_pose(q, j.child)) for j in joints)
     skeleton = np.array([(link_pose[j.parent][:3, 3], link_pose[j.child][:3, 3]) for j in joints])
     skeleton = skeleton.reshape(-1, 2, 3)
-    joint_axes = {j.name: (link_pose[j.child][:3, 3].copy(), link_pose[j.child][:3, :3] @ np.asarray(j.axis))
-                  for j in joints if j.movable}
+    joint_axes = {
+        j.name: (link_pose[j.child][:3, 3].copy(), link_pose[j.child][:3, :3] @ np.asarray(j.axis))
+        for j in joints
+        if j.movable
+    }
     span = float(np.ptp(skeleton.reshape(-1, 3), axis=0).max()) if len(skeleton) else 0.0
     span = span if span > 0 else 1.0
     if axis_length is None:
@@ -79,12 +88,30 @@ def drawing(robot, q: object = None, *, frames: Sequence[str] = (), ellipsoid: s
         ellipse = robot.velocity_ellipsoid(q, ellipsoid)
         longest = float(ellipse.semi_axes[0])
         scale = float(f"{ELLIPSOID_FRACTION * span / longest:.1g}") if longest > 0 else 1.0
-    return Drawing(q, skeleton, tuple(j.name for j in joints), joint_axes, triads, ellipse, ellipsoid, scale,
-                   float(axis_length), _title(robot, q, frames[0] if frames else robot.end_effector))
+    return Drawing(
+        q,
+        skeleton,
+        tuple(j.name for j in joints),
+        joint_axes,
+        triads,
+        ellipse,
+        ellipsoid,
+        scale,
+        float(axis_length),
+        _title(robot, q, frames[0] if frames else robot.end_effector),
+    )
 
 
-def plot_robot(robot, q: object = None, ax=None, *, frames: Sequence[str] = (), ellipsoid: str | None = None,
-               axis_length: float | None = None, title: bool | str = True):
+def plot_robot(
+    robot,
+    q: object = None,
+    ax=None,
+    *,
+    frames: Sequence[str] = (),
+    ellipsoid: str | None = None,
+    axis_length: float | None = None,
+    title: bool | str = True,
+):
     """Draw ``robot`` at q (None: neutral) into a 3D axes (new figure if ``ax`` is None); returns the axes.
 
     ``frames``: names drawn as RGB triads; ``ellipsoid``: frame whose velocity ellipsoid is drawn;
@@ -95,6 +122,7 @@ def plot_robot(robot, q: object = None, ax=None, *, frames: Sequence[str] = (), 
     """
     import matplotlib.pyplot as plt
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
+
     if ax is not None and getattr(ax, "name", None) != "3d":
         raise KinematicsError("`ax` must be a 3D axes, e.g. fig.add_subplot(projection='3d')")
     d = drawing(robot, q, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length)
@@ -107,40 +135,84 @@ def plot_robot(robot, q: object = None, ax=None, *, frames: Sequence[str] = (), 
         u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 25), np.linspace(0, np.pi, 13))
         sphere = np.stack([np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v)])
         surface = d.ellipsoid.center[:, None, None] + np.einsum(
-            "ij,jkl->ikl", d.ellipsoid.axes * (d.ellipsoid_scale * d.ellipsoid.semi_axes), sphere)
-        ax.plot_wireframe(*surface, color="tab:cyan", linewidth=0.5, alpha=0.6, zorder=1,
-                          label=f"velocity ellipsoid of {d.ellipsoid_frame}, ×{d.ellipsoid_scale:g} "
-                                f"(1 m/s per unit $|\\dot{{q}}|$ drawn as {d.ellipsoid_scale:g} m)")
+            "ij,jkl->ikl", d.ellipsoid.axes * (d.ellipsoid_scale * d.ellipsoid.semi_axes), sphere
+        )
+        ax.plot_wireframe(
+            *surface,
+            color="tab:cyan",
+            linewidth=0.5,
+            alpha=0.6,
+            zorder=1,
+            label=f"velocity ellipsoid of {d.ellipsoid_frame}, ×{d.ellipsoid_scale:g} "
+            f"(1 m/s per unit $|\\dot{{q}}|$ drawn as {d.ellipsoid_scale:g} m)",
+        )
         points.append(surface.reshape(3, -1).T)
 
     if len(d.skeleton):  # a robot of one link has no segment to draw
-        ax.add_collection3d(Line3DCollection(d.skeleton, colors="0.25", linewidths=2.5, zorder=2,
-                                             label="links (joint origin to joint origin)"))
+        ax.add_collection3d(
+            Line3DCollection(
+                d.skeleton,
+                colors="0.25",
+                linewidths=2.5,
+                zorder=2,
+                label="links (joint origin to joint origin)",
+            )
+        )
         ax.scatter(*d.skeleton.reshape(-1, 3).T, color="0.25", s=12, depthshade=False, zorder=2)
-    ax.scatter(0, 0, 0, color="k", marker="s", s=30, depthshade=False, zorder=2,
-               label=f"root {robot.description.root}")
+    ax.scatter(
+        0,
+        0,
+        0,
+        color="k",
+        marker="s",
+        s=30,
+        depthshade=False,
+        zorder=2,
+        label=f"root {robot.description.root}",
+    )
 
     types = {j.name: j.type for j in robot.description.joints}
     for kind, color in (("revolute", "tab:orange"), ("prismatic", "tab:purple")):
         names = [n for n in d.joint_axes if (types[n] == "prismatic") == (kind == "prismatic")]
         if names:
             origin, direction = (np.array([d.joint_axes[n][i] for n in names]) for i in (0, 1))
-            ax.quiver(*origin.T, *direction.T, length=d.axis_length, color=color, linewidths=2,
-                      arrow_length_ratio=0.3, zorder=3, label=f"{kind} joint axes")
+            ax.quiver(
+                *origin.T,
+                *direction.T,
+                length=d.axis_length,
+                color=color,
+                linewidths=2,
+                arrow_length_ratio=0.3,
+                zorder=3,
+                label=f"{kind} joint axes",
+            )
             points.append(origin + d.axis_length * direction)
 
     for name, T in d.frames.items():
         for k in range(3):
-            ax.quiver(*T[:3, 3], *T[:3, k], length=d.axis_length, color=_TRIAD_COLORS[k], linewidths=2,
-                      arrow_length_ratio=0.2, zorder=4)
+            ax.quiver(
+                *T[:3, 3],
+                *T[:3, k],
+                length=d.axis_length,
+                color=_TRIAD_COLORS[k],
+                linewidths=2,
+                arrow_length_ratio=0.2,
+                zorder=4,
+            )
         ax.text(*(T[:3, 3] + 0.3 * d.axis_length * T[:3, :3].sum(axis=1)), name, fontsize=8, zorder=5)
         points.append(T[:3, 3] + d.axis_length * T[:3, :3].T)
 
     points = np.concatenate(points)
     centre = (points.max(axis=0) + points.min(axis=0)) / 2
     half = 0.55 * max(float(np.ptp(points, axis=0).max()), d.axis_length)
-    ax.set(xlim=(centre[0] - half, centre[0] + half), ylim=(centre[1] - half, centre[1] + half),
-           zlim=(centre[2] - half, centre[2] + half), xlabel="x [m]", ylabel="y [m]", zlabel="z [m]")
+    ax.set(
+        xlim=(centre[0] - half, centre[0] + half),
+        ylim=(centre[1] - half, centre[1] + half),
+        zlim=(centre[2] - half, centre[2] + half),
+        xlabel="x [m]",
+        ylabel="y [m]",
+        zlabel="z [m]",
+    )
     ax.set_box_aspect((1, 1, 1))
     ax.legend(loc="upper left", fontsize=7)
     if title:
@@ -154,9 +226,11 @@ def _title(robot, q: np.ndarray, frame: str) -> str:
     types = {j.type for j in robot.description.joints if j.movable and j.mimic is None}
     unit = "m" if types == {"prismatic"} else "rad, m" if "prismatic" in types else "rad"
     chi = robot.pose_parameters(q, frame, "cartesian", "rotation_vector")
-    lines = (f"{robot.name} at q = {_vector(q, '.3g')} [{unit}]",
-             f"{frame} in {robot.description.root}: p = {_vector(chi[:3])} m, "
-             f"rotation vector {_vector(chi[3:])} rad")
+    lines = (
+        f"{robot.name} at q = {_vector(q, '.3g')} [{unit}]",
+        f"{frame} in {robot.description.root}: p = {_vector(chi[:3])} m, "
+        f"rotation vector {_vector(chi[3:])} rad",
+    )
     return "\n".join(textwrap.fill(line, TITLE_WIDTH) for line in lines)
 
 

@@ -9,8 +9,8 @@ lecture notes (ETH Zürich).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -37,8 +37,10 @@ class ReferenceKinematics:
             if name not in own:
                 raise FrameNotFoundError(name, own, kind="joint")
         if sorted(names) != sorted(own):
-            raise ConfigurationError(f"joint_names must name each of the {len(own)} independent movable "
-                                     f"joints exactly once: {', '.join(own)}")
+            raise ConfigurationError(
+                f"joint_names must name each of the {len(own)} independent movable "
+                f"joints exactly once: {', '.join(own)}"
+            )
         self._tree = tree
         self._joint_names = names
         self._frames = tree.frames
@@ -53,14 +55,16 @@ class ReferenceKinematics:
                 self._coordinate[j.name] = (column[root], a, b)
 
     @classmethod
-    def from_urdf_string(cls, text: str | bytes, *, joint_names: Sequence[str] | None = None,
-                         source: str = "<string>") -> "ReferenceKinematics":
+    def from_urdf_string(
+        cls, text: str | bytes, *, joint_names: Sequence[str] | None = None, source: str = "<string>"
+    ) -> ReferenceKinematics:
         """Reference kinematics of URDF text, parsed strictly by yourdfpy."""
         return cls(KinematicTree.from_urdf(read_urdf(text, source=source), source=source), joint_names)
 
     @classmethod
-    def from_file(cls, path: str | os.PathLike[str], *,
-                  joint_names: Sequence[str] | None = None) -> "ReferenceKinematics":
+    def from_file(
+        cls, path: str | os.PathLike[str], *, joint_names: Sequence[str] | None = None
+    ) -> ReferenceKinematics:
         """Reference kinematics of a .urdf file."""
         return cls.from_urdf_string(Path(path).read_bytes(), joint_names=joint_names, source=str(path))
 
@@ -110,8 +114,9 @@ class ReferenceKinematics:
             J[:, :3] -= np.cross(J[:, 3:], r_IF[:, :, None], axis=1)
         return J if batched else J[0]
 
-    def _chain_poses(self, q: np.ndarray,
-                     frame: str) -> tuple[list[tuple[TreeJoint, np.ndarray]], np.ndarray]:
+    def _chain_poses(
+        self, q: np.ndarray, frame: str
+    ) -> tuple[list[tuple[TreeJoint, np.ndarray]], np.ndarray]:
         """Eq. 2.127 along the root -> frame chain: per movable joint its pose T_I,joint (N, 4, 4)
         taken before its own motion, and T_IF (N, 4, 4)."""
         try:
@@ -135,8 +140,9 @@ class ReferenceKinematics:
         except (TypeError, ValueError):
             raise ConfigurationError(f"Expected `q` to be numeric, got {type(q).__name__}") from None
         if arr.ndim not in (1, 2) or arr.shape[-1] != self.dof:
-            raise ConfigurationError(f"Expected `q` to have shape ({self.dof},) or (N, {self.dof}), "
-                                     f"got {arr.shape}")
+            raise ConfigurationError(
+                f"Expected `q` to have shape ({self.dof},) or (N, {self.dof}), got {arr.shape}"
+            )
         if not np.all(np.isfinite(arr)):
             raise ConfigurationError("`q` has non-finite values")
         return (arr if arr.ndim == 2 else arr[None]), arr.ndim == 2

@@ -7,15 +7,15 @@ T_{parent,joint} = Trans(xyz) · Rz(yaw) · Ry(pitch) · Rx(roll) are used as gi
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
 import io
 import re
+from collections.abc import Mapping
+from dataclasses import dataclass
 from xml.parsers import expat
 
-from lxml import etree
 import numpy as np
 import yourdfpy
+from lxml import etree
 
 from ..errors import URDFError
 
@@ -33,9 +33,13 @@ def read_urdf(text: str | bytes, *, source: str = "<string>", scene_graph: bool 
     """
     data = plain_urdf(text, source=source)
     try:
-        return yourdfpy.URDF.load(io.BytesIO(data), build_scene_graph=scene_graph,
-                                  build_collision_scene_graph=False, load_meshes=False,
-                                  load_collision_meshes=False)
+        return yourdfpy.URDF.load(
+            io.BytesIO(data),
+            build_scene_graph=scene_graph,
+            build_collision_scene_graph=False,
+            load_meshes=False,
+            load_collision_meshes=False,
+        )
     except Exception as exc:  # yourdfpy signals bad attributes with assorted builtin errors
         raise URDFError(f"yourdfpy could not read it: {type(exc).__name__}: {exc}", source=source) from None
 
@@ -67,8 +71,11 @@ def plain_urdf(text: str | bytes, *, source: str = "<string>") -> bytes:
             builder.end(name)
 
     def refuse_dtd(*_: object) -> None:
-        raise URDFError("a <!DOCTYPE> is not read: no DTD, no entity declarations", source=source,
-                        line=parser.CurrentLineNumber)
+        raise URDFError(
+            "a <!DOCTYPE> is not read: no DTD, no entity declarations",
+            source=source,
+            line=parser.CurrentLineNumber,
+        )
 
     parser = expat.ParserCreate()  # no namespace_separator: no namespace processing, as TinyXML
     parser.StartElementHandler, parser.EndElementHandler = start, end
@@ -78,8 +85,9 @@ def plain_urdf(text: str | bytes, *, source: str = "<string>") -> bytes:
     try:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
-        raise URDFError(f"not well-formed XML: {expat.errors.messages[exc.code]}", source=source,
-                        line=exc.lineno) from None
+        raise URDFError(
+            f"not well-formed XML: {expat.errors.messages[exc.code]}", source=source, line=exc.lineno
+        ) from None
     root = builder.close()
     if root.tag != "robot":
         raise URDFError(f"the root element is <{root.tag}>, expected <robot>", source=source)
@@ -123,7 +131,7 @@ class KinematicTree:
     parent_joint: Mapping[str, int]  # link name -> index in joints of the joint whose child it is
 
     @classmethod
-    def from_urdf(cls, urdf: yourdfpy.URDF, *, source: str = "<string>") -> "KinematicTree":
+    def from_urdf(cls, urdf: yourdfpy.URDF, *, source: str = "<string>") -> KinematicTree:
         robot = urdf.robot
         links = [link.name for link in robot.links]
         _unique(links, "link", source)
@@ -135,17 +143,23 @@ class KinematicTree:
             joint = _tree_joint(j, source)
             for role, link in (("parent", joint.parent), ("child", joint.child)):
                 if link not in known:
-                    raise URDFError(f"{role} link {link!r} is not defined", source=source,
-                                    element=f"joint {joint.name!r}")
+                    raise URDFError(
+                        f"{role} link {link!r} is not defined", source=source, element=f"joint {joint.name!r}"
+                    )
             if joint.child in parent_of:
-                raise URDFError(f"link {joint.child!r} is the child of both {parent_of[joint.child]!r} "
-                                f"and {joint.name!r}", source=source, element=f"joint {joint.name!r}")
+                raise URDFError(
+                    f"link {joint.child!r} is the child of both {parent_of[joint.child]!r} "
+                    f"and {joint.name!r}",
+                    source=source,
+                    element=f"joint {joint.name!r}",
+                )
             parent_of[joint.child] = joint.name
             by_parent[joint.parent].append(joint)
         roots = [name for name in links if name not in parent_of]
         if len(roots) != 1:
-            raise URDFError(f"expected exactly one root link, found {roots or 'none (a cycle)'}",
-                            source=source)
+            raise URDFError(
+                f"expected exactly one root link, found {roots or 'none (a cycle)'}", source=source
+            )
         ordered: list[TreeJoint] = []
         stack = list(reversed(by_parent[roots[0]]))
         while stack:  # depth-first, children in file order
@@ -154,8 +168,9 @@ class KinematicTree:
             stack.extend(reversed(by_parent[joint.child]))
         if len(ordered) != len(robot.joints):
             cut = sorted(set(parent_of) - {j.child for j in ordered})
-            raise URDFError(f"links {cut} are not connected to the root {roots[0]!r} (a cycle)",
-                            source=source)
+            raise URDFError(
+                f"links {cut} are not connected to the root {roots[0]!r} (a cycle)", source=source
+            )
         _check_mimics(ordered, source)
         return cls(robot.name, roots[0], tuple(ordered), {j.child: i for i, j in enumerate(ordered)})
 
@@ -192,26 +207,40 @@ class KinematicTree:
 def _tree_joint(j: yourdfpy.Joint, source: str) -> TreeJoint:
     where = f"joint {j.name!r}"
     if j.type not in SUPPORTED_TYPES:
-        raise URDFError(f"joint type {j.type!r} is not supported (use one of {', '.join(SUPPORTED_TYPES)})",
-                        source=source, element=where)
+        raise URDFError(
+            f"joint type {j.type!r} is not supported (use one of {', '.join(SUPPORTED_TYPES)})",
+            source=source,
+            element=where,
+        )
     origin = np.eye(4) if j.origin is None else np.array(j.origin, dtype=float)
     if not np.all(np.isfinite(origin)):
         raise URDFError("<origin> has non-finite values", source=source, element=where)
     axis = np.array([1.0, 0.0, 0.0]) if j.axis is None else np.array(j.axis, dtype=float)
     norm = float(np.linalg.norm(axis)) if axis.shape == (3,) else 0.0
     if j.type != "fixed" and not (np.isfinite(norm) and norm > 1e-12):
-        raise URDFError(f"<axis xyz> must be a finite non-zero 3-vector, got {axis.tolist()}",
-                        source=source, element=where)
+        raise URDFError(
+            f"<axis xyz> must be a finite non-zero 3-vector, got {axis.tolist()}",
+            source=source,
+            element=where,
+        )
     mimic = j.mimic if j.type != "fixed" else None  # a fixed joint has nothing to mimic
     if mimic is not None and (mimic.joint is None or not np.isfinite([mimic.multiplier, mimic.offset]).all()):
-        raise URDFError("<mimic> needs a joint name and finite multiplier and offset", source=source,
-                        element=where)
+        raise URDFError(
+            "<mimic> needs a joint name and finite multiplier and offset", source=source, element=where
+        )
     axis = axis / norm if norm else axis
     origin.flags.writeable = axis.flags.writeable = False
-    return TreeJoint(j.name, j.type, j.parent, j.child, origin, axis,
-                     None if mimic is None else mimic.joint,
-                     1.0 if mimic is None else float(mimic.multiplier),
-                     0.0 if mimic is None else float(mimic.offset))
+    return TreeJoint(
+        j.name,
+        j.type,
+        j.parent,
+        j.child,
+        origin,
+        axis,
+        None if mimic is None else mimic.joint,
+        1.0 if mimic is None else float(mimic.multiplier),
+        0.0 if mimic is None else float(mimic.offset),
+    )
 
 
 def _check_mimics(joints: list[TreeJoint], source: str) -> None:
@@ -222,15 +251,17 @@ def _check_mimics(joints: list[TreeJoint], source: str) -> None:
         if j.leader is None:
             continue
         leader = by_name.get(j.leader)
-        problem = ("does not exist" if leader is None
-                   else "is fixed" if not leader.movable else None)
+        problem = "does not exist" if leader is None else "is fixed" if not leader.movable else None
         if problem:
-            raise URDFError(f"mimics joint {j.leader!r}, which {problem}", source=source,
-                            element=f"joint {j.name!r}")
+            raise URDFError(
+                f"mimics joint {j.leader!r}, which {problem}", source=source, element=f"joint {j.name!r}"
+            )
         chain = [j.name]
         while leader is not None and leader.leader is not None:
             if leader.name in chain:
-                raise URDFError(f"mimic joints {chain} form a cycle", source=source, element=f"joint {j.name!r}")
+                raise URDFError(
+                    f"mimic joints {chain} form a cycle", source=source, element=f"joint {j.name!r}"
+                )
             chain.append(leader.name)
             leader = by_name.get(leader.leader)
 

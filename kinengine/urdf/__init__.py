@@ -9,5 +9,14 @@ from .description import Inertial, Joint, Link, Mimic, RobotDescription
 from .limits import LIMITS, Limits
 from .parser import parse_urdf, read_urdf_file
 
-__all__ = ["Inertial", "Joint", "LIMITS", "Limits", "Link", "Mimic", "RobotDescription", "parse_urdf",
-           "read_urdf_file"]
+__all__ = [
+    "LIMITS",
+    "Inertial",
+    "Joint",
+    "Limits",
+    "Link",
+    "Mimic",
+    "RobotDescription",
+    "parse_urdf",
+    "read_urdf_file",
+]

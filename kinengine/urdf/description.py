@@ -106,26 +106,28 @@ class RobotDescription:
                 i = link.inertial
                 ixx, ixy, ixz, iyy, iyz, izz = (repr(float(v)) for v in i.inertia)
                 out.append(
-                    f"    <inertial><origin xyz=\"{_v(i.xyz)}\" rpy=\"{_v(i.rpy)}\"/>"
-                    f"<mass value=\"{float(i.mass)!r}\"/>"
-                    f"<inertia ixx=\"{ixx}\" ixy=\"{ixy}\" ixz=\"{ixz}\" iyy=\"{iyy}\" "
-                    f"iyz=\"{iyz}\" izz=\"{izz}\"/></inertial>")
+                    f'    <inertial><origin xyz="{_v(i.xyz)}" rpy="{_v(i.rpy)}"/>'
+                    f'<mass value="{float(i.mass)!r}"/>'
+                    f'<inertia ixx="{ixx}" ixy="{ixy}" ixz="{ixz}" iyy="{iyy}" '
+                    f'iyz="{iyz}" izz="{izz}"/></inertial>'
+                )
             out.append("  </link>")
         for j in self.joints:
-            out.append(f"  <joint name={quoteattr(j.name)} type=\"{j.type}\">")
+            out.append(f'  <joint name={quoteattr(j.name)} type="{j.type}">')
             out.append(f"    <parent link={quoteattr(j.parent)}/><child link={quoteattr(j.child)}/>")
-            out.append(f"    <origin xyz=\"{_v(j.xyz)}\" rpy=\"{_v(j.rpy)}\"/>")
+            out.append(f'    <origin xyz="{_v(j.xyz)}" rpy="{_v(j.rpy)}"/>')
             if j.movable:
-                out.append(f"    <axis xyz=\"{_v(j.axis)}\"/>")
-                lim = [f"effort=\"{float(j.effort or 0.0)!r}\"",
-                       f"velocity=\"{float(j.velocity or 0.0)!r}\""]
+                out.append(f'    <axis xyz="{_v(j.axis)}"/>')
+                lim = [f'effort="{float(j.effort or 0.0)!r}"', f'velocity="{float(j.velocity or 0.0)!r}"']
                 if j.lower is not None and j.upper is not None:
-                    lim += [f"lower=\"{float(j.lower)!r}\"", f"upper=\"{float(j.upper)!r}\""]
+                    lim += [f'lower="{float(j.lower)!r}"', f'upper="{float(j.upper)!r}"']
                 out.append(f"    <limit {' '.join(lim)}/>")
             if j.mimic is not None:
                 m = j.mimic
-                out.append(f"    <mimic joint={quoteattr(m.joint)} "
-                           f"multiplier=\"{float(m.multiplier)!r}\" offset=\"{float(m.offset)!r}\"/>")
+                out.append(
+                    f"    <mimic joint={quoteattr(m.joint)} "
+                    f'multiplier="{float(m.multiplier)!r}" offset="{float(m.offset)!r}"/>'
+                )
             out.append("  </joint>")
         out.append("</robot>")
         return "\n".join(out) + "\n"

@@ -26,13 +26,18 @@ from .limits import Limits
 _DECIMAL = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")  # ASCII, as urdfdom reads
 _UNIT_TOLERANCE = 1e-9  # |‖axis‖ - 1| above this: normalize and warn; ‖axis‖ below it: refuse
 _INERTIA = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-_UNUSED_NUMBERS = {"calibration": ("rising", "falling"), "dynamics": ("damping", "friction"),
-                   "safety_controller": ("soft_lower_limit", "soft_upper_limit", "k_position", "k_velocity")}
+_UNUSED_NUMBERS = {
+    "calibration": ("rising", "falling"),
+    "dynamics": ("damping", "friction"),
+    "safety_controller": ("soft_lower_limit", "soft_upper_limit", "k_position", "k_velocity"),
+}
 _FIXED_IGNORED = {"limit": ("lower", "upper", "effort", "velocity"), "mimic": ("multiplier", "offset")}
 _RESERVED = "universe"
-_FLOATING = ("a fixed-base model cannot have a {type} joint: kinengine models arms and trees bolted to "
-             "the world. Remove the joint and its parent link (its child becomes the root) or make it fixed; "
-             "a floating-base robot (legged, humanoid, flying) is then modelled with its base held still")
+_FLOATING = (
+    "a fixed-base model cannot have a {type} joint: kinengine models arms and trees bolted to "
+    "the world. Remove the joint and its parent link (its child becomes the root) or make it fixed; "
+    "a floating-base robot (legged, humanoid, flying) is then modelled with its base held still"
+)
 
 
 class Where:
@@ -54,21 +59,30 @@ def read_name(element: etree._Element, attribute: str, where: Where, limits: Lim
     if not value:
         raise where.error(f"<{element.tag}> has an empty {attribute!r} attribute", element)
     if len(value) > limits.max_name_length:
-        raise where.error(f"<{element.tag} {attribute}> has {len(value)} characters, more than "
-                          f"Limits.max_name_length = {limits.max_name_length}", element)
+        raise where.error(
+            f"<{element.tag} {attribute}> has {len(value)} characters, more than "
+            f"Limits.max_name_length = {limits.max_name_length}",
+            element,
+        )
     if value == _RESERVED and element.tag in ("link", "joint"):
-        raise where.error(f"<{element.tag} {attribute}=\"{_RESERVED}\">: the name is reserved (Pinocchio calls "
-                          "its world frame and joint 0 so); rename it", element)
+        raise where.error(
+            f'<{element.tag} {attribute}="{_RESERVED}">: the name is reserved (Pinocchio calls '
+            "its world frame and joint 0 so); rename it",
+            element,
+        )
     return value
 
 
-def read_link(element: etree._Element, source: str, limits: Limits, warnings: list[str] | None = None) -> Link:
+def read_link(
+    element: etree._Element, source: str, limits: Limits, warnings: list[str] | None = None
+) -> Link:
     """A link: its name and, if present, its inertial [kg, m, rad, kg m^2]; appends to ``warnings``."""
     name = read_name(element, "name", Where(source, "link"), limits)
     where = Where(source, f"link {name!r}", warnings)
     inertial = _single(_children(element), "inertial", where)
-    return Link(name=name, inertial=None if inertial is None else _inertial(inertial, where),
-                line=element.sourceline)
+    return Link(
+        name=name, inertial=None if inertial is None else _inertial(inertial, where), line=element.sourceline
+    )
 
 
 def read_joint(element: etree._Element, source: str, limits: Limits, warnings: list[str]) -> Joint:
@@ -95,9 +109,11 @@ def read_joint(element: etree._Element, source: str, limits: Limits, warnings: l
         fields["axis"] = _axis(children, where, warnings)
         fields.update(_limits(children, element, kind, where))
         if mimic is not None:
-            fields["mimic"] = Mimic(joint=read_name(mimic, "joint", where, limits),
-                                    multiplier=_number(mimic, "multiplier", where, 1.0),
-                                    offset=_number(mimic, "offset", where, 0.0))
+            fields["mimic"] = Mimic(
+                joint=read_name(mimic, "joint", where, limits),
+                multiplier=_number(mimic, "multiplier", where, 1.0),
+                offset=_number(mimic, "offset", where, 0.0),
+            )
     else:  # a fixed joint: <axis>, <limit> and <mimic> are ignored, but other URDF readers parse them
         axis = _single(children, "axis", where)
         if axis is not None:
@@ -113,8 +129,16 @@ def read_joint(element: etree._Element, source: str, limits: Limits, warnings: l
         extra = _single(children, tag, where)
         for attribute in attributes if extra is not None else ():
             _number(extra, attribute, where, None)
-    return Joint(name=name, type=kind, parent=links[0], child=links[1], xyz=xyz, rpy=rpy,
-                 line=element.sourceline, **fields)
+    return Joint(
+        name=name,
+        type=kind,
+        parent=links[0],
+        child=links[1],
+        xyz=xyz,
+        rpy=rpy,
+        line=element.sourceline,
+        **fields,
+    )
 
 
 def _children(element: etree._Element) -> dict[str, list[etree._Element]]:
@@ -130,8 +154,10 @@ def _single(children: dict[str, list[etree._Element]], tag: str, where: Where) -
     found = children.get(tag, ())
     if len(found) > 1 and where.warnings is not None:
         lines = ", ".join(str(f.sourceline) for f in found)
-        where.warnings.append(f"{where.label} (line {found[0].getparent().sourceline}) has {len(found)} <{tag}> "
-                              f"elements (lines {lines}); the first one is used, as urdfdom does")
+        where.warnings.append(
+            f"{where.label} (line {found[0].getparent().sourceline}) has {len(found)} <{tag}> "
+            f"elements (lines {lines}); the first one is used, as urdfdom does"
+        )
     return found[0] if found else None
 
 
@@ -151,7 +177,7 @@ def _parse_float(text: str, element: etree._Element, attribute: str, where: Wher
         what = "overflows a double"
     else:
         return value
-    raise where.error(f"<{element.tag} {attribute}=\"{element.get(attribute)}\">: {text!r} {what}", element)
+    raise where.error(f'<{element.tag} {attribute}="{element.get(attribute)}">: {text!r} {what}', element)
 
 
 def _vector(element: etree._Element, attribute: str, where: Where, default: Vector3) -> Vector3:
@@ -161,8 +187,11 @@ def _vector(element: etree._Element, attribute: str, where: Where, default: Vect
         return default
     parts = text.split()
     if len(parts) != 3:
-        raise where.error(f"<{element.tag} {attribute}=\"{text}\">: expected three numbers separated by "
-                          f"spaces, got {len(parts)}", element)
+        raise where.error(
+            f'<{element.tag} {attribute}="{text}">: expected three numbers separated by '
+            f"spaces, got {len(parts)}",
+            element,
+        )
     x, y, z = (_parse_float(p, element, attribute, where) for p in parts)
     return (x, y, z)
 
@@ -181,28 +210,39 @@ def _axis(children: dict[str, list[etree._Element]], where: Where, warnings: lis
     v = _vector(axis, "xyz", where, (1.0, 0.0, 0.0))
     norm = math.hypot(*v)
     if norm < _UNIT_TOLERANCE:
-        raise where.error(f"<axis xyz=\"{axis.get('xyz')}\"> is zero; give a unit axis, e.g. \"0 0 1\"", axis)
+        raise where.error(f'<axis xyz="{axis.get("xyz")}"> is zero; give a unit axis, e.g. "0 0 1"', axis)
     if not math.isfinite(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]):  # Pinocchio and numpy would get NaN
-        raise where.error(f"<axis xyz=\"{axis.get('xyz')}\"> is too large: its squared norm overflows a double, "
-                          "so other URDF readers cannot normalize it; give a unit axis", axis)
+        raise where.error(
+            f'<axis xyz="{axis.get("xyz")}"> is too large: its squared norm overflows a double, '
+            "so other URDF readers cannot normalize it; give a unit axis",
+            axis,
+        )
     if abs(norm - 1.0) <= _UNIT_TOLERANCE:
         return v
     unit = (v[0] / norm, v[1] / norm, v[2] / norm)
-    warnings.append(f"{where.label}: axis {axis.get('xyz')!r} has norm {norm:.9g}; normalized to "
-                    f"({unit[0]:.9g}, {unit[1]:.9g}, {unit[2]:.9g})")
+    warnings.append(
+        f"{where.label}: axis {axis.get('xyz')!r} has norm {norm:.9g}; normalized to "
+        f"({unit[0]:.9g}, {unit[1]:.9g}, {unit[2]:.9g})"
+    )
     return unit
 
 
-def _limits(children: dict[str, list[etree._Element]], element: etree._Element, kind: str,
-            where: Where) -> dict[str, float | None]:
+def _limits(
+    children: dict[str, list[etree._Element]], element: etree._Element, kind: str, where: Where
+) -> dict[str, float | None]:
     limit = _single(children, "limit", where)
     if limit is None:
         if kind == "continuous":
             return {}
-        raise where.error(f"a {kind} joint needs a <limit lower=... upper=...> element "
-                          "(use type=\"continuous\" for an unbounded revolute joint)", element)
-    out = {"velocity": _number(limit, "velocity", where, None),
-           "effort": _number(limit, "effort", where, None)}
+        raise where.error(
+            f"a {kind} joint needs a <limit lower=... upper=...> element "
+            '(use type="continuous" for an unbounded revolute joint)',
+            element,
+        )
+    out = {
+        "velocity": _number(limit, "velocity", where, None),
+        "effort": _number(limit, "effort", where, None),
+    }
     lower, upper = _number(limit, "lower", where, 0.0), _number(limit, "upper", where, 0.0)
     if kind != "continuous":  # continuous joints ignore lower/upper (urdfdom reads but never uses them)
         if lower > upper:

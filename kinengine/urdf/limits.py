@@ -9,9 +9,9 @@ to load a bigger model.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
 import math
 import numbers
+from dataclasses import dataclass, fields
 
 from ..errors import OptionError
 
@@ -28,7 +28,8 @@ class Limits:
     - ``max_links``, ``max_joints``: ``<link>`` and ``<joint>`` elements of ``<robot>``.
     - ``max_movable_joints``: joints whose type is not ``fixed`` (mimic joints included). Each
       Pinocchio ``Data`` (a Robot makes one per thread that uses it, a Task one more) grows like
-      32·nv³ bytes and briefly needs twice that while it is made. Measured on pin 4.1 (resident memory added by ``createData()`` / its peak):
+      32·nv³ bytes and briefly needs twice that while it is made. Measured on pin 4.1 (resident memory
+      added by ``createData()`` / its peak):
       nv = 64: 12 / 20 MiB, 128: 73 / 139 MiB, 192: 234 / 455 MiB, 256: 542 / 1062 MiB.
       128 keeps one Data under ~75 MiB and covers every example-robot-data model (at most 101).
     - ``max_tree_depth``: joints (fixed ones included) between the root and any link. Pinocchio's
@@ -62,21 +63,28 @@ class Limits:
             value, (low, high) = getattr(self, f.name), BOUNDS[f.name]
             real = f.type in ("float", float)
             kinds = (numbers.Real,) if real else (numbers.Integral,)
-            if isinstance(value, bool) or not isinstance(value, kinds) or \
-                    not ((not real or math.isfinite(value)) and low <= value <= high):
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, kinds)
+                or not ((not real or math.isfinite(value)) and low <= value <= high)
+            ):
                 kind = "a finite real number" if real else "a whole number"
                 span = f"[{low:g}, {high:g}]" if real else f"[{low}, {high}]"
                 raise OptionError(f"Limits.{f.name} must be {kind} in {span}, got {value!r}")
 
 
 BOUNDS: dict[str, tuple[float, float]] = {
-    "max_bytes": (1, 2**31), "max_tags": (1, 2**31),
+    "max_bytes": (1, 2**31),
+    "max_tags": (1, 2**31),
     "max_depth": (1, 256),  # libxml2 itself refuses deeper nesting (lxml's huge_tree is off)
-    "max_attribute_length": (1, 10**7), "max_name_length": (1, 10**6),
-    "max_links": (1, 10**6), "max_joints": (1, 10**6),
+    "max_attribute_length": (1, 10**7),
+    "max_name_length": (1, 10**6),
+    "max_links": (1, 10**6),
+    "max_joints": (1, 10**6),
     "max_movable_joints": (0, 10**6),  # Data beyond the memory left is refused when it is made
     "max_tree_depth": (1, 10**6),  # the build thread's stack grows with the depth
-    "max_offset": (1e-9, 1e100), "max_multiplier": (1e-9, 1e100),
+    "max_offset": (1e-9, 1e100),
+    "max_multiplier": (1e-9, 1e100),
 }
 """(smallest, largest) value of each Limits field."""
 

@@ -18,31 +18,69 @@ from .description import Joint, Link
 from .limits import LIMITS, Limits
 
 
-def check_magnitudes(links: Sequence[Link], joints: Sequence[Joint], *, source: str,
-                     limits: Limits = LIMITS) -> None:
+def check_magnitudes(
+    links: Sequence[Link], joints: Sequence[Joint], *, source: str, limits: Limits = LIMITS
+) -> None:
     """URDFError naming the element and the bound for the first number beyond the limits' magnitudes."""
     offset, factor = limits.max_offset, limits.max_multiplier
     for joint in joints:
         where = f"joint {joint.name!r}"
         _bounded(joint.xyz, offset, "origin xyz", "max_offset", "m", where, joint.line, source)
         if joint.mimic is not None:
-            _bounded((joint.mimic.offset,), offset, "mimic offset", "max_offset", "m or rad", where,
-                     joint.line, source)
-            _bounded((joint.mimic.multiplier,), factor, "mimic multiplier", "max_multiplier", "", where,
-                     joint.line, source)
+            _bounded(
+                (joint.mimic.offset,),
+                offset,
+                "mimic offset",
+                "max_offset",
+                "m or rad",
+                where,
+                joint.line,
+                source,
+            )
+            _bounded(
+                (joint.mimic.multiplier,),
+                factor,
+                "mimic multiplier",
+                "max_multiplier",
+                "",
+                where,
+                joint.line,
+                source,
+            )
     for link in links:
         if link.inertial is not None:
-            _bounded(link.inertial.xyz, offset, "inertial origin xyz", "max_offset", "m",
-                     f"link {link.name!r}", link.line, source)
+            _bounded(
+                link.inertial.xyz,
+                offset,
+                "inertial origin xyz",
+                "max_offset",
+                "m",
+                f"link {link.name!r}",
+                link.line,
+                source,
+            )
 
 
-def _bounded(values: Sequence[float], bound: float, what: str, field: str, unit: str, where: str,
-             line: int | None, source: str) -> None:
+def _bounded(
+    values: Sequence[float],
+    bound: float,
+    what: str,
+    field: str,
+    unit: str,
+    where: str,
+    line: int | None,
+    source: str,
+) -> None:
     for value in values:
         if not abs(value) <= bound:
-            raise URDFError(f"{what} {value!r} is beyond ±{bound:g}{' ' + unit if unit else ''} "
-                            f"(Limits.{field}), where poses could overflow; fix the number or pass "
-                            f"limits=Limits({field}=...)", source=source, element=where, line=line)
+            raise URDFError(
+                f"{what} {value!r} is beyond ±{bound:g}{' ' + unit if unit else ''} "
+                f"(Limits.{field}), where poses could overflow; fix the number or pass "
+                f"limits=Limits({field}=...)",
+                source=source,
+                element=where,
+                line=line,
+            )
 
 
 __all__ = ["check_magnitudes"]

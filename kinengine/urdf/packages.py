@@ -17,15 +17,16 @@ from urllib.parse import unquote, urlsplit
 
 from ..errors import URDFError
 
-SEARCH_DEPTH = 3                # folder levels below each ROS_PACKAGE_PATH root that are searched
-_MANIFEST_BYTES = 1 << 20       # a package.xml is read up to this size
+SEARCH_DEPTH = 3  # folder levels below each ROS_PACKAGE_PATH root that are searched
+_MANIFEST_BYTES = 1 << 20  # a package.xml is read up to this size
 _VALID_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 _COMMENT = re.compile(rb"<!--.*?-->", re.DOTALL)
 _NAME = re.compile(rb"<name>\s*([^<\s]+)\s*</name>")
 
 
-def resolve_package(name: str, *, packages: Mapping[str, str | os.PathLike[str]] | None = None,
-                    start: Path | None = None) -> Path:
+def resolve_package(
+    name: str, *, packages: Mapping[str, str | os.PathLike[str]] | None = None, start: Path | None = None
+) -> Path:
     """The absolute folder of ROS package ``name``; URDFError (one line) if it is nowhere.
 
     Searched in order: (1) ``packages[name]``, which must be an existing folder;
@@ -58,16 +59,21 @@ def resolve_package(name: str, *, packages: Mapping[str, str | os.PathLike[str]]
                 return folder
             if (folder / name).is_dir():
                 return folder / name
-    searched = [f"packages= ({', '.join(map(repr, packages)) if packages else 'empty'})",
-                f"ROS_PACKAGE_PATH ({os.pathsep.join(roots) if roots else 'unset'})",
-                f"the folders above {str(here)!r}" if here is not None else "no file's folders (no start)"]
-    raise URDFError(f"ROS package {name!r} not found; searched {', '.join(searched)}; pass "
-                    f"packages={{{name!r}: '/path/to/{name}'}} (CLI: --package {name}=/path/to/{name}) "
-                    "or add its parent folder to ROS_PACKAGE_PATH")
+    searched = [
+        f"packages= ({', '.join(map(repr, packages)) if packages else 'empty'})",
+        f"ROS_PACKAGE_PATH ({os.pathsep.join(roots) if roots else 'unset'})",
+        f"the folders above {str(here)!r}" if here is not None else "no file's folders (no start)",
+    ]
+    raise URDFError(
+        f"ROS package {name!r} not found; searched {', '.join(searched)}; pass "
+        f"packages={{{name!r}: '/path/to/{name}'}} (CLI: --package {name}=/path/to/{name}) "
+        "or add its parent folder to ROS_PACKAGE_PATH"
+    )
 
 
-def resolve_uri(uri: str, *, packages: Mapping[str, str | os.PathLike[str]] | None = None,
-                start: Path | None = None) -> Path:
+def resolve_uri(
+    uri: str, *, packages: Mapping[str, str | os.PathLike[str]] | None = None, start: Path | None = None
+) -> Path:
     """The absolute path a URDF/xacro file name points to; URDFError (one line) otherwise.
 
     ``package://pkg/rel/path`` is ``resolve_package(pkg, packages=, start=) / rel/path``;
@@ -88,8 +94,9 @@ def resolve_uri(uri: str, *, packages: Mapping[str, str | os.PathLike[str]] | No
             raise URDFError(f"{uri!r} names a remote host: only local file:// URIs are read")
         return Path(os.path.abspath(unquote(parts.path)))
     if len(parts.scheme) > 1:  # one letter: a Windows drive
-        raise URDFError(f"{uri!r}: unsupported URI scheme {parts.scheme!r}; use package://, file:// "
-                        "or a path")
+        raise URDFError(
+            f"{uri!r}: unsupported URI scheme {parts.scheme!r}; use package://, file:// or a path"
+        )
     base = Path.cwd() if start is None else Path(os.path.abspath(start))
     if start is not None and not base.is_dir():
         base = base.parent
@@ -117,8 +124,9 @@ def _search_root(root: Path, name: str) -> Path | None:
         below = []
         for folder in level:
             try:
-                children = sorted(e.path for e in os.scandir(folder)
-                                  if e.is_dir() and not e.name.startswith("."))
+                children = sorted(
+                    e.path for e in os.scandir(folder) if e.is_dir() and not e.name.startswith(".")
+                )
             except OSError:
                 continue
             for child in map(Path, children):

@@ -26,8 +26,9 @@ from .tree import assemble
 _NONBLOCKING = getattr(os, "O_NONBLOCK", 0)  # a FIFO swapped in after the check must not block open()
 
 
-def parse_urdf(document: str | bytes, source: str = "<string>", *,
-               limits: Limits = LIMITS) -> RobotDescription:
+def parse_urdf(
+    document: str | bytes, source: str = "<string>", *, limits: Limits = LIMITS
+) -> RobotDescription:
     """The validated description of URDF ``document`` (str or bytes); URDFError otherwise.
 
     Each non-unit joint axis is normalized with a ``UserWarning`` (also kept in
@@ -37,19 +38,25 @@ def parse_urdf(document: str | bytes, source: str = "<string>", *,
         raise URDFError(f"limits= takes a kinengine.urdf.Limits, got {type(limits).__name__}", source=source)
     root = parse_xml(document, source=source, limits=limits)
     if root.tag != "robot":
-        raise URDFError(f"the root element is <{root.tag}>, expected <robot>", source=source,
-                        line=root.sourceline)
+        raise URDFError(
+            f"the root element is <{root.tag}>, expected <robot>", source=source, line=root.sourceline
+        )
     name = read_name(root, "name", Where(source, "robot"), limits)
     _refuse_xacro(root, source)
     link_elements, joint_elements = root.findall("link"), root.findall("joint")
     movable = int(root.xpath("count(joint[not(@type='fixed')])"))
-    for count, limit, what in ((len(link_elements), limits.max_links, "links"),
-                               (len(joint_elements), limits.max_joints, "joints"),
-                               (movable, limits.max_movable_joints, "movable_joints")):
+    for count, limit, what in (
+        (len(link_elements), limits.max_links, "links"),
+        (len(joint_elements), limits.max_joints, "joints"),
+        (movable, limits.max_movable_joints, "movable_joints"),
+    ):
         if count > limit:
-            raise URDFError(f"the robot has {count} {what.replace('_', ' ')}, more than Limits.max_{what} = "
-                            f"{limit}; pass parse_urdf(..., limits=Limits(max_{what}=...)) to allow more",
-                            source=source, element=f"robot {name!r}")
+            raise URDFError(
+                f"the robot has {count} {what.replace('_', ' ')}, more than Limits.max_{what} = "
+                f"{limit}; pass parse_urdf(..., limits=Limits(max_{what}=...)) to allow more",
+                source=source,
+                element=f"robot {name!r}",
+            )
     found: list[str] = []
     links = [read_link(e, source, limits, found) for e in link_elements]
     joints = [read_joint(e, source, limits, found) for e in joint_elements]
@@ -81,8 +88,10 @@ def read_urdf_file(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> 
             kind = "a directory" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
             raise URDFError(f"not a regular file ({kind})", source=source)
         if info.st_size > limits.max_bytes:
-            raise URDFError(f"the file is {info.st_size} bytes, more than Limits.max_bytes = "
-                            f"{limits.max_bytes}", source=source)
+            raise URDFError(
+                f"the file is {info.st_size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
+                source=source,
+            )
         with os.fdopen(fd, "rb", closefd=False) as f:
             data = f.read(limits.max_bytes + 1)
     except OSError as exc:
@@ -96,6 +105,8 @@ def _refuse_xacro(root: etree._Element, source: str) -> None:
     macros = root.xpath("*[contains(namespace-uri(), 'xacro')]")
     if macros:
         tag = f"{macros[0].prefix}:{etree.QName(macros[0]).localname}"
-        raise URDFError(f"<{tag}> is a xacro macro: expand the file first "
-                        "(xacro robot.urdf.xacro > robot.urdf)", source=source,
-                        line=macros[0].sourceline)
+        raise URDFError(
+            f"<{tag}> is a xacro macro: expand the file first (xacro robot.urdf.xacro > robot.urdf)",
+            source=source,
+            line=macros[0].sourceline,
+        )

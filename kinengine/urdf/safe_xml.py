@@ -22,27 +22,45 @@ from lxml import etree
 from ..errors import URDFError
 from .limits import LIMITS, Limits
 
-_PARSER_OPTIONS = dict(resolve_entities=False, no_network=True, recover=False, load_dtd=False,
-                       dtd_validation=False, attribute_defaults=False, huge_tree=False,
-                       remove_comments=True, remove_pis=True)
+_PARSER_OPTIONS = {
+    "resolve_entities": False,
+    "no_network": True,
+    "recover": False,
+    "load_dtd": False,
+    "dtd_validation": False,
+    "attribute_defaults": False,
+    "huge_tree": False,
+    "remove_comments": True,
+    "remove_pis": True,
+}
 
 # Encodings whose bytes hide ASCII markup (XML 1.0, appendix F); anything else is scanned as latin-1.
-_WIDE_ENCODINGS = ((codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"),
-                   (b"\x00\x00\x00<", "utf-32-be"), (b"<\x00\x00\x00", "utf-32-le"),
-                   (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"),
-                   (b"\x00<", "utf-16-be"), (b"<\x00", "utf-16-le"))
+_WIDE_ENCODINGS = (
+    (codecs.BOM_UTF32_LE, "utf-32"),
+    (codecs.BOM_UTF32_BE, "utf-32"),
+    (b"\x00\x00\x00<", "utf-32-be"),
+    (b"<\x00\x00\x00", "utf-32-le"),
+    (codecs.BOM_UTF16_LE, "utf-16"),
+    (codecs.BOM_UTF16_BE, "utf-16"),
+    (b"\x00<", "utf-16-be"),
+    (b"<\x00", "utf-16-le"),
+)
 _DECLARED_ENCODING = re.compile(r"\A(\ufeff?<\?xml\s[^>]*?\bencoding\s*=\s*)(['\"])[^'\"]*\2")
 _FIRST_START_TAG = re.compile(r"<[^!?]")
 _DTD_MARKUP = re.compile(r"<!(DOCTYPE|ENTITY)\b")
 _PROLOG = re.compile(r"(?:\ufeff|\xef\xbb\xbf)?(?:\s|<\?.*?\?>|<!--.*?-->)*", re.DOTALL)
 _ROOT_TAG = re.compile(r"<([^\s/>]+)((?:\s+[^\s=/>]+\s*=\s*(?:\"[^\"]*\"|'[^']*'))*)\s*/?>")
-_USED_PREFIX = re.compile(r"</?([A-Za-z_][\w.-]*):[A-Za-z_]|\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=", re.ASCII)
+_USED_PREFIX = re.compile(
+    r"</?([A-Za-z_][\w.-]*):[A-Za-z_]|\s([A-Za-z_][\w.-]*):[A-Za-z_][\w.-]*\s*=", re.ASCII
+)
 _DECLARED_PREFIX = re.compile(r"xmlns:([A-Za-z_][\w.-]*)\s*=", re.ASCII)
 _PLACEHOLDER_URI = "urn:kinengine:undeclared-prefix:"
 _UNDECLARED_PREFIX = re.compile(r"Namespace prefix \S+ (for \S+ )?on \S+ is not defined")
 _MAX_UNDECLARED = 256  # real files use a handful (sensor, gz, ...); each one adds an attribute to the root
-_NO_DTD = ("is not allowed: kinengine reads no DTD and no entity declaration (they can read local "
-           "files or expand without bound); remove it and write the values out")
+_NO_DTD = (
+    "is not allowed: kinengine reads no DTD and no entity declaration (they can read local "
+    "files or expand without bound); remove it and write the values out"
+)
 
 
 def parse_xml(document: str | bytes, *, source: str = "<string>", limits: Limits = LIMITS) -> etree._Element:
@@ -55,18 +73,24 @@ def parse_xml(document: str | bytes, *, source: str = "<string>", limits: Limits
     _refuse_dtd(data, source)
     tags = data.count(b"<")
     if tags > limits.max_tags:
-        raise URDFError(f"the document has {tags} markup tags, more than Limits.max_tags = {limits.max_tags}",
-                        source=source)
+        raise URDFError(
+            f"the document has {tags} markup tags, more than Limits.max_tags = {limits.max_tags}",
+            source=source,
+        )
     try:
         root = _parse(data)
     except etree.XMLSyntaxError as exc:
         declared = _declare_prefixes(data, source) if _UNDECLARED_PREFIX.search(exc.msg) else data
         if declared is data:
-            raise URDFError(f"not well-formed XML: {exc.msg}", source=source, line=exc.lineno or None) from None
+            raise URDFError(
+                f"not well-formed XML: {exc.msg}", source=source, line=exc.lineno or None
+            ) from None
         try:
             root = _parse(declared)
         except etree.XMLSyntaxError as again:
-            raise URDFError(f"not well-formed XML: {again.msg}", source=source, line=again.lineno or None) from None
+            raise URDFError(
+                f"not well-formed XML: {again.msg}", source=source, line=again.lineno or None
+            ) from None
     docinfo = root.getroottree().docinfo
     if docinfo.doctype or docinfo.internalDTD is not None or docinfo.externalDTD is not None:
         raise URDFError(f"a <!DOCTYPE> {_NO_DTD}", source=source)
@@ -103,11 +127,14 @@ def _declare_prefixes(data: bytes, source: str) -> bytes:
     if not missing:
         return data
     if len(missing) > _MAX_UNDECLARED:
-        raise URDFError(f"the document uses {len(missing)} namespace prefixes that <{root.group(1)}> does not declare "
-                        f"(e.g. {missing[0]!r}), more than the {_MAX_UNDECLARED} kinengine declares for you; "
-                        "declare them with xmlns:prefix=\"...\"", source=source)
+        raise URDFError(
+            f"the document uses {len(missing)} namespace prefixes that <{root.group(1)}> does not declare "
+            f"(e.g. {missing[0]!r}), more than the {_MAX_UNDECLARED} kinengine declares for you; "
+            'declare them with xmlns:prefix="..."',
+            source=source,
+        )
     declarations = "".join(f' xmlns:{p}="{_PLACEHOLDER_URI}{p}"' for p in missing)
-    return (text[:root.end(1)] + declarations + text[root.end(1):]).encode(codec)
+    return (text[: root.end(1)] + declarations + text[root.end(1) :]).encode(codec)
 
 
 def _to_bytes(document: object, source: str, limits: Limits) -> bytes:
@@ -118,8 +145,9 @@ def _to_bytes(document: object, source: str, limits: Limits) -> bytes:
         try:
             data = document.encode("utf-8")
         except UnicodeEncodeError as exc:
-            raise URDFError(f"the text is not valid Unicode: {exc.reason} at character {exc.start}",
-                            source=source) from None
+            raise URDFError(
+                f"the text is not valid Unicode: {exc.reason} at character {exc.start}", source=source
+            ) from None
     elif isinstance(document, (bytes, bytearray, memoryview)):
         data = bytes(document)
     else:
@@ -130,8 +158,9 @@ def _to_bytes(document: object, source: str, limits: Limits) -> bytes:
 
 
 def _too_big(size: int, source: str, limits: Limits) -> None:
-    raise URDFError(f"the document is {size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
-                    source=source)
+    raise URDFError(
+        f"the document is {size} bytes, more than Limits.max_bytes = {limits.max_bytes}", source=source
+    )
 
 
 def _refuse_dtd(data: bytes, source: str) -> None:
@@ -142,7 +171,7 @@ def _refuse_dtd(data: bytes, source: str) -> None:
     codec = next((c for prefix, c in _WIDE_ENCODINGS if data.startswith(prefix)), "latin-1")
     text = data.decode(codec, errors="replace")
     start = _FIRST_START_TAG.search(text)
-    prolog = text[:start.start()] if start else text
+    prolog = text[: start.start()] if start else text
     found = _DTD_MARKUP.search(prolog)
     if found:
         line = prolog.count("\n", 0, found.start()) + 1
@@ -154,11 +183,19 @@ def _check_shape(root: etree._Element, source: str, limits: Limits) -> None:
     too_deep = root.xpath("/*" * (limits.max_depth + 1))
     if too_deep:
         element = too_deep[0]
-        raise URDFError(f"elements are nested deeper than Limits.max_depth = {limits.max_depth}",
-                        source=source, element=f"<{element.tag}>", line=element.sourceline)
+        raise URDFError(
+            f"elements are nested deeper than Limits.max_depth = {limits.max_depth}",
+            source=source,
+            element=f"<{element.tag}>",
+            line=element.sourceline,
+        )
     too_long = root.xpath(f"//@*[string-length(.) > {int(limits.max_attribute_length)}]")
     if too_long:
         element = too_long[0].getparent()
-        raise URDFError(f"attribute {too_long[0].attrname!r} has {len(too_long[0])} characters, more than "
-                        f"Limits.max_attribute_length = {limits.max_attribute_length}",
-                        source=source, element=f"<{element.tag}>", line=element.sourceline)
+        raise URDFError(
+            f"attribute {too_long[0].attrname!r} has {len(too_long[0])} characters, more than "
+            f"Limits.max_attribute_length = {limits.max_attribute_length}",
+            source=source,
+            element=f"<{element.tag}>",
+            line=element.sourceline,
+        )

@@ -21,8 +21,13 @@ from ..errors import URDFError
 from .limits import LIMITS, Limits
 
 _NONBLOCKING = getattr(os, "O_NONBLOCK", 0)
-_BOMS = ((codecs.BOM_UTF32_LE, "utf-32-le"), (codecs.BOM_UTF32_BE, "utf-32-be"), (codecs.BOM_UTF8, "utf-8"),
-         (codecs.BOM_UTF16_LE, "utf-16-le"), (codecs.BOM_UTF16_BE, "utf-16-be"))
+_BOMS = (
+    (codecs.BOM_UTF32_LE, "utf-32-le"),
+    (codecs.BOM_UTF32_BE, "utf-32-be"),
+    (codecs.BOM_UTF8, "utf-8"),
+    (codecs.BOM_UTF16_LE, "utf-16-le"),
+    (codecs.BOM_UTF16_BE, "utf-16-be"),
+)
 _DECLARED = re.compile(rb"""^<\?xml[^>]*?\sencoding\s*=\s*["']([A-Za-z][A-Za-z0-9._-]{0,39})["']""")
 _DECLARATION = re.compile(r"""^(<\?xml[^>]*?\sencoding\s*=\s*)(["'])[A-Za-z][A-Za-z0-9._-]{0,39}\2""")
 
@@ -49,8 +54,10 @@ def read_bytes_once(path: str | os.PathLike[str], limits: Limits = LIMITS) -> tu
             kind = "a directory" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
             raise URDFError(f"not a regular file ({kind})", source=source)
         if info.st_size > limits.max_bytes:
-            raise URDFError(f"the file is {info.st_size} bytes, more than Limits.max_bytes = "
-                            f"{limits.max_bytes}", source=source)
+            raise URDFError(
+                f"the file is {info.st_size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
+                source=source,
+            )
         chunks, left = [], limits.max_bytes + 1
         while left > 0:
             chunk = os.read(fd, min(left, 1 << 20))
@@ -64,8 +71,9 @@ def read_bytes_once(path: str | os.PathLike[str], limits: Limits = LIMITS) -> tu
     finally:
         os.close(fd)
     if len(data) > limits.max_bytes:
-        raise URDFError(f"the file grew past Limits.max_bytes = {limits.max_bytes} while it was read",
-                        source=source)
+        raise URDFError(
+            f"the file grew past Limits.max_bytes = {limits.max_bytes} while it was read", source=source
+        )
     return source, data
 
 

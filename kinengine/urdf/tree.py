@@ -14,16 +14,23 @@ iterative: a 10,000-link chain needs no recursion, in any thread.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 import difflib
+from collections.abc import Sequence
 
 from ..errors import URDFError
 from .description import Joint, Link, RobotDescription
 from .limits import LIMITS, Limits
 
 
-def assemble(name: str, links: Sequence[Link], joints: Sequence[Joint], *, source: str,
-             warnings: Sequence[str] = (), limits: Limits = LIMITS) -> RobotDescription:
+def assemble(
+    name: str,
+    links: Sequence[Link],
+    joints: Sequence[Joint],
+    *,
+    source: str,
+    warnings: Sequence[str] = (),
+    limits: Limits = LIMITS,
+) -> RobotDescription:
     """The validated :class:`RobotDescription` of these links and joints (file order in, tree order out)."""
     if not links:
         raise URDFError("the robot has no <link>", source=source, element=f"robot {name!r}")
@@ -35,14 +42,19 @@ def assemble(name: str, links: Sequence[Link], joints: Sequence[Joint], *, sourc
         for role in ("parent", "child"):
             link = getattr(joint, role)
             if link not in link_by_name:
-                raise _error(f"its {role} link {link!r} is not defined{_hint(link, link_by_name)}",
-                             joint, source)
+                raise _error(
+                    f"its {role} link {link!r} is not defined{_hint(link, link_by_name)}", joint, source
+                )
         if joint.parent == joint.child:
             raise _error(f"connects link {joint.child!r} to itself (a cycle)", joint, source)
         if joint.child in parent_joint:
             first = parent_joint[joint.child]
-            raise _error(f"link {joint.child!r} already has parent joint {first.name!r} (line {first.line}); "
-                         "a link can have only one parent in a URDF tree", joint, source)
+            raise _error(
+                f"link {joint.child!r} already has parent joint {first.name!r} (line {first.line}); "
+                "a link can have only one parent in a URDF tree",
+                joint,
+                source,
+            )
         parent_joint[joint.child] = joint
         children[joint.parent].append(joint)
     roots = [link.name for link in links if link.name not in parent_joint]
@@ -50,27 +62,41 @@ def assemble(name: str, links: Sequence[Link], joints: Sequence[Joint], *, sourc
         raise URDFError(f"there is no root link: {_cycle(links[0].name, parent_joint)}", source=source)
     if len(roots) > 1:
         named = ", ".join(repr(r) for r in roots[:10]) + (", ..." if len(roots) > 10 else "")
-        raise URDFError(f"the links form {len(roots)} separate trees, with roots {named}; a robot is one "
-                        "tree: connect them with joints or remove the extra links", source=source)
+        raise URDFError(
+            f"the links form {len(roots)} separate trees, with roots {named}; a robot is one "
+            "tree: connect them with joints or remove the extra links",
+            source=source,
+        )
     ordered = _depth_first(roots[0], children, limits.max_tree_depth, source)
     if len(ordered) < len(joints):
         reached = {roots[0]} | {j.child for j in ordered}
         unreached = next(link.name for link in links if link.name not in reached)
-        raise URDFError(f"not every link hangs from root {roots[0]!r}: {_cycle(unreached, parent_joint)}",
-                        source=source)
+        raise URDFError(
+            f"not every link hangs from root {roots[0]!r}: {_cycle(unreached, parent_joint)}", source=source
+        )
     _check_mimics(ordered, joint_by_name, source)
     tree_links = (link_by_name[roots[0]],) + tuple(link_by_name[j.child] for j in ordered)
-    return RobotDescription(name=name, root=roots[0], links=tree_links, joints=tuple(ordered),
-                            source=source, warnings=tuple(warnings))
+    return RobotDescription(
+        name=name,
+        root=roots[0],
+        links=tree_links,
+        joints=tuple(ordered),
+        source=source,
+        warnings=tuple(warnings),
+    )
 
 
 def _unique(items: Sequence[Link] | Sequence[Joint], kind: str, source: str) -> dict:
     by_name: dict = {}
     for item in items:
         if item.name in by_name:
-            raise URDFError(f"{kind} name {item.name!r} is used twice (lines {by_name[item.name].line} and "
-                            f"{item.line}); names must be unique", source=source,
-                            element=f"{kind} {item.name!r}", line=item.line)
+            raise URDFError(
+                f"{kind} name {item.name!r} is used twice (lines {by_name[item.name].line} and "
+                f"{item.line}); names must be unique",
+                source=source,
+                element=f"{kind} {item.name!r}",
+                line=item.line,
+            )
         by_name[item.name] = item
     return by_name
 
@@ -82,9 +108,13 @@ def _depth_first(root: str, children: dict[str, list[Joint]], max_depth: int, so
     while stack:
         joint, depth = stack.pop()
         if depth > max_depth:
-            raise URDFError(f"link {joint.child!r} is more than Limits.max_tree_depth = {max_depth} joints "
-                            f"below the root {root!r}", source=source, element=f"joint {joint.name!r}",
-                            line=joint.line)
+            raise URDFError(
+                f"link {joint.child!r} is more than Limits.max_tree_depth = {max_depth} joints "
+                f"below the root {root!r}",
+                source=source,
+                element=f"joint {joint.name!r}",
+                line=joint.line,
+            )
         order.append(joint)
         stack.extend((j, depth + 1) for j in sorted(children[joint.child], key=_byte_name, reverse=True))
     return order
@@ -104,7 +134,7 @@ def _cycle(start: str, parent_joint: dict[str, Joint]) -> str:
         joint = parent_joint[link]
         path.append(joint)
         link = joint.parent
-    loop = path[seen[link]:][::-1]
+    loop = path[seen[link] :][::-1]
     chain = " -> ".join([repr(loop[0].parent)] + [f"{j.child!r}" for j in loop])
     joints = ", ".join(repr(j.name) for j in loop)
     return f"joints {joints} form a cycle {chain}; a URDF must be a tree"
@@ -121,11 +151,16 @@ def _check_mimics(ordered: list[Joint], joint_by_name: dict[str, Joint], source:
             raise _error("mimics itself; a mimic joint must follow another joint", joint, source)
         leader = joint_by_name.get(target)
         if leader is None:
-            raise _error(f"mimics joint {target!r}, which is not defined{_hint(target, joint_by_name)}",
-                         joint, source)
+            raise _error(
+                f"mimics joint {target!r}, which is not defined{_hint(target, joint_by_name)}", joint, source
+            )
         if not leader.movable:
-            raise _error(f"mimics joint {target!r}, which is fixed; a mimic leader must be revolute, "
-                         "continuous or prismatic", joint, source)
+            raise _error(
+                f"mimics joint {target!r}, which is fixed; a mimic leader must be revolute, "
+                "continuous or prismatic",
+                joint,
+                source,
+            )
         seen = [joint.name]
         while leader.mimic is not None:  # follow the chain to its root leader
             seen.append(leader.name)
@@ -133,9 +168,12 @@ def _check_mimics(ordered: list[Joint], joint_by_name: dict[str, Joint], source:
                 break  # reported when that joint is checked
             leader = joint_by_name[leader.mimic.joint]
             if leader.name in seen:
-                cycle = " -> ".join(repr(n) for n in seen[seen.index(leader.name):] + [leader.name])
-                raise _error(f"is part of a cycle of mimic joints {cycle}; one of them must be independent",
-                             joint, source)
+                cycle = " -> ".join(repr(n) for n in seen[seen.index(leader.name) :] + [leader.name])
+                raise _error(
+                    f"is part of a cycle of mimic joints {cycle}; one of them must be independent",
+                    joint,
+                    source,
+                )
 
 
 def _hint(name: str, known: dict) -> str:

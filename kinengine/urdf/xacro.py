@@ -38,8 +38,12 @@ _LOCK = threading.Lock()  # xacro keeps its file stack, arguments and symbols in
 _XACRO_NS = "http://www.ros.org/wiki/xacro"
 
 
-def expand_xacro(path: str | os.PathLike[str], *, args: Mapping[str, str] | None = None,
-                 packages: Mapping[str, str | os.PathLike[str]] | None = None) -> str:
+def expand_xacro(
+    path: str | os.PathLike[str],
+    *,
+    args: Mapping[str, str] | None = None,
+    packages: Mapping[str, str | os.PathLike[str]] | None = None,
+) -> str:
     """The URDF text (str) that xacro file ``path`` expands to; URDFError (one line) otherwise.
 
     ``args`` sets ``xacro:arg`` values (as ``xacro file name:=value`` does; values are
@@ -60,8 +64,10 @@ def expand_xacro(path: str | os.PathLike[str], *, args: Mapping[str, str] | None
         raise URDFError(f"expected a path to a .xacro file, got {type(path).__name__}") from None
     mappings = _arguments(args, source)
     if packages is not None and not isinstance(packages, Mapping):
-        raise URDFError(f"packages= takes a mapping of package name to folder, got {type(packages).__name__}",
-                        source=source)
+        raise URDFError(
+            f"packages= takes a mapping of package name to folder, got {type(packages).__name__}",
+            source=source,
+        )
     try:
         info = os.stat(source)
     except (OSError, ValueError) as exc:
@@ -72,8 +78,9 @@ def expand_xacro(path: str | os.PathLike[str], *, args: Mapping[str, str] | None
     try:
         import xacro
     except ImportError:
-        raise URDFError(f"expanding xacro files needs the xacro package: pip install {XACRO_REQUIREMENT}",
-                        source=source) from None
+        raise URDFError(
+            f"expanding xacro files needs the xacro package: pip install {XACRO_REQUIREMENT}", source=source
+        ) from None
     messages: list[str] = []
     with _LOCK, _xacro_hooks(xacro, packages, LIMITS, messages):
         try:
@@ -84,8 +91,9 @@ def expand_xacro(path: str | os.PathLike[str], *, args: Mapping[str, str] | None
         except URDFError:
             raise
         except RecursionError:
-            raise URDFError("xacro error: macros nested too deeply (a macro that calls itself?)",
-                            source=source) from None
+            raise URDFError(
+                "xacro error: macros nested too deeply (a macro that calls itself?)", source=source
+            ) from None
         except Exception as exc:  # xacro raises XacroException, and lets anything from eval() through
             raise _translate(exc, source) from None
     for message in dict.fromkeys(messages):
@@ -98,8 +106,9 @@ def _arguments(args: object, source: str) -> dict[str, str]:
     if args is None:
         return {}
     if not isinstance(args, Mapping):
-        raise URDFError(f"args= takes a mapping of xacro argument name to value, got {type(args).__name__}",
-                        source=source)
+        raise URDFError(
+            f"args= takes a mapping of xacro argument name to value, got {type(args).__name__}", source=source
+        )
     for key in args:
         if not isinstance(key, str) or not key:
             raise URDFError(f"xacro argument names are non-empty strings, got {key!r}", source=source)
@@ -107,8 +116,12 @@ def _arguments(args: object, source: str) -> dict[str, str]:
 
 
 @contextlib.contextmanager
-def _xacro_hooks(xacro: ModuleType, packages: Mapping[str, str | os.PathLike[str]] | None, limits: Limits,
-                 messages: list[str]) -> Iterator[None]:
+def _xacro_hooks(
+    xacro: ModuleType,
+    packages: Mapping[str, str | os.PathLike[str]] | None,
+    limits: Limits,
+    messages: list[str],
+) -> Iterator[None]:
     """xacro with fresh global state, our file reader, package finder, message sink and element budget."""
     from xacro import color
     from xacro import substitution_args as subst
@@ -131,19 +144,30 @@ def _xacro_hooks(xacro: ModuleType, packages: Mapping[str, str | os.PathLike[str
     def counted_macro_call(node: object, macros: object, symbols: object) -> bool:
         budget["elements"] -= 1
         if budget["elements"] < 0:
-            raise URDFError(f"the expansion processes more than Limits.max_tags = {limits.max_tags} elements "
-                            "(a macro that expands exponentially?)", source=_failing_file("?"))
+            raise URDFError(
+                f"the expansion processes more than Limits.max_tags = {limits.max_tags} elements "
+                "(a macro that expands exponentially?)",
+                source=_failing_file("?"),
+            )
         return bool(handle_macro_call(node, macros, symbols))
 
     def message(msg: object, *args: object, **kwargs: object) -> None:
         messages.append(" ".join(str(a) for a in (msg, *args)).replace("\n", " "))
 
-    patches = [(xacro, "parse", parse), (xacro, "handle_macro_call", counted_macro_call),
-               (xacro, "print_location", lambda: None), (xacro, "message", message),
-               (color, "message", message), (subst, "_eval_find", find), (xacro, "root_dir", os.curdir),
-               (xacro, "verbosity", 0),
-               (xacro, "all_includes", []), (xacro, "filestack", None), (xacro, "macrostack", None),
-               (xacro, "_global_symbols", xacro.create_global_symbols())]  # eval() can mutate the old ones
+    patches = [
+        (xacro, "parse", parse),
+        (xacro, "handle_macro_call", counted_macro_call),
+        (xacro, "print_location", lambda: None),
+        (xacro, "message", message),
+        (color, "message", message),
+        (subst, "_eval_find", find),
+        (xacro, "root_dir", os.curdir),
+        (xacro, "verbosity", 0),
+        (xacro, "all_includes", []),
+        (xacro, "filestack", None),
+        (xacro, "macrostack", None),
+        (xacro, "_global_symbols", xacro.create_global_symbols()),
+    ]  # eval() can mutate the old ones
     originals = [(module, name, getattr(module, name)) for module, name, _ in patches]
     original_find = subst._eval_dict.get("find")
     for module, name, value in patches:
@@ -171,14 +195,19 @@ def _read(filename: str, budget: dict[str, int], limits: Limits, xacro: ModuleTy
         raise xacro.XacroException(f"cannot read {filename!r}: {exc.strerror}", exc=exc) from None
     budget["bytes"] -= len(data)
     if budget["bytes"] < 0:
-        raise URDFError(f"the file (or all files read) is more than Limits.max_bytes = {limits.max_bytes} "
-                        "bytes", source=filename)
+        raise URDFError(
+            f"the file (or all files read) is more than Limits.max_bytes = {limits.max_bytes} bytes",
+            source=filename,
+        )
     return data
 
 
 _PATTERNS = (  # (what xacro says, how kinengine says it)
-    (re.compile(r"Undefined substitution argument (\S+)"),
-     r"missing xacro argument '\1': pass args={'\1': ...} (CLI: \1:=value) or give its xacro:arg a default"),
+    (
+        re.compile(r"Undefined substitution argument (\S+)"),
+        r"missing xacro argument '\1': pass args={'\1': ...} (CLI: \1:=value) or give its "
+        r"xacro:arg a default",
+    ),
     (re.compile(r"unknown macro name: (\S+)"), r"unknown xacro macro <\1> (not defined nor included)"),
     (re.compile(r"name '(.+?)' is not defined"), r"undefined xacro property or name '\1'"),
 )
@@ -215,13 +244,19 @@ def _failing_file(source: str) -> str:
 def _check_result(text: str, source: str, limits: Limits) -> None:
     size = len(text.encode("utf-8"))
     if size > limits.max_bytes:
-        raise URDFError(f"the expanded URDF is {size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
-                        source=source)
+        raise URDFError(
+            f"the expanded URDF is {size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
+            source=source,
+        )
     root = parse_xml(text, source=source, limits=limits)
     if root.tag != "robot":
-        raise URDFError(f"the expansion's root element is <{root.tag}>, expected <robot name=...>",
-                        source=source)
+        raise URDFError(
+            f"the expansion's root element is <{root.tag}>, expected <robot name=...>", source=source
+        )
     if not root.get("name") or root.find("link") is None:
         missing = "no <link>" if root.get("name") else "a <robot> without a name"
-        raise URDFError(f"the expansion has {missing}: a file that only defines macros (e.g. *_macro.xacro) "
-                        "is meant to be included by a xacro that calls them; expand that one", source=source)
+        raise URDFError(
+            f"the expansion has {missing}: a file that only defines macros (e.g. *_macro.xacro) "
+            "is meant to be included by a xacro that calls them; expand that one",
+            source=source,
+        )
