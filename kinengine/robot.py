@@ -40,7 +40,8 @@ from .control.task import Task
 from .errors import FrameNotFoundError, OptionError
 from .kinematics import REFERENCES, Kinematics, resolve_reference
 from .kinematics import batch as _batch
-from .kinematics.options import checked_flag, checked_parameterization, checked_rng, checked_threshold
+from .kinematics.options import (checked_flag, checked_frames, checked_parameterization, checked_rng,
+                                 checked_threshold)
 from .kinematics import derivatives as _derivatives
 from .kinematics import relative as _relative
 from .model.editing import add_frame, edited_urdf_text, lock_joints
@@ -302,12 +303,7 @@ class Robot:
         position, rotation, rows = checked_parameterization(position, rotation, rows)
         singularity_threshold = checked_threshold(singularity_threshold)
         continuous, check_inputs = checked_flag(continuous, "continuous"), checked_flag(check_inputs, "check_inputs")
-        if not (frames is None or isinstance(frames, (str, FrameTask))):
-            entries = frames if isinstance(frames, (list, tuple)) else [frames]
-            bad = next((f for f in entries if not isinstance(f, (str, FrameTask))), None)
-            if bad is not None or not isinstance(frames, (list, tuple)):
-                raise OptionError(f"a task's frames are frame names or kinengine.FrameTask entries, got "
-                                  f"{' '.join(repr(bad).split())[:40]}")
+        checked_frames(frames, (str, FrameTask))
         return Task(self, self._end_effector if frames is None else frames, position, rotation, rows=rows,
                     check_inputs=check_inputs, continuous=continuous,
                     singularity_threshold=singularity_threshold, relative_to=relative_to,

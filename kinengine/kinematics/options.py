@@ -54,6 +54,17 @@ def checked_flag(value: object, name: str) -> bool:
     raise OptionError(f"{name} must be True or False, got {type(value).__name__} {_short(value)}")
 
 
+def checked_frames(frames: object, kinds: tuple[type, ...]) -> None:
+    """OptionError unless ``frames`` is None, one entry of ``kinds`` (a name, a FrameTask) or a list or tuple
+    of them (an empty one is left to the task to refuse)."""
+    if frames is None or isinstance(frames, kinds):
+        return
+    entries = frames if isinstance(frames, (list, tuple)) else [frames]
+    bad = next((f for f in entries if not isinstance(f, kinds)), None)
+    if bad is not None or not isinstance(frames, (list, tuple)):
+        raise OptionError(f"a task's frames are frame names or kinengine.FrameTask entries, got {_short(bad)}")
+
+
 def checked_rng(rng: object) -> np.random.Generator:
     """A numpy Generator from ``rng`` (None: fresh entropy; an int >= 0: a seed; a Generator: itself)."""
     if rng is None or isinstance(rng, np.random.Generator):
@@ -92,5 +103,5 @@ def _short(value: object) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-__all__ = ["checked_flag", "checked_nonnegative", "checked_parameterization", "checked_rng",
+__all__ = ["checked_flag", "checked_frames", "checked_nonnegative", "checked_parameterization", "checked_rng",
            "checked_threshold", "checked_tolerance"]
