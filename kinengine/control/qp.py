@@ -34,6 +34,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError
+from ..kinematics.memory import create_data
 from ..kinematics.relative import relative_terms
 
 ROWS = ("x", "y", "z", "rx", "ry", "rz")
@@ -127,7 +128,7 @@ class DifferentialIK:
         )
         kin = robot.engine
         self._model, self._coords = kin.model, kin.coordinates
-        self._data = self._model.createData()
+        self._data = create_data(self._model, "a DifferentialIK")
         n = self.dof = robot.dof
         self._pose_terms, self._postures = [], []
         for task in tasks:

@@ -48,6 +48,7 @@ import pinocchio as pin
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
 from ..analytic.singular import check_on_singularity
 from ..errors import OptionError
+from ..kinematics.memory import create_data
 from .frame_task import FrameTask, as_frame_tasks
 from .task_frame import FrameBlock, FrameKinematics
 
@@ -100,7 +101,7 @@ class Task:
         kin = robot.engine
         self._coords = coords = kin.coordinates
         self._model = model = kin.model
-        self._data = data = model.createData()
+        self._data = data = create_data(model, "a Task")
         self.dof = n = robot.dof
         k, M = len(specs), sum(pm.size for pm in pmaps)
         # views of Pinocchio's world-frame joint Jacobians (eigenpy hands a (6, 1) matrix over as (6,))
