@@ -17,7 +17,6 @@ The formulas are the parameterizations' own, written once over ``xp`` (see
 from __future__ import annotations
 
 import math
-import struct
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -27,6 +26,7 @@ import numpy as np
 
 from ..errors import ParameterizationError
 from ..parameterizations import get_position, get_rotation
+from .layout import Layout, combine
 from .singular import check_on_singularity, pose_of, singularity_error  # noqa: F401 (re-exported)
 
 DEFAULT_SINGULARITY_THRESHOLD = 1e-6
@@ -43,12 +43,12 @@ class PoseMap:
     rotation: object | None
     labels: tuple[str, ...]  # labels of the selected rows
     rows: tuple[int, ...] | None  # indices into the full (χ_P, χ_R) stack; None: all rows
-    layout: _Layout = field(init=False, repr=False, compare=False)
+    layout: Layout = field(init=False, repr=False, compare=False)
     part_rows: tuple[tuple[int, ...], ...] = field(init=False, repr=False, compare=False)
     """Per part (in :attr:`parts` order), the indices of its rows among the selected rows."""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "layout", _Layout(self.position, self.rotation))
+        object.__setattr__(self, "layout", Layout(self.position, self.rotation))
         selected = tuple(range(len(self.labels))) if self.rows is None else self.rows
         spans, start = [], 0
         for part in (p for p in (self.position, self.rotation) if p is not None):
@@ -194,7 +194,7 @@ class PoseMap:
                 E_rows += [(E[k : k + 3], block) for k in range(0, len(E), 3)]
             scratch = np.empty(out.shape[1:])
             for target, source in enumerate(range(len(E_rows)) if self.rows is None else self.rows):
-                _combine(*E_rows[source], out[target], scratch)
+                combine(*E_rows[source], out[target], scratch)
         return distances
 
     def raise_if_singular(
@@ -231,54 +231,6 @@ class PoseMap:
             hit = np.flatnonzero(below[:, k])
             if hit.size and rows:
                 out[np.ix_(hit, rows)] = np.nan
-
-
-class _Layout:
-    """Where E's computed entries go in the (m, 6) matrix E = blockdiag(E_P, E_R) of one PoseMap.
-
-    A template holds the constant entries (zeros, the identity of Cartesian rows); one struct writes
-    the computed ones: E_P entries in columns 0-2 of the position rows, E_R in columns 3-5.
-    """
-
-    def __init__(self, position: object | None, rotation: object | None) -> None:
-        self.position_formula = position is not None and position.name != "cartesian"
-        rows = (position.size if position is not None else 0) + (rotation.size if rotation is not None else 0)
-        self.shape = (rows, 6)
-        template = np.zeros(self.shape)
-        if position is not None and not self.position_formula:
-            template[:3, :3] = np.eye(3)
-        self.template = template.tobytes()
-        self.offset = 0 if self.position_formula else 48 * (rows - (rotation.size if rotation else 0))
-        self.pack_into = struct.Struct(
-            "<"
-            + "3d24x" * (position.size if self.position_formula else 0)
-            + "24x3d" * (rotation.size if rotation is not None else 0)
-        ).pack_into
-        self.fast = (
-            self.position_formula,
-            position,
-            rotation,
-            self.template,
-            self.pack_into,
-            self.offset,
-            self.shape,
-        )  # what jacobian_single reads, in one attribute lookup
-
-
-def _combine(
-    entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.ndarray, scratch: np.ndarray
-) -> None:
-    """out = Σ_k entries[k] · block[k]: a row of E (entries (n,) or constants) times J's rows (3, dof, n)."""
-    terms = [(e, b) for e, b in zip(entries, block, strict=False) if not (isinstance(e, float) and e == 0.0)]
-    if not terms:
-        out[...] = 0.0
-        return
-    for k, (e, b) in enumerate(terms):
-        if k == 0:
-            np.multiply(b, e, out=out)
-        else:
-            np.multiply(b, e, out=scratch)
-            np.add(out, scratch, out=out)
 
 
 _F64 = np.dtype(np.float64)

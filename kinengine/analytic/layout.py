@@ -1,0 +1,57 @@
+"""The memory layout of E = blockdiag(E_P, E_R) for one pose map, and the row combination the batched
+analytic Jacobian uses: where the computed entries go, so that one struct write fills them."""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Sequence
+
+import numpy as np
+
+
+class Layout:
+    """Where E's computed entries go in the (m, 6) matrix E = blockdiag(E_P, E_R) of one PoseMap.
+
+    A template holds the constant entries (zeros, the identity of Cartesian rows); one struct writes
+    the computed ones: E_P entries in columns 0-2 of the position rows, E_R in columns 3-5.
+    """
+
+    def __init__(self, position: object | None, rotation: object | None) -> None:
+        self.position_formula = position is not None and position.name != "cartesian"
+        rows = (position.size if position is not None else 0) + (rotation.size if rotation is not None else 0)
+        self.shape = (rows, 6)
+        template = np.zeros(self.shape)
+        if position is not None and not self.position_formula:
+            template[:3, :3] = np.eye(3)
+        self.template = template.tobytes()
+        self.offset = 0 if self.position_formula else 48 * (rows - (rotation.size if rotation else 0))
+        self.pack_into = struct.Struct(
+            "<"
+            + "3d24x" * (position.size if self.position_formula else 0)
+            + "24x3d" * (rotation.size if rotation is not None else 0)
+        ).pack_into
+        self.fast = (
+            self.position_formula,
+            position,
+            rotation,
+            self.template,
+            self.pack_into,
+            self.offset,
+            self.shape,
+        )  # what jacobian_single reads, in one attribute lookup
+
+
+def combine(
+    entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.ndarray, scratch: np.ndarray
+) -> None:
+    """out = Σ_k entries[k] · block[k]: a row of E (entries (n,) or constants) times J's rows (3, dof, n)."""
+    terms = [(e, b) for e, b in zip(entries, block, strict=False) if not (isinstance(e, float) and e == 0.0)]
+    if not terms:
+        out[...] = 0.0
+        return
+    for k, (e, b) in enumerate(terms):
+        if k == 0:
+            np.multiply(b, e, out=out)
+        else:
+            np.multiply(b, e, out=scratch)
+            np.add(out, scratch, out=out)
