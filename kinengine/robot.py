@@ -204,7 +204,7 @@ class Robot:
         q = self._coords.check(q) if check_limits is False else self._coords.check(q, check_limits=check_limits)
         if q.ndim == 2:
             return _batch.evaluate(self._kin, q, handle.frame_id, ref, pose=False)[1]
-        return handle.jacobian(q, ref)
+        return handle.jacobian(q, reference)  # the name: the handle's fast lookup
 
     def kinematics(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
                    check_limits: bool = False, out: tuple[np.ndarray, np.ndarray] | None = None,
@@ -226,7 +226,7 @@ class Robot:
         if out is not None:
             raise OptionError("`out=` is for batches q (N, dof); a single q returns fresh arrays")
         _batch.checked_workers(workers)
-        return handle.kinematics(q, ref)
+        return handle.kinematics(q, reference)  # the name: the handle's fast lookup
 
     # -- analytic Jacobians --------------------------------------------------------------------
     def pose_parameters(self, q: object, frame: str | None = None, position: str | None = "cartesian",
