@@ -81,10 +81,16 @@ def analytic_batch(
     if nan:
         pmap.nan_where_singular(distances, threshold, out)
         return out
+
+    def pose(row: int) -> np.ndarray:
+        T, _ = batch.evaluate(kin, Q[row : row + 1], fid, None, jacobian=False)
+        assert T is not None  # pose=True (the default): the poses are computed
+        return T[0]
+
     pmap.raise_if_singular(
         distances,
         threshold,
-        lambda row: batch.evaluate(kin, Q[row : row + 1], fid, None, jacobian=False)[0][0],
+        pose,
         lambda row: kin.jacobian(Q[row], fid, pin.LOCAL_WORLD_ALIGNED),
     )
     return out

@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from ..kinematics.derivatives import kinematic_hessian
 from ..kinematics.engine import Kinematics
+from ..parameterizations.base import PositionParameterization
 from .pose_map import PoseMap
 
 
@@ -29,7 +30,9 @@ def analytic_hessian(kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, th
             blocks.append(H[block])
             continue
         chi = (
-            param.from_position(value) if param.kind == "position" else param.from_rotation(value, warn=False)
+            param.from_position(value)
+            if isinstance(param, PositionParameterization)
+            else param.from_rotation(value, warn=False)
         )
         Edot = param.E_dot(np.broadcast_to(chi, (kin.dof, chi.size)), J[block].T)  # (dof, m, 3): one per k
         blocks.append(

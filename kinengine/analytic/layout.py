@@ -4,9 +4,23 @@ analytic Jacobian uses: where the computed entries go, so that one struct write 
 from __future__ import annotations
 
 import struct
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
+import numpy.typing as npt
+
+from ..parameterizations.base import PositionParameterization, RotationParameterization
+
+Fast = tuple[
+    bool,
+    PositionParameterization | None,
+    RotationParameterization | None,
+    bytes,
+    Callable[..., None],
+    int,
+    tuple[int, int],
+]
+"""Layout.fast: (position_formula, position, rotation, template, pack_into, offset, shape)."""
 
 
 class Layout:
@@ -16,21 +30,23 @@ class Layout:
     the computed ones: E_P entries in columns 0-2 of the position rows, E_R in columns 3-5.
     """
 
-    def __init__(self, position: object | None, rotation: object | None) -> None:
+    def __init__(
+        self, position: PositionParameterization | None, rotation: RotationParameterization | None
+    ) -> None:
         self.position_formula = position is not None and position.name != "cartesian"
         rows = (position.size if position is not None else 0) + (rotation.size if rotation is not None else 0)
-        self.shape = (rows, 6)
+        self.shape: tuple[int, int] = (rows, 6)
         template = np.zeros(self.shape)
         if position is not None and not self.position_formula:
             template[:3, :3] = np.eye(3)
         self.template = template.tobytes()
         self.offset = 0 if self.position_formula else 48 * (rows - (rotation.size if rotation else 0))
-        self.pack_into = struct.Struct(
+        self.pack_into: Callable[..., None] = struct.Struct(
             "<"
-            + "3d24x" * (position.size if self.position_formula else 0)
+            + "3d24x" * (position.size if position is not None and self.position_formula else 0)
             + "24x3d" * (rotation.size if rotation is not None else 0)
         ).pack_into
-        self.fast = (
+        self.fast: Fast = (
             self.position_formula,
             position,
             rotation,
@@ -42,7 +58,10 @@ class Layout:
 
 
 def combine(
-    entries: Sequence[np.ndarray | float], block: np.ndarray, out: np.ndarray, scratch: np.ndarray
+    entries: Sequence[npt.NDArray[np.float64] | float],
+    block: npt.NDArray[np.float64],
+    out: npt.NDArray[np.float64],
+    scratch: npt.NDArray[np.float64],
 ) -> None:
     """out = Σ_k entries[k] · block[k]: a row of E (entries (n,) or constants) times J's rows (3, dof, n)."""
     terms = [(e, b) for e, b in zip(entries, block, strict=False) if not (isinstance(e, float) and e == 0.0)]

@@ -21,11 +21,19 @@ import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import TypeVar
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterizationError
 from ..parameterizations import get_position, get_rotation
+from ..parameterizations.base import (
+    Entries,
+    Parameterization,
+    PositionParameterization,
+    RotationParameterization,
+)
 from .layout import Layout, combine
 from .singular import check_on_singularity, pose_of, singularity_error  # noqa: F401 (re-exported)
 
@@ -39,8 +47,8 @@ DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 class PoseMap:
     """χ_e = (χ_P, χ_R)[rows]: which parameterizations, and which of their rows, make up χ."""
 
-    position: object | None
-    rotation: object | None
+    position: PositionParameterization | None
+    rotation: RotationParameterization | None
     labels: tuple[str, ...]  # labels of the selected rows
     rows: tuple[int, ...] | None  # indices into the full (χ_P, χ_R) stack; None: all rows
     layout: Layout = field(init=False, repr=False, compare=False)
@@ -50,7 +58,8 @@ class PoseMap:
     def __post_init__(self) -> None:
         object.__setattr__(self, "layout", Layout(self.position, self.rotation))
         selected = tuple(range(len(self.labels))) if self.rows is None else self.rows
-        spans, start = [], 0
+        spans: list[tuple[int, ...]] = []
+        start = 0
         for part in (p for p in (self.position, self.rotation) if p is not None):
             spans.append(tuple(i for i, r in enumerate(selected) if start <= r < start + part.size))
             start += part.size
@@ -61,24 +70,25 @@ class PoseMap:
         return len(self.labels)
 
     @property
-    def parts(self) -> tuple[object, ...]:
+    def parts(self) -> tuple[Parameterization, ...]:
         """The parameterizations in χ's order (position first), without the absent one."""
         return tuple(p for p in (self.position, self.rotation) if p is not None)
 
     def parameters(
         self,
-        T: np.ndarray,
+        T: npt.NDArray[np.float64],
         threshold: float | None = None,
         nan: bool = False,
-        J: Callable[[int | None], np.ndarray] | None = None,
-    ) -> np.ndarray:
+        J: Callable[[int | None], npt.NDArray[np.float64]] | None = None,
+    ) -> npt.NDArray[np.float64]:
         """χ from poses T_IF, (4, 4) -> (m,) or (N, 4, 4) -> (N, m).
 
         ``threshold`` None: χ everywhere (a UserWarning at gimbal lock). Otherwise a pose within
         ``threshold`` of a part's singular set raises RepresentationSingularityError (``nan`` False;
         ``J(row)`` gives that pose's geometric Jacobian for the message) or gets NaN in that part's rows.
         """
-        parts, distances = [], []
+        parts: list[npt.NDArray[np.float64]] = []
+        distances: list[npt.NDArray[np.float64]] = []
         with warnings.catch_warnings():
             if threshold is not None:
                 warnings.simplefilter("ignore", UserWarning)
@@ -91,26 +101,32 @@ class PoseMap:
         if threshold is None:
             return chi
         for param, values in zip(self.parts, parts, strict=False):
-            distances.append(np.asarray(param.singularity_distance(values), dtype=float))
-        distances = np.stack(distances, axis=-1)
+            distances.append(np.asarray(param.singularity_distance(values), dtype=np.float64))
+        distance = np.stack(distances, axis=-1)
         if nan:
-            below = ~(distances >= threshold) | (distances == 0.0)
+            below = ~(distance >= threshold) | (distance == 0.0)
             for k, rows in enumerate(self.part_rows):
                 chi[..., list(rows)] = np.where(below[..., k : k + 1], np.nan, chi[..., list(rows)])
             return chi
         if T.ndim == 2:
             self.raise_if_singular(
-                distances[None],
+                distance[None],
                 threshold,
                 lambda row: T,
                 None if J is None else (lambda row: J(None)),
                 single=True,
             )
         else:
-            self.raise_if_singular(distances, threshold, lambda row: T[row], J)
+            self.raise_if_singular(distance, threshold, lambda row: T[row], J)
         return chi
 
-    def jacobian(self, T: np.ndarray, J: np.ndarray, threshold: float, nan: bool = False) -> np.ndarray:
+    def jacobian(
+        self,
+        T: npt.NDArray[np.float64],
+        J: npt.NDArray[np.float64],
+        threshold: float,
+        nan: bool = False,
+    ) -> npt.NDArray[np.float64]:
         """J_A = E(χ) · J_e0 for one pose T_IF (4, 4) and J_e0 (6, dof) in "local_world_aligned" -> (m, dof).
 
         Raises RepresentationSingularityError when χ is within ``threshold`` of its singular set
@@ -126,11 +142,11 @@ class PoseMap:
         self,
         C: Sequence[Sequence[float]],
         p: Sequence[float],
-        J: np.ndarray,
+        J: npt.NDArray[np.float64],
         threshold: float,
         row: int | None = None,
         nan: bool = False,
-    ) -> np.ndarray:
+    ) -> npt.NDArray[np.float64]:
         """J_A for C_IF and p [m] given as Python floats (the fast path of one configuration).
 
         Scalar math gives E's entries, packed straight into an (m, 6) array (zeros and the identity
@@ -140,31 +156,32 @@ class PoseMap:
         """
         position_formula, position, rotation, template, pack_into, offset, shape = self.layout.fast
         entries: tuple[float, ...] = ()
-        param = position
+        param: Parameterization | None = position
         try:
-            if position_formula:
-                chi = param._from_position(math, *p)
-                distance = param._distance(math, *chi)
+            if position_formula and position is not None:
+                chi = position._from_position(math, *p)
+                distance = position._distance(math, *chi)
                 if not distance >= threshold or distance == 0.0:
                     if not nan:
-                        raise singularity_error(param, distance, threshold, pose_of(C, p), row, J)
-                    entries = (math.nan,) * (3 * param.size)
+                        raise singularity_error(position, distance, threshold, pose_of(C, p), row, J)
+                    entries = (math.nan,) * (3 * position.size)
                 else:
-                    entries = param._E(math, *chi)
+                    entries = position._E(math, *chi)
             param = rotation
-            if param is not None:
+            if rotation is not None:
                 (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
-                chi = param._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)
-                distance = param._distance(math, *chi)
+                chi = rotation._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)
+                distance = rotation._distance(math, *chi)
                 if not distance >= threshold or distance == 0.0:
                     if not nan:
-                        raise singularity_error(param, distance, threshold, pose_of(C, p), row, J)
-                    entries += (math.nan,) * (3 * param.size)
+                        raise singularity_error(rotation, distance, threshold, pose_of(C, p), row, J)
+                    entries += (math.nan,) * (3 * rotation.size)
                 else:
-                    entries += param._E(math, *chi)
+                    entries += rotation._E(math, *chi)
         except ZeroDivisionError:  # exactly on the singular set with threshold 0 (distance rounds above 0)
             if nan:
                 return np.full((self.size, J.shape[1]), np.nan)
+            assert param is not None  # the parameterization whose formula divided by zero
             raise singularity_error(param, 0.0, threshold, pose_of(C, p), row, J) from None
         buffer = bytearray(template)
         pack_into(buffer, offset, *entries)
@@ -181,13 +198,15 @@ class PoseMap:
         own, evaluated with numpy. Returns each parameterization's distance to its singular set,
         (n,) or a float, in χ's order; the caller decides (see :meth:`raise_if_singular`).
         """
-        E_rows, distances = [], []
+        E_rows: list[tuple[Entries, npt.NDArray[np.float64]]] = []
+        distances: list[npt.NDArray[np.float64] | float] = []
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             blocks = (J[:3], J[3:]) if self.position is not None else (J[3:],)
             for param, block in zip(self.parts, blocks, strict=False):  # no rotation: J[3:] unused
-                if param.kind == "position":
+                if isinstance(param, PositionParameterization):
                     chi = param._from_position(np, *p)
                 else:
+                    assert isinstance(param, RotationParameterization)  # parts: position, then rotation
                     chi = param._from_rotation(np, False, *C)
                 distances.append(param._distance(np, *chi))
                 E = param._E(np, *chi)
@@ -230,10 +249,11 @@ class PoseMap:
         for k, rows in enumerate(self.part_rows):
             hit = np.flatnonzero(below[:, k])
             if hit.size and rows:
-                out[np.ix_(hit, rows)] = np.nan
+                out[np.ix_(hit, np.array(rows, dtype=np.intp))] = np.nan
 
 
 _F64 = np.dtype(np.float64)
+_P = TypeVar("_P", bound=Parameterization)
 
 
 @lru_cache(maxsize=256)
@@ -268,7 +288,7 @@ def pose_map(
     return PoseMap(p, r, tuple(labels[i] for i in index), tuple(index))
 
 
-def _lookup(getter, name: object):
+def _lookup(getter: Callable[[str], _P], name: object) -> _P:
     if not isinstance(name, str):
         raise ParameterizationError(f"parameterization names are strings, got {name!r}")
     return getter(name)

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import OptionError, RepresentationSingularityError
 from ..parameterizations import POSITION_PARAMETERIZATIONS, ROTATION_PARAMETERIZATIONS
+from ..parameterizations.base import Parameterization
 
 ON_SINGULARITY = ("raise", "nan")
 """What a configuration closer than the threshold to a singular set gives: RepresentationSingularityError
@@ -53,7 +54,7 @@ def robot_rank(J: np.ndarray) -> tuple[int, int]:
 
 
 def singularity_error(
-    param: object,
+    param: Parameterization,
     distance: float,
     threshold: float,
     T: np.ndarray,

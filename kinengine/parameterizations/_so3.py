@@ -10,10 +10,21 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .base import SMALL_ANGLE_SQ
+from .base import SMALL_ANGLE_SQ, Component, Entries, Namespace
 
 
-def quaternion_from_matrix(xp, c00, c01, c02, c10, c11, c12, c20, c21, c22):
+def quaternion_from_matrix(
+    xp: Namespace,
+    c00: Component,
+    c01: Component,
+    c02: Component,
+    c10: Component,
+    c11: Component,
+    c12: Component,
+    c20: Component,
+    c21: Component,
+    c22: Component,
+) -> tuple[Component, Component, Component, Component]:
     """Unit quaternion (w, x, y, z) of C_IE, canonical like scipy's ``as_quat(canonical=True)``.
 
     Canonical: w > 0, or w = 0 and the first nonzero of (x, y, z) > 0. The case split on the largest
@@ -48,7 +59,7 @@ def quaternion_from_matrix(xp, c00, c01, c02, c10, c11, c12, c20, c21, c22):
     return w / norm, x / norm, y / norm, z / norm
 
 
-def rotation_entries(alpha, beta, x, y, z):
+def rotation_entries(alpha: Component, beta: Component, x: Component, y: Component, z: Component) -> Entries:
     """Row-major entries of I + α[u]x + β[u]x² for u = (x, y, z) ([u]x² = u u^T − |u|² I)."""
     u2 = x * x + y * y + z * z
     bxy, bxz, byz = beta * x * y, beta * x * z, beta * y * z
@@ -66,13 +77,18 @@ def rotation_entries(alpha, beta, x, y, z):
     )
 
 
-def matrix_from_quaternion(w, x, y, z):
+def matrix_from_quaternion(w: Component, x: Component, y: Component, z: Component) -> Entries:
     """Row-major entries of C_IE(q) for q = (w, x, y, z), normalized first (any nonzero q)."""
     s = 2.0 / (w * w + x * x + y * y + z * z)
     return rotation_entries(s * w, s, x, y, z)
 
 
-def series_or_closed(xp, t, series: Callable, closed: Callable):
+def series_or_closed(
+    xp: Namespace,
+    t: Component,
+    series: Callable[[Component], Component],
+    closed: Callable[[Namespace, Component], Component],
+) -> Component:
     """series(θ²) where θ² = t < SMALL_ANGLE_SQ, else closed(xp, θ²) (jaxlie's small-angle branch, on θ²)."""
     if xp is math:
         return series(t) if t < SMALL_ANGLE_SQ else closed(math, t)
@@ -80,6 +96,6 @@ def series_or_closed(xp, t, series: Callable, closed: Callable):
     return np.where(small, series(t), closed(np, np.where(small, 1.0, t)))
 
 
-def cross_matrix(x, y, z):
+def cross_matrix(x: Component, y: Component, z: Component) -> Entries:
     """Row-major entries of [u]x for u = (x, y, z), the matrix with [u]x w = u × w."""
     return (0.0, -z, y, z, 0.0, -x, -y, x, 0.0)

@@ -19,10 +19,20 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries
-from .base import RotationParameterization, is_single, warn_where
+from .base import (
+    Component,
+    Entries,
+    FloatArray,
+    Namespace,
+    RotationParameterization,
+    Values,
+    is_single,
+    warn_where,
+)
 from .euler import GIMBAL_LOCK_TOLERANCE
 from .rotation_vector import PIN_LOG3_MAX_SQ
 
@@ -35,9 +45,9 @@ class AngleAxis(RotationParameterization):
     name = "angle_axis"
     labels = ("angle", "axis_x", "axis_y", "axis_z")
     singular_set = "θ = 0, the identity rotation (axis undefined)"
-    alternatives = ("quaternion", "rotation_vector", "rotation_matrix")
+    alternatives: tuple[str, ...] = ("quaternion", "rotation_vector", "rotation_matrix")
 
-    def from_rotation(self, C: object, *, warn: bool = True) -> np.ndarray:
+    def from_rotation(self, C: npt.ArrayLike, *, warn: bool = True) -> FloatArray:
         # One sample with 1e-7 < θ < 2: from Pinocchio's log3 (measured ~2x faster); else the generic path
         if is_single(C, (3, 3)):
             x, y, z = pin.log3(C).tolist()
@@ -47,7 +57,7 @@ class AngleAxis(RotationParameterization):
                 return np.array((theta, x / theta, y / theta, z / theta))
         return super().from_rotation(C, warn=warn)
 
-    def _from_rotation(self, xp, warn, *C):
+    def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
         w, x, y, z = quaternion_from_matrix(xp, *C)
         s = xp.sqrt(x * x + y * y + z * z)  # sin(θ/2)
         theta = 2.0 * xp.atan2(s, w)
@@ -64,17 +74,21 @@ class AngleAxis(RotationParameterization):
         s = np.where(zero, 1.0, s)
         return theta, np.where(zero, 1.0, x / s), y / s, z / s
 
-    def _to_rotation(self, xp, theta, nx, ny, nz):
+    def _to_rotation(
+        self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component
+    ) -> Entries:
         n2 = nx * nx + ny * ny + nz * nz
         half = xp.sin(0.5 * theta)
         return rotation_entries(xp.sin(theta) / xp.sqrt(n2), 2.0 * half * half / n2, nx, ny, nz)
 
-    def _E(self, xp, theta, nx, ny, nz):
+    def _E(self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component) -> Entries:
         k = -0.5 / xp.tan(0.5 * theta)  # −½ cot(θ/2)
         M = rotation_entries(-0.5, k, nx, ny, nz)  # I − ½ [n]x − ½ cot(θ/2) [n]x²
         return (nx, ny, nz, M[0] - 1.0, M[1], M[2], M[3], M[4] - 1.0, M[5], M[6], M[7], M[8] - 1.0)
 
-    def _E_inverse(self, xp, theta, nx, ny, nz):
+    def _E_inverse(
+        self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component
+    ) -> Entries:
         s, half = xp.sin(theta), xp.sin(0.5 * theta)
         v = 2.0 * half * half  # 1 − cos θ
         return (
@@ -92,7 +106,7 @@ class AngleAxis(RotationParameterization):
             s * (1.0 - nz * nz),
         )
 
-    def _E_dot(self, xp, chi, u):
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         theta, nx, ny, nz = chi
         a, b, c = u
         half = xp.sin(0.5 * theta)
@@ -110,5 +124,7 @@ class AngleAxis(RotationParameterization):
         )
         return (*nd, *rows)
 
-    def _distance(self, xp, theta, nx, ny, nz):
+    def _distance(
+        self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component
+    ) -> Component:
         return abs(xp.sin(0.5 * theta))

@@ -19,8 +19,11 @@ import sys
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
+from types import FrameType, ModuleType
+from typing import Any, TypeAlias, TypeGuard
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ParameterizationError, RepresentationSingularityError
 
@@ -28,18 +31,31 @@ SMALL_ANGLE_SQ = 1e-2
 """θ² below which coefficients with a division by a power of θ use their Taylor series (through θ⁸;
 relative truncation error < 1e-14 there). Decided on θ², never on θ."""
 
+Namespace: TypeAlias = ModuleType
+"""The namespace the formulas run over: :mod:`math` (one sample) or :mod:`numpy` (a batch)."""
+Component: TypeAlias = Any
+"""One scalar component in a formula: a Python float when ``xp`` is math, a float64 array of the batch
+shape when ``xp`` is numpy. ``Any`` because which of the two is decided at run time by ``xp`` (the
+formulas branch on ``xp is math``), which a type checker cannot follow: a union would flag every
+``math.*`` call on an array and every ``bool()`` of an array comparison."""
+Entries: TypeAlias = tuple[Component, ...]
+"""Row-major entries of a formula's result (a vector or matrix), each a Component."""
+Values: TypeAlias = Sequence[Component]
+"""The components of χ or of u given to a formula as one sequence (a tuple or list of Components)."""
+FloatArray: TypeAlias = npt.NDArray[np.float64]
+
 _ND = np.ndarray
 _F8 = np.dtype(np.float64)
 _PACK9 = struct.Struct("9d")
 _KINENGINE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
 
 
-def is_single(value: object, shape: tuple[int, ...]) -> bool:
+def is_single(value: object, shape: tuple[int, ...]) -> TypeGuard[FloatArray]:
     """True for one float64 sample of exactly ``shape`` (the fast path: its .tolist() gives floats)."""
     return type(value) is _ND and value.dtype is _F8 and value.shape == shape
 
 
-def as_float_array(value: object, tail: tuple[int, ...], what: str) -> np.ndarray:
+def as_float_array(value: npt.ArrayLike, tail: tuple[int, ...], what: str) -> FloatArray:
     """``value`` as a float64 array of shape tail or (..., *tail); ParameterizationError otherwise."""
     array = np.asarray(value, dtype=np.float64)
     n = len(tail)
@@ -52,12 +68,12 @@ def as_float_array(value: object, tail: tuple[int, ...], what: str) -> np.ndarra
     return array
 
 
-def columns(array: np.ndarray, n: int) -> list[np.ndarray]:
+def columns(array: FloatArray, n: int) -> list[FloatArray]:
     """The n entries of the last axis of a batch (..., n), each of shape (...,)."""
     return [array[..., k] for k in range(n)]
 
 
-def stack(entries: Sequence[object], batch: tuple[int, ...], shape: tuple[int, ...]) -> np.ndarray:
+def stack(entries: Entries, batch: tuple[int, ...], shape: tuple[int, ...]) -> FloatArray:
     """Assemble row-major ``entries`` (arrays of shape batch, or constants) into (*batch, *shape)."""
     out = np.empty(batch + (len(entries),))
     for k, entry in enumerate(entries):
@@ -65,10 +81,11 @@ def stack(entries: Sequence[object], batch: tuple[int, ...], shape: tuple[int, .
     return out.reshape(batch + shape)
 
 
-def warn_where(xp, condition, message: str) -> None:
+def warn_where(xp: Namespace, condition: Component, message: str) -> None:
     """UserWarning if ``condition`` holds for any sample, attributed to the first caller outside kinengine."""
     if condition if xp is math else bool(np.any(condition)):
-        frame, level = sys._getframe(1), 2  # level 1 is this function, 2 its caller
+        frame: FrameType | None = sys._getframe(1)
+        level = 2  # level 1 is this function, 2 its caller
         while frame is not None and frame.f_code.co_filename.startswith(_KINENGINE_DIR):
             frame, level = frame.f_back, level + 1
         warnings.warn(message, UserWarning, stacklevel=level)
@@ -101,7 +118,7 @@ class Parameterization(ABC):
     def __repr__(self) -> str:
         return f"<{self.kind} parameterization {self.name!r} {self.labels}>"
 
-    def E(self, chi: object) -> np.ndarray:
+    def E(self, chi: npt.ArrayLike) -> FloatArray:
         """E(χ), (m,) -> (m, 3) or (..., m) -> (..., m, 3): χ̇ = E(χ)·u, u = v [m/s] or ω [rad/s] in I.
 
         Raises RepresentationSingularityError where E has no finite value (distance exactly 0).
@@ -113,14 +130,14 @@ class Parameterization(ABC):
                 raise self._singular_error() from None
         return self._general(self._E, chi, self._E_shape)
 
-    def E_inverse(self, chi: object) -> np.ndarray:
+    def E_inverse(self, chi: npt.ArrayLike) -> FloatArray:
         """(m,) -> (3, m), batched (..., 3, m): u = E_inverse(χ)·χ̇, with E_inverse(χ)·E(χ) = I_3."""
         if type(chi) is _ND and chi.dtype is _F8 and chi.shape == self._one:
             entries = self._E_inverse(math, *chi.tolist())
             return _ND(self._E_inverse_shape, _F8, bytearray(self._pack(*entries)))
         return self._general(self._E_inverse, chi, self._E_inverse_shape)
 
-    def E_dot(self, chi: object, velocity: object) -> np.ndarray:
+    def E_dot(self, chi: npt.ArrayLike, velocity: npt.ArrayLike) -> FloatArray:
         """dE/dt along the motion with u = velocity (v [m/s] or ω [rad/s] in I): (m,), (3,) -> (m, 3).
 
         Batched: (..., m) and (..., 3) broadcast to (..., m, 3). J̇_A = Ė·J_e0 + E·J̇_e0.
@@ -141,7 +158,7 @@ class Parameterization(ABC):
             entries = self._E_dot(np, columns(chi, m), columns(u, 3))
         return self._finite(stack(entries, batch, (m, 3)))
 
-    def singularity_distance(self, chi: object) -> float | np.ndarray:
+    def singularity_distance(self, chi: npt.ArrayLike) -> float | FloatArray:
         """(m,) -> float, (..., m) -> (...,): >= 0, zero exactly on the singular set, ~ the vanishing
         sine/cosine/radius there (E's entries grow like 1/distance); ``inf`` if never singular."""
         if type(chi) is _ND and chi.dtype is _F8 and chi.shape == self._one:
@@ -152,8 +169,8 @@ class Parameterization(ABC):
         return np.broadcast_to(self._distance(np, *columns(chi, chi.shape[-1])), chi.shape[:-1]).copy()
 
     def _general(
-        self, formula: Callable[..., Sequence[object]], chi: object, shape: tuple[int, int]
-    ) -> np.ndarray:
+        self, formula: Callable[..., Entries], chi: npt.ArrayLike, shape: tuple[int, int]
+    ) -> FloatArray:
         """formula for any input: a single sample of another type, or a batch (..., m) -> (..., *shape)."""
         m = len(self.labels)
         chi = as_float_array(chi, (m,), "chi")
@@ -166,7 +183,7 @@ class Parameterization(ABC):
             entries = formula(np, *columns(chi, m))
         return self._finite(stack(entries, chi.shape[:-1], shape))
 
-    def _finite(self, out: np.ndarray) -> np.ndarray:
+    def _finite(self, out: np.ndarray) -> FloatArray:
         if not np.isfinite(out).all():
             raise self._singular_error()
         return out
@@ -175,25 +192,25 @@ class Parameterization(ABC):
         return RepresentationSingularityError(self.name, 0.0, 0.0, self.alternatives, self.singular_set)
 
     @abstractmethod
-    def _E(self, xp, *chi): ...
+    def _E(self, xp: Namespace, *chi: Component) -> Entries: ...
 
     @abstractmethod
-    def _E_inverse(self, xp, *chi): ...
+    def _E_inverse(self, xp: Namespace, *chi: Component) -> Entries: ...
 
     @abstractmethod
-    def _E_dot(self, xp, chi, u): ...
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries: ...
 
     @abstractmethod
-    def _distance(self, xp, *chi): ...
+    def _distance(self, xp: Namespace, *chi: Component) -> Component: ...
 
 
 class PositionParameterization(Parameterization):
     """χ_P(p) for the frame origin p [m] in the inertial frame I; E_P maps v (in I) to χ̇_P."""
 
     kind = "position"
-    alternatives = ("cartesian",)
+    alternatives: tuple[str, ...] = ("cartesian",)
 
-    def from_position(self, pos: object) -> np.ndarray:
+    def from_position(self, pos: npt.ArrayLike) -> FloatArray:
         """χ_P from p [m] in I: (3,) -> (m,), (..., 3) -> (..., m)."""
         if not is_single(pos, (3,)):
             pos = as_float_array(pos, (3,), "pos")
@@ -201,7 +218,7 @@ class PositionParameterization(Parameterization):
                 return stack(self._from_position(np, *columns(pos, 3)), pos.shape[:-1], self._one)
         return np.array(self._from_position(math, *pos.tolist()))
 
-    def to_position(self, chi: object) -> np.ndarray:
+    def to_position(self, chi: npt.ArrayLike) -> FloatArray:
         """p [m] in I from χ_P: (m,) -> (3,), (..., m) -> (..., 3)."""
         chi = as_float_array(chi, self._one, "chi")
         if chi.ndim == 1:
@@ -209,19 +226,19 @@ class PositionParameterization(Parameterization):
         return stack(self._to_position(np, *columns(chi, self.size)), chi.shape[:-1], (3,))
 
     @abstractmethod
-    def _from_position(self, xp, x, y, z): ...
+    def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries: ...
 
     @abstractmethod
-    def _to_position(self, xp, *chi): ...
+    def _to_position(self, xp: Namespace, *chi: Component) -> Entries: ...
 
 
 class RotationParameterization(Parameterization):
     """χ_R(C) for C = C_IE, the rotation of the frame E in the inertial frame I; E_R maps ω (in I) to χ̇_R."""
 
     kind = "rotation"
-    alternatives = ("quaternion", "rotation_matrix")
+    alternatives: tuple[str, ...] = ("quaternion", "rotation_matrix")
 
-    def from_rotation(self, C: object, *, warn: bool = True) -> np.ndarray:
+    def from_rotation(self, C: npt.ArrayLike, *, warn: bool = True) -> FloatArray:
         """χ_R from C_IE: (3, 3) -> (m,), (..., 3, 3) -> (..., m).
 
         Where χ_R is not unique (a singular set) a documented choice is returned and, if ``warn``,
@@ -235,7 +252,7 @@ class RotationParameterization(Parameterization):
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
         return np.array(self._from_rotation(math, warn, c00, c01, c02, c10, c11, c12, c20, c21, c22))
 
-    def to_rotation(self, chi: object) -> np.ndarray:
+    def to_rotation(self, chi: npt.ArrayLike) -> FloatArray:
         """C_IE from χ_R: (m,) -> (3, 3), (..., m) -> (..., 3, 3)."""
         chi = as_float_array(chi, self._one, "chi")
         if chi.ndim == 1:
@@ -243,7 +260,7 @@ class RotationParameterization(Parameterization):
         return stack(self._to_rotation(np, *columns(chi, self.size)), chi.shape[:-1], (3, 3))
 
     @abstractmethod
-    def _from_rotation(self, xp, warn, *c): ...
+    def _from_rotation(self, xp: Namespace, warn: bool, *c: Component) -> Entries: ...
 
     @abstractmethod
-    def _to_rotation(self, xp, *chi): ...
+    def _to_rotation(self, xp: Namespace, *chi: Component) -> Entries: ...

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from .base import PositionParameterization
+from .base import Component, Entries, Namespace, PositionParameterization, Values
 
 
 class Cartesian(PositionParameterization):
@@ -13,21 +13,21 @@ class Cartesian(PositionParameterization):
     name = "cartesian"
     labels = ("x", "y", "z")
     singular_set = "none (E = I everywhere)"
-    alternatives = ()
+    alternatives: tuple[str, ...] = ()
 
-    def _from_position(self, xp, x, y, z):
+    def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         return x, y, z
 
-    def _to_position(self, xp, x, y, z):
+    def _to_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         return x, y, z
 
-    def _E(self, xp, x, y, z):
+    def _E(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         return (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
     _E_inverse = _E
 
-    def _E_dot(self, xp, chi, u):
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         return (0.0,) * 9
 
-    def _distance(self, xp, x, y, z):
+    def _distance(self, xp: Namespace, x: Component, y: Component, z: Component) -> Component:
         return math.inf

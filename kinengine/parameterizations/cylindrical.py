@@ -9,7 +9,7 @@ Singular on the z axis (ρ = 0), where θ is undefined (from_position returns θ
 
 from __future__ import annotations
 
-from .base import PositionParameterization, warn_where
+from .base import Component, Entries, Namespace, PositionParameterization, Values, warn_where
 
 
 class Cylindrical(PositionParameterization):
@@ -19,23 +19,23 @@ class Cylindrical(PositionParameterization):
     labels = ("rho", "theta", "z")
     singular_set = "the z axis, ρ = 0 (azimuth θ undefined)"
 
-    def _from_position(self, xp, x, y, z):
+    def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         rho = xp.sqrt(x * x + y * y)
         warn_where(xp, rho == 0.0, "cylindrical: point on the z axis (ρ = 0); azimuth θ undefined, set to 0")
         return rho, xp.atan2(y, x), z
 
-    def _to_position(self, xp, rho, theta, z):
+    def _to_position(self, xp: Namespace, rho: Component, theta: Component, z: Component) -> Entries:
         return rho * xp.cos(theta), rho * xp.sin(theta), z
 
-    def _E(self, xp, rho, theta, z):
+    def _E(self, xp: Namespace, rho: Component, theta: Component, z: Component) -> Entries:
         c, s = xp.cos(theta), xp.sin(theta)
         return (c, s, 0.0, -s / rho, c / rho, 0.0, 0.0, 0.0, 1.0)
 
-    def _E_inverse(self, xp, rho, theta, z):
+    def _E_inverse(self, xp: Namespace, rho: Component, theta: Component, z: Component) -> Entries:
         c, s = xp.cos(theta), xp.sin(theta)
         return (c, -rho * s, 0.0, s, rho * c, 0.0, 0.0, 0.0, 1.0)
 
-    def _E_dot(self, xp, chi, u):
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         rho, theta, _ = chi
         vx, vy, _ = u
         c, s = xp.cos(theta), xp.sin(theta)
@@ -53,5 +53,5 @@ class Cylindrical(PositionParameterization):
             0.0,
         )
 
-    def _distance(self, xp, rho, theta, z):
+    def _distance(self, xp: Namespace, rho: Component, theta: Component, z: Component) -> Component:
         return abs(rho)

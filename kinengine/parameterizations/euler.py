@@ -23,17 +23,27 @@ import math
 from operator import itemgetter
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import ParameterizationError
-from .base import RotationParameterization, is_single, warn_where
+from .base import (
+    Component,
+    Entries,
+    FloatArray,
+    Namespace,
+    RotationParameterization,
+    Values,
+    is_single,
+    warn_where,
+)
 
 EULER_SEQUENCES = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz")
 GIMBAL_LOCK_TOLERANCE = 1e-7
 """[rad]; scipy's tolerance on χ2 for declaring gimbal lock in ``as_euler``."""
 
 
-def _elementary(xp, axis: int, angle):
+def _elementary(xp: Namespace, axis: int, angle: Component) -> Entries:
     """Row-major entries of the rotation by ``angle`` [rad] about the basis axis ``axis``."""
     c, s = xp.cos(angle), xp.sin(angle)
     if axis == 0:
@@ -43,7 +53,7 @@ def _elementary(xp, axis: int, angle):
     return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
 
 
-def _matmul(A, B):
+def _matmul(A: Entries, B: Entries) -> Entries:
     """Row-major entries of A·B for 3x3 matrices given by row-major entries."""
     a0, a1, a2, a3, a4, a5, a6, a7, a8 = A
     b0, b1, b2, b3, b4, b5, b6, b7, b8 = B
@@ -91,7 +101,7 @@ class EulerAngles(RotationParameterization):
             self.alternatives = ("quaternion", f"euler_{seq[0]}{seq[1]}{seq[0]}", "rotation_matrix")
         super().__init__()
 
-    def _from_rotation(self, xp, warn, *C):
+    def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
         ab, at, aa, ba, ta, bt, tt, tb, bb = self._index
         eps = self._eps
         # proper: C[a][a] = c2, C[a][b] = s2 s3, C[a][t] = ε s2 c3, C[b][a] = s1 s2, C[t][a] = −ε c1 s2
@@ -128,11 +138,11 @@ class EulerAngles(RotationParameterization):
             return chi1, chi2, 0.0 if locked else chi3
         return chi1, chi2, np.where(locked, 0.0, chi3)
 
-    def _to_rotation(self, xp, chi1, chi2, chi3):
+    def _to_rotation(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         a, b, c = self._axes
         return _matmul(_matmul(_elementary(xp, a, chi1), _elementary(xp, b, chi2)), _elementary(xp, c, chi3))
 
-    def _E(self, xp, chi1, chi2, chi3):
+    def _E(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         c1, s1, c2, s2, e = xp.cos(chi1), xp.sin(chi1), xp.cos(chi2), xp.sin(chi2), self._eps
         if self._proper:
             u = 1.0 / s2
@@ -142,13 +152,13 @@ class EulerAngles(RotationParameterization):
         t = s2 * u
         return self._to_columns((1.0, s1 * t, -e * c1 * t, 0.0, c1, e * s1, 0.0, -e * s1 * u, c1 * u))
 
-    def _E_inverse(self, xp, chi1, chi2, chi3):
+    def _E_inverse(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         c1, s1, c2, s2, e = xp.cos(chi1), xp.sin(chi1), xp.cos(chi2), xp.sin(chi2), self._eps
         if self._proper:
             return self._to_rows((1.0, 0.0, c2, 0.0, c1, s1 * s2, 0.0, e * s1, -e * c1 * s2))
         return self._to_rows((1.0, 0.0, e * s2, 0.0, c1, -e * s1 * c2, 0.0, e * s1, c1 * c2))
 
-    def _E_dot(self, xp, chi, u):
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         chi1, chi2, _ = chi
         c1, s1, c2, s2, e = xp.cos(chi1), xp.sin(chi1), xp.cos(chi2), xp.sin(chi2), self._eps
         wa, wb, wt = (u[axis] for axis in self._perm)
@@ -187,7 +197,7 @@ class EulerAngles(RotationParameterization):
             )
         )
 
-    def _distance(self, xp, chi1, chi2, chi3):
+    def _distance(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Component:
         return abs(xp.sin(chi2)) if self._proper else abs(xp.cos(chi2))
 
 
@@ -198,20 +208,20 @@ class EulerZYX(EulerAngles):
     def __init__(self) -> None:
         super().__init__("zyx")
 
-    def from_rotation(self, C: object, *, warn: bool = True) -> np.ndarray:
+    def from_rotation(self, C: npt.ArrayLike, *, warn: bool = True) -> FloatArray:
         if is_single(C, (3, 3)):
             rpy = pin.rpy.matrixToRpy(C)
             if abs(abs(rpy[1]) - 0.5 * math.pi) > GIMBAL_LOCK_TOLERANCE:
                 return rpy[::-1]
         return super().from_rotation(C, warn=warn)
 
-    def E(self, chi: object) -> np.ndarray:
+    def E(self, chi: npt.ArrayLike) -> FloatArray:
         # rpẏ = computeRpyJacobianInverse(rpy, WORLD)·ω (ω in I); χ = rpy reversed, so are E's rows
         if is_single(chi, (3,)):
             return pin.rpy.computeRpyJacobianInverse(chi[::-1], pin.WORLD)[::-1]
         return super().E(chi)
 
-    def E_inverse(self, chi: object) -> np.ndarray:
+    def E_inverse(self, chi: npt.ArrayLike) -> FloatArray:
         if is_single(chi, (3,)):
             return pin.rpy.computeRpyJacobian(chi[::-1], pin.WORLD)[:, ::-1]
         return super().E_inverse(chi)

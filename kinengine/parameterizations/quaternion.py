@@ -16,10 +16,10 @@ from __future__ import annotations
 import math
 
 from ._so3 import matrix_from_quaternion, quaternion_from_matrix
-from .base import RotationParameterization
+from .base import Component, Entries, Namespace, RotationParameterization, Values
 
 
-def _half_H(w, x, y, z):
+def _half_H(w: Component, x: Component, y: Component, z: Component) -> Entries:
     """Row-major entries of ½ [−v^T; w I − [v]x] for q = (w, v)."""
     w, x, y, z = 0.5 * w, 0.5 * x, 0.5 * y, 0.5 * z
     return (-x, -y, -z, w, z, -y, -z, w, x, y, -x, w)
@@ -31,22 +31,22 @@ class Quaternion(RotationParameterization):
     name = "quaternion"
     labels = ("qw", "qx", "qy", "qz")
     singular_set = "none (E is defined everywhere; branch cut of the sign choice at w = 0)"
-    alternatives = ()
+    alternatives: tuple[str, ...] = ()
 
-    def _from_rotation(self, xp, warn, *C):
+    def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
         return quaternion_from_matrix(xp, *C)
 
-    def _to_rotation(self, xp, w, x, y, z):
+    def _to_rotation(self, xp: Namespace, w: Component, x: Component, y: Component, z: Component) -> Entries:
         return matrix_from_quaternion(w, x, y, z)
 
-    def _E(self, xp, w, x, y, z):
+    def _E(self, xp: Namespace, w: Component, x: Component, y: Component, z: Component) -> Entries:
         return _half_H(w, x, y, z)
 
-    def _E_inverse(self, xp, w, x, y, z):
+    def _E_inverse(self, xp: Namespace, w: Component, x: Component, y: Component, z: Component) -> Entries:
         w, x, y, z = 2.0 * w, 2.0 * x, 2.0 * y, 2.0 * z
         return (-x, w, -z, y, -y, z, w, -x, -z, -y, x, w)
 
-    def _E_dot(self, xp, chi, u):
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         a, b, c = u
         w, x, y, z = chi
         q_dot = (
@@ -57,5 +57,5 @@ class Quaternion(RotationParameterization):
         )
         return _half_H(*q_dot)
 
-    def _distance(self, xp, w, x, y, z):
+    def _distance(self, xp: Namespace, w: Component, x: Component, y: Component, z: Component) -> Component:
         return math.inf

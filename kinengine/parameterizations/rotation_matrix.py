@@ -10,10 +10,20 @@ from __future__ import annotations
 
 import math
 
-from .base import RotationParameterization
+from .base import Component, Entries, Namespace, RotationParameterization, Values
 
 
-def _rate_map(c00, c01, c02, c10, c11, c12, c20, c21, c22):
+def _rate_map(
+    c00: Component,
+    c01: Component,
+    c02: Component,
+    c10: Component,
+    c11: Component,
+    c12: Component,
+    c20: Component,
+    c21: Component,
+    c22: Component,
+) -> Entries:
     """Row-major entries of the 9x3 E with vec(Ċ) = E·ω (row 3i + j is row i of −[C[:, j]]x)."""
     return (
         0.0,
@@ -52,18 +62,18 @@ class RotationMatrix(RotationParameterization):
     name = "rotation_matrix"
     labels = ("C11", "C12", "C13", "C21", "C22", "C23", "C31", "C32", "C33")
     singular_set = "none (E is defined everywhere)"
-    alternatives = ()
+    alternatives: tuple[str, ...] = ()
 
-    def _from_rotation(self, xp, warn, *C):
+    def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
         return C
 
-    def _to_rotation(self, xp, *chi):
+    def _to_rotation(self, xp: Namespace, *chi: Component) -> Entries:
         return chi
 
-    def _E(self, xp, *chi):
+    def _E(self, xp: Namespace, *chi: Component) -> Entries:
         return _rate_map(*chi)
 
-    def _E_inverse(self, xp, *chi):
+    def _E_inverse(self, xp: Namespace, *chi: Component) -> Entries:
         c00, c01, c02, c10, c11, c12, c20, c21, c22 = (0.5 * c for c in chi)
         return (
             0.0,
@@ -95,7 +105,7 @@ class RotationMatrix(RotationParameterization):
             0.0,
         )
 
-    def _E_dot(self, xp, chi, u):
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         a, b, c = u
         C_dot = []
         for j in range(3):  # column j of Ċ is ω × C[:, j]
@@ -103,5 +113,5 @@ class RotationMatrix(RotationParameterization):
             C_dot.append((b * z - c * y, c * x - a * z, a * y - b * x))
         return _rate_map(*(C_dot[j][i] for i in range(3) for j in range(3)))
 
-    def _distance(self, xp, *chi):
+    def _distance(self, xp: Namespace, *chi: Component) -> Component:
         return math.inf

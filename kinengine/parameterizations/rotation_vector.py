@@ -17,10 +17,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries, series_or_closed
-from .base import RotationParameterization, is_single
+from .base import Component, Entries, FloatArray, Namespace, RotationParameterization, Values, is_single
 
 PIN_LOG3_MAX_SQ = 4.0
 """θ² below which one sample takes φ from pin.log3 (as accurate as the quaternion route there: ~5e-16 in C(φ);
@@ -32,46 +33,48 @@ _TINY_SIN2 = 1e-12
 
 # Coefficients as functions of t = θ²: the Taylor series (Horner, through θ⁸) used for t < SMALL_ANGLE_SQ
 # and the closed form used elsewhere.
-def _sinc_series(t):  # sin θ / θ
+def _sinc_series(t: Component) -> Component:  # sin θ / θ
     return 1.0 - t / 6.0 * (1.0 - t / 20.0 * (1.0 - t / 42.0 * (1.0 - t / 72.0)))
 
 
-def _sinc_closed(xp, t):
+def _sinc_closed(xp: Namespace, t: Component) -> Component:
     return xp.sin(xp.sqrt(t)) / xp.sqrt(t)
 
 
-def _versine_series(t):  # (1 − cos θ)/θ²
+def _versine_series(t: Component) -> Component:  # (1 − cos θ)/θ²
     return 0.5 * (1.0 - t / 12.0 * (1.0 - t / 30.0 * (1.0 - t / 56.0 * (1.0 - t / 90.0))))
 
 
-def _versine_closed(xp, t):  # 2 sin²(θ/2)/θ², no cancellation
+def _versine_closed(xp: Namespace, t: Component) -> Component:  # 2 sin²(θ/2)/θ², no cancellation
     half = xp.sin(0.5 * xp.sqrt(t))
     return 2.0 * half * half / t
 
 
-def _theta_minus_sin_series(t):  # (θ − sin θ)/θ³
+def _theta_minus_sin_series(t: Component) -> Component:  # (θ − sin θ)/θ³
     return (1.0 - t / 20.0 * (1.0 - t / 42.0 * (1.0 - t / 72.0 * (1.0 - t / 110.0)))) / 6.0
 
 
-def _theta_minus_sin_closed(xp, t):
+def _theta_minus_sin_closed(xp: Namespace, t: Component) -> Component:
     theta = xp.sqrt(t)
     return (theta - xp.sin(theta)) / (t * theta)
 
 
-def _b_series(t):  # b(θ) = (1 − (θ/2) cot(θ/2))/θ²
+def _b_series(t: Component) -> Component:  # b(θ) = (1 − (θ/2) cot(θ/2))/θ²
     return 1.0 / 12.0 + t * (1.0 / 720.0 + t * (1.0 / 30240.0 + t * (1.0 / 1209600.0 + t / 47900160.0)))
 
 
-def _b_closed(xp, t):
+def _b_closed(xp: Namespace, t: Component) -> Component:
     half = 0.5 * xp.sqrt(t)
     return (1.0 - half / xp.tan(half)) / t
 
 
-def _b_prime_over_theta_series(t):  # b'(θ)/θ
+def _b_prime_over_theta_series(t: Component) -> Component:  # b'(θ)/θ
     return 1.0 / 360.0 + t * (1.0 / 7560.0 + t * (1.0 / 201600.0 + t / 5987520.0))
 
 
-def _b_prime_over_theta_closed(xp, t):  # −2/θ⁴ + 1/(4θ² sin²(θ/2)) + cot(θ/2)/(2θ³)
+def _b_prime_over_theta_closed(
+    xp: Namespace, t: Component
+) -> Component:  # −2/θ⁴ + 1/(4θ² sin²(θ/2)) + cot(θ/2)/(2θ³)
     theta = xp.sqrt(t)
     half = xp.sin(0.5 * theta)
     return -2.0 / (t * t) + 0.25 / (t * half * half) + 0.5 / (xp.tan(0.5 * theta) * t * theta)
@@ -83,9 +86,9 @@ class RotationVector(RotationParameterization):
     name = "rotation_vector"
     labels = ("rotvec_x", "rotvec_y", "rotvec_z")
     singular_set = "θ = |φ| = 2π k, k >= 1 (never reached by from_rotation, which keeps θ <= π)"
-    alternatives = ("quaternion", "rotation_matrix")
+    alternatives: tuple[str, ...] = ("quaternion", "rotation_matrix")
 
-    def from_rotation(self, C: object, *, warn: bool = True) -> np.ndarray:
+    def from_rotation(self, C: npt.ArrayLike, *, warn: bool = True) -> FloatArray:
         # One sample with θ < 2: Pinocchio's log3 (measured ~3x faster); otherwise the generic path.
         if is_single(C, (3, 3)):
             phi = pin.log3(C)
@@ -94,7 +97,7 @@ class RotationVector(RotationParameterization):
                 return phi
         return super().from_rotation(C, warn=warn)
 
-    def _from_rotation(self, xp, warn, *C):
+    def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
         w, x, y, z = quaternion_from_matrix(xp, *C)
         s2 = x * x + y * y + z * z  # sin²(θ/2)
         if xp is math:
@@ -109,7 +112,7 @@ class RotationVector(RotationParameterization):
             scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.atan2(s, w) / s)
         return scale * x, scale * y, scale * z
 
-    def _to_rotation(self, xp, x, y, z):
+    def _to_rotation(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z
         return rotation_entries(
             series_or_closed(xp, t, _sinc_series, _sinc_closed),
@@ -119,17 +122,17 @@ class RotationVector(RotationParameterization):
             z,
         )
 
-    def _E(self, xp, x, y, z):
+    def _E(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         b = series_or_closed(xp, x * x + y * y + z * z, _b_series, _b_closed)
         return rotation_entries(-0.5, b, x, y, z)
 
-    def _E_inverse(self, xp, x, y, z):
+    def _E_inverse(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z
         a1 = series_or_closed(xp, t, _versine_series, _versine_closed)
         a2 = series_or_closed(xp, t, _theta_minus_sin_series, _theta_minus_sin_closed)
         return rotation_entries(a1, a2, x, y, z)
 
-    def _E_dot(self, xp, chi, u):
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         x, y, z = chi
         t = x * x + y * y + z * z
         b = series_or_closed(xp, t, _b_series, _b_closed)
@@ -146,7 +149,7 @@ class RotationVector(RotationParameterization):
             for j in range(3)
         )
 
-    def _distance(self, xp, x, y, z):
+    def _distance(self, xp: Namespace, x: Component, y: Component, z: Component) -> Component:
         theta = xp.sqrt(x * x + y * y + z * z)
         if xp is math:  # the nearest 2πk with k >= 1 (θ >= 0: a round to 0 means k = 1)
             return abs(theta - _TWO_PI * (round(theta / _TWO_PI) or 1))

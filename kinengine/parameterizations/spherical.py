@@ -11,7 +11,7 @@ from_position returns atan2(0, 0) = 0 for it.
 
 from __future__ import annotations
 
-from .base import PositionParameterization, warn_where
+from .base import Component, Entries, Namespace, PositionParameterization, Values, warn_where
 
 
 class Spherical(PositionParameterization):
@@ -21,25 +21,25 @@ class Spherical(PositionParameterization):
     labels = ("r", "theta", "phi")
     singular_set = "the z axis, r·sin φ = 0 (azimuth θ undefined; at r = 0 also φ)"
 
-    def _from_position(self, xp, x, y, z):
+    def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         rho = xp.sqrt(x * x + y * y)
         warn_where(xp, rho == 0.0, "spherical: the point is on the z axis; azimuth θ is undefined, set to 0")
         return xp.sqrt(x * x + y * y + z * z), xp.atan2(y, x), xp.atan2(rho, z)
 
-    def _to_position(self, xp, r, theta, phi):
+    def _to_position(self, xp: Namespace, r: Component, theta: Component, phi: Component) -> Entries:
         r_sin = r * xp.sin(phi)
         return r_sin * xp.cos(theta), r_sin * xp.sin(theta), r * xp.cos(phi)
 
-    def _E(self, xp, r, theta, phi):
+    def _E(self, xp: Namespace, r: Component, theta: Component, phi: Component) -> Entries:
         ct, st, cp, sp = xp.cos(theta), xp.sin(theta), xp.cos(phi), xp.sin(phi)
         rs = r * sp
         return (ct * sp, st * sp, cp, -st / rs, ct / rs, 0.0, ct * cp / r, st * cp / r, -sp / r)
 
-    def _E_inverse(self, xp, r, theta, phi):
+    def _E_inverse(self, xp: Namespace, r: Component, theta: Component, phi: Component) -> Entries:
         ct, st, cp, sp = xp.cos(theta), xp.sin(theta), xp.cos(phi), xp.sin(phi)
         return (ct * sp, -r * st * sp, r * ct * cp, st * sp, r * ct * sp, r * st * cp, cp, 0.0, -r * sp)
 
-    def _E_dot(self, xp, chi, u):
+    def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         # rows' rates: ė_r = θ̇ sin φ e_θ + φ̇ e_φ, ė_θ = −θ̇ (sin φ e_r + cos φ e_φ), ė_φ = θ̇ cos φ e_θ − φ̇ e_r
         r, theta, phi = chi
         vx, vy, vz = u
@@ -60,5 +60,5 @@ class Spherical(PositionParameterization):
         ]
         return (*row_r, *row_t, *row_p)
 
-    def _distance(self, xp, r, theta, phi):
+    def _distance(self, xp: Namespace, r: Component, theta: Component, phi: Component) -> Component:
         return abs(r * xp.sin(phi))
