@@ -349,6 +349,8 @@ class LimitWeights:
         self.lower, self.upper = np.where(self.bounded, lower, -1.0), np.where(self.bounded, upper, 1.0)
         self.middle_twice = self.lower + self.upper
         self.quarter_span_sq = np.where(self.bounded, self.upper - self.lower, 0.0) ** 2 / 4  # 0: unbounded
+        self._lower, self._upper = self.lower.tolist(), self.upper.tolist()
+        self._mid2, self._quarter = self.middle_twice.tolist(), self.quarter_span_sq.tolist()
 
     def inverse_weights(self, q: np.ndarray, previous: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """(1 / w, |∂φ/∂q|) at q, given |∂φ/∂q| of the last iteration (None: the first). Distances to the
@@ -359,6 +361,19 @@ class LimitWeights:
         if previous is None:
             return inverse, grad
         return np.where(grad > previous, inverse, 1.0), grad
+
+    def inverse_weights_one(self, q: np.ndarray, previous: list | None) -> tuple[np.ndarray, list]:
+        """:meth:`inverse_weights` for one q (dof,) in plain floats (a dozen numpy calls on a 6-vector cost
+        more than the arithmetic); ``previous`` and the returned gradient are lists."""
+        grad, inverse = [], []
+        for i, (qi, lo, hi, mid2, quarter) in enumerate(zip(q.tolist(), self._lower, self._upper, self._mid2,
+                                                            self._quarter)):
+            du, dl = hi - qi, qi - lo
+            d = (du if du > 1e-12 else 1e-12) * (dl if dl > 1e-12 else 1e-12)
+            g = quarter * abs(2.0 * qi - mid2) / (d * d)
+            grad.append(g)
+            inverse.append(1.0 / (1.0 + g) if previous is None or g > previous[i] else 1.0)
+        return np.array(inverse), grad
 
 
 # -- the single-target solver ----------------------------------------------------------------------
@@ -417,7 +432,7 @@ def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, w
             elif not full:
                 J = J[part]
             if limits.any:
-                w, previous = limits.inverse_weights(q, previous)
+                w, previous = limits.inverse_weights_one(q, previous)
                 JW = J * w
             else:
                 JW = J
