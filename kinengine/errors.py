@@ -7,9 +7,9 @@ subclass also derives from the builtin a caller would naturally catch
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
 import difflib
 import re
+from collections.abc import Iterable, Sequence
 
 
 class KinematicsError(Exception):
@@ -98,7 +98,7 @@ class ParameterizationError(KinematicsError, ValueError):
     """An unknown parameterization name or an invalid parameter vector."""
 
     @classmethod
-    def unknown(cls, kind: str, name: object, valid: Sequence[str]) -> "ParameterizationError":
+    def unknown(cls, kind: str, name: object, valid: Sequence[str]) -> ParameterizationError:
         return cls(f"unknown {kind} parameterization {name!r}; valid names: {', '.join(valid)}")
 
 
@@ -122,8 +122,8 @@ class RepresentationSingularityError(KinematicsError, ValueError):
         self.detail = detail
         self.robot_rank = robot_rank
         self.full_rank = full_rank
-        self._init = ((parameterization, distance, threshold, self.alternatives, detail, robot_rank, full_rank),
-                      {})
+        args = (parameterization, distance, threshold, self.alternatives, detail, robot_rank, full_rank)
+        self._init: tuple[tuple[object, ...], dict[str, object]] = (args, {})
         msg = (f"{parameterization!r} is at a representation singularity "
                f"(distance {distance:.3g} < threshold {threshold:.3g})")
         if detail:
@@ -131,7 +131,8 @@ class RepresentationSingularityError(KinematicsError, ValueError):
         if robot_rank is None or full_rank is None:
             robot = ". This is a property of the parameterization, not of a robot"
         elif robot_rank < full_rank:
-            robot = (f". The robot itself is also kinematically singular here (rank {robot_rank} of {full_rank}), "
+            robot = (f". The robot itself is also kinematically singular here "
+                     f"(rank {robot_rank} of {full_rank}), "
                      "which no parameterization removes. For the representation singularity")
         else:
             robot = f". The robot itself is not singular here (rank {robot_rank} of {full_rank})"
@@ -145,6 +146,9 @@ class KinematicSingularityError(KinematicsError, ValueError):
     """The geometric Jacobian J_e0(q) loses rank: the robot cannot move its frame in some direction."""
 
     multiline = True  # the message is the SingularityReport, one line per lost direction
+    report: object | None = None
+    """The kinengine.control.manipulability.SingularityReport behind the message when raised by
+    require_regular (typed ``object``: this bottom layer cannot import the control layer's class)."""
 
 
 class ResourceLimitError(KinematicsError, MemoryError):

@@ -18,8 +18,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import ConfigurationError, KinematicSingularityError, ParameterizationError
 from ..kinematics.options import checked_tolerance
@@ -29,6 +31,26 @@ ROW_SETS = {"all": (0, 1, 2, 3, 4, 5), "linear": (0, 1, 2), "angular": (3, 4, 5)
 DEFAULT_TOLERANCE = 1e-6
 """σ at or below which a direction counts as lost [m/rad for linear rows, 1 for angular rows]."""
 Rows = str | Sequence[str | int]
+
+
+class ManipulabilityRobot(Protocol):
+    """What these functions read of the Robot passed in (public attributes of :class:`kinengine.Robot`)."""
+
+    @property
+    def end_effector(self) -> str: ...
+
+    @property
+    def dof(self) -> int: ...
+
+    def check_configuration(
+        self, q: npt.ArrayLike, *, check_limits: bool = True, batch: bool = True
+    ) -> npt.NDArray[np.float64]: ...
+
+    def frame_pose(self, q: npt.ArrayLike, frame: str | None = None) -> npt.NDArray[np.float64]: ...
+
+    def jacobian(self, q: npt.ArrayLike, frame: str | None = None) -> npt.NDArray[np.float64]: ...
+
+
 """'all', 'linear', 'angular', or row labels (vx vy vz wx wy wz) / indices 0-5."""
 
 
@@ -114,7 +136,12 @@ def analyze_jacobian(
 
 
 def singularity_report(
-    robot, q: object, frame: str | None = None, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE
+    robot: ManipulabilityRobot,
+    q: npt.ArrayLike,
+    frame: str | None = None,
+    rows: Rows = "all",
+    *,
+    tolerance: float = DEFAULT_TOLERANCE,
 ) -> SingularityReport:
     """The :class:`SingularityReport` of J_e0(q) of ``frame`` (default: end effector), q (dof,)."""
     frame = robot.end_effector if frame is None else frame
@@ -122,7 +149,9 @@ def singularity_report(
     return analyze_jacobian(robot.jacobian(q, frame), rows, tolerance=tolerance, frame=frame)
 
 
-def manipulability(robot, q: object, frame: str | None = None, rows: Rows = "all") -> float | np.ndarray:
+def manipulability(
+    robot: ManipulabilityRobot, q: npt.ArrayLike, frame: str | None = None, rows: Rows = "all"
+) -> float | npt.NDArray[np.float64]:
     """Yoshikawa's w = sqrt(det(J Jᵀ)) of J_e0[rows]: float for q (dof,), (N,) for q (N, dof)."""
     index = list(_rows(rows))
     J = robot.jacobian(q, frame)[..., index, :]
@@ -132,7 +161,9 @@ def manipulability(robot, q: object, frame: str | None = None, rows: Rows = "all
     return float(w) if J.ndim == 2 else w
 
 
-def velocity_ellipsoid(robot, q: object, frame: str | None = None) -> VelocityEllipsoid:
+def velocity_ellipsoid(
+    robot: ManipulabilityRobot, q: npt.ArrayLike, frame: str | None = None
+) -> VelocityEllipsoid:
     """The velocity manipulability ellipsoid of ``frame``'s origin (eigenvectors of J_v J_vᵀ), q (dof,)."""
     frame = robot.end_effector if frame is None else frame
     q = robot.check_configuration(q, check_limits=False, batch=False)
@@ -144,7 +175,12 @@ def velocity_ellipsoid(robot, q: object, frame: str | None = None) -> VelocityEl
 
 
 def require_regular(
-    robot, q: object, frame: str | None = None, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE
+    robot: ManipulabilityRobot,
+    q: npt.ArrayLike,
+    frame: str | None = None,
+    rows: Rows = "all",
+    *,
+    tolerance: float = DEFAULT_TOLERANCE,
 ) -> SingularityReport:
     """The report if J_e0[rows] has full row rank; KinematicSingularityError (with ``.report``) otherwise."""
     report = singularity_report(robot, q, frame, rows, tolerance=tolerance)

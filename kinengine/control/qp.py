@@ -29,13 +29,17 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import OptionError
+from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
 from ..kinematics.relative import relative_terms
+from ..urdf.description import RobotDescription
 
 ROWS = ("x", "y", "z", "rx", "ry", "rz")
 SOLVERS = ("daqp", "proxqp")
@@ -72,10 +76,34 @@ class PostureTarget:
     _mask: np.ndarray | None = field(default=None, repr=False)
 
 
+class QPRobot(Protocol):
+    """What DifferentialIK reads of the Robot passed in (public attributes of :class:`kinengine.Robot`)."""
+
+    @property
+    def engine(self) -> Kinematics: ...
+
+    @property
+    def dof(self) -> int: ...
+
+    @property
+    def description(self) -> RobotDescription: ...
+
+    @property
+    def joint_names(self) -> Sequence[str]: ...
+
+    @property
+    def lower_limits(self) -> npt.NDArray[np.float64]: ...
+
+    @property
+    def upper_limits(self) -> npt.NDArray[np.float64]: ...
+
+    def frame_id(self, frame: str) -> int: ...
+
+
 class _PoseTerm:
     """A PoseTarget resolved against the robot: frame ids, row indices, buffers."""
 
-    def __init__(self, robot, target: PoseTarget) -> None:
+    def __init__(self, robot: QPRobot, target: PoseTarget) -> None:
         self.target = target
         self.fid = robot.frame_id(target.frame)
         self.fb = None if target.relative_to is None else robot.frame_id(target.relative_to)
@@ -107,7 +135,7 @@ class DifferentialIK:
 
     def __init__(
         self,
-        robot,
+        robot: QPRobot,
         tasks: Sequence[PoseTarget | PostureTarget],
         *,
         damping: float = 1e-12,
@@ -130,7 +158,8 @@ class DifferentialIK:
         self._model, self._coords = kin.model, kin.coordinates
         self._data = create_data(self._model, "a DifferentialIK")
         n = self.dof = robot.dof
-        self._pose_terms, self._postures = [], []
+        self._pose_terms: list[_PoseTerm] = []
+        self._postures: list[PostureTarget] = []
         for task in tasks:
             if isinstance(task, PoseTarget):
                 self._pose_terms.append(_PoseTerm(robot, task))
@@ -164,7 +193,7 @@ class DifferentialIK:
         """How many solves needed the QP solver (a bound active); the others were one linear solve."""
 
     @staticmethod
-    def _velocity_limits(robot, limits: object) -> np.ndarray:
+    def _velocity_limits(robot: QPRobot, limits: object) -> npt.NDArray[np.float64]:
         urdf = {j.name: j.velocity for j in robot.description.joints}
         out = np.array(
             [urdf.get(name) if urdf.get(name) else np.inf for name in robot.joint_names], dtype=float
@@ -226,6 +255,7 @@ class DifferentialIK:
             weighted_sq += float(e.dot(e))
         for posture in self._postures:
             w, mask = posture.weight, posture._mask
+            assert mask is not None  # set by __init__
             e = posture.gain * (np.asarray(posture.q_ref, dtype=float) - q) * mask
             diag += w * mask
             c -= w * e
@@ -255,7 +285,9 @@ class DifferentialIK:
             np.clip(step, lb, ub, out=step)  # the solver's tolerance (~1e-14) off a bound: onto it
         return step / dt
 
-    def _pose_rows(self, term: _PoseTerm, model, data) -> tuple[np.ndarray, np.ndarray]:
+    def _pose_rows(
+        self, term: _PoseTerm, model: pin.Model, data: pin.Data
+    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(A (6, dof), e (6,)): rows [position; rotation] of the module doc, at the current Data."""
         fold = self._coords.fold
         MA = pin.updateFramePlacement(model, data, term.fid)

@@ -41,6 +41,7 @@ views that the next update overwrites; copy what you keep.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
@@ -48,9 +49,22 @@ import pinocchio as pin
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
 from ..analytic.singular import check_on_singularity
 from ..errors import OptionError
+from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
 from .frame_task import FrameTask, as_frame_tasks
 from .task_frame import FrameBlock, FrameKinematics
+
+
+class TaskRobot(Protocol):
+    """What a Task reads of the Robot it is built from (public attributes of :class:`kinengine.Robot`)."""
+
+    @property
+    def engine(self) -> Kinematics: ...
+
+    @property
+    def dof(self) -> int: ...
+
+    def frame_id(self, frame: str) -> int: ...
 
 
 class Task:
@@ -66,7 +80,7 @@ class Task:
 
     def __init__(
         self,
-        robot,
+        robot: TaskRobot,
         frames: str | FrameTask | Sequence[str | FrameTask],
         position: str | None = "cartesian",
         rotation: str | None = "euler_zyx",
@@ -126,7 +140,8 @@ class Task:
                 kinematics[fid] = FrameKinematics(model, data, fid, n, coords)
             return kinematics[fid]
 
-        self._blocks, row, part = [], 0, 0
+        self._blocks: list[FrameBlock] = []
+        row, part = 0, 0
         for i, (spec, pm) in enumerate(zip(specs, pmaps, strict=False)):
             a = frame_kinematics(spec.frame)
             b = None if spec.relative_to is None else frame_kinematics(spec.relative_to)
@@ -158,6 +173,7 @@ class Task:
         self.weights = _readonly(self._weights)
         self.singularity_distances = _readonly(self._distances)
         self._rates = (self._twist, self._Jdot, self._JAdot, self._chi_dot)
+        self._rates_valid: bool = False
         self._invalidate_rates()
 
     def __repr__(self) -> str:

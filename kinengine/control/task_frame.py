@@ -19,13 +19,19 @@ import math
 import struct
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ..analytic.pose_map import PoseMap
 from ..analytic.singular import singularity_error
 from ..errors import RepresentationSingularityError
 from ..model.coordinates import CoordinateMap
-from .continuity import continuity_rule
+from ..parameterizations.base import (
+    Parameterization,
+    PositionParameterization,
+    RotationParameterization,
+)
+from .continuity import Rule, continuity_rule
 from .frame_task import FrameTask
 
 
@@ -118,20 +124,32 @@ class FrameBlock:
         self.chi_offset, self.distance_offset = chi_offset, distance_offset
         layout = pmap.layout
         self.template, self.pack_into, self.offset = layout.template, layout.pack_into, layout.offset
-        self.E = np.frombuffer(bytearray(layout.template)).reshape(layout.shape)
-        self.Edot = np.zeros(layout.shape)
+        self.E: npt.NDArray[np.float64] = np.frombuffer(bytearray(layout.template)).reshape(layout.shape)
+        self.Edot: npt.NDArray[np.float64] = np.zeros(layout.shape)
         self.rows = None if pmap.rows is None else np.asarray(pmap.rows, dtype=np.intp)
         ms = pmap.size
         self.Esel, self.Edot_sel = np.zeros((ms, 6)), np.zeros((ms, 6))
         self.tmpA = np.zeros((ms, dof))
         self.write_chi = struct.Struct(f"{ms}d").pack_into
-        self.parts = []
+        # per part: (param, param if a position one else None, param if a rotation one else None,
+        # constant E (cartesian), continuity rule, its rows in χ)
+        self.parts: list[
+            tuple[
+                Parameterization,
+                PositionParameterization | None,
+                RotationParameterization | None,
+                bool,
+                Rule,
+                slice,
+            ]
+        ] = []
         start = 0
         for param in pmap.parts:
             self.parts.append(
                 (
                     param,
-                    param.kind == "position",
+                    param if isinstance(param, PositionParameterization) else None,
+                    param if isinstance(param, RotationParameterization) else None,
                     param.name == "cartesian",
                     continuity_rule(param.name),
                     slice(start, start + param.size),
@@ -207,15 +225,32 @@ class FrameBlock:
             C, p = self._relative(qdot)
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
         px, py, pz = p
-        _POSE_ROWS.pack_into(self.pose, 0, c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
+        _POSE_ROWS.pack_into(
+            self.pose,  # type: ignore[arg-type]  # a buffer; numpy declares __buffer__ for Python >= 3.12 only
+            0,
+            c00,
+            c01,
+            c02,
+            px,
+            c10,
+            c11,
+            c12,
+            py,
+            c20,
+            c21,
+            c22,
+            pz,
+        )
         values: list[float] = []
         entries: tuple[float, ...] = ()
-        previous, error, flags = self.previous, None, []
-        for k, (param, position, constant, rule, rows) in enumerate(self.parts):
-            if position:
-                chi = list(param._from_position(math, px, py, pz))
-            else:
-                chi = list(param._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22))
+        previous = self.previous
+        error: tuple[Parameterization, float] | None = None
+        flags: list[bool] = []
+        for k, (param, position, rotation, constant, rule, rows) in enumerate(self.parts):
+            if position is not None:
+                chi = list(position._from_position(math, px, py, pz))
+            elif rotation is not None:
+                chi = list(rotation._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22))
             if previous is not None:
                 chi = rule(chi, previous[rows])
             distance = param._distance(math, *chi)
@@ -234,9 +269,9 @@ class FrameBlock:
             E = self.Esel
         np.dot(E, self.J, out=self.JA)
         self.write_chi(
-            chi_out,
+            chi_out,  # type: ignore[arg-type]  # a buffer; numpy declares __buffer__ for Python >= 3.12 only
             8 * self.chi_offset,
-            *(values if self.rows is None else [values[i] for i in self.pmap.rows]),
+            *(values if self.pmap.rows is None else [values[i] for i in self.pmap.rows]),
         )
         if continuous:
             self.previous = values
@@ -250,14 +285,14 @@ class FrameBlock:
         """J̇_A = Ė·J + E·J̇ and χ̇ = J_A·q̇ (NaN rows where E is NaN)."""
         vx, vy, vz, wx, wy, wz = self.twist.tolist()
         entries: tuple[float, ...] = ()
-        for param, position, constant, _rule, rows in self.parts:
+        for param, position, _rotation, constant, _rule, rows in self.parts:
             if constant:
                 continue
             chi = values[rows]
             if singular[rows.start]:
                 entries += (math.nan,) * (3 * param.size)
             else:
-                entries += param._E_dot(math, chi, (vx, vy, vz) if position else (wx, wy, wz))
+                entries += param._E_dot(math, chi, (vx, vy, vz) if position is not None else (wx, wy, wz))
         self.pack_into(self.Edot, self.offset, *entries)  # Ė's constant entries are all zero
         Edot = self.Edot
         if self.rows is not None:
