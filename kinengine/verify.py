@@ -21,12 +21,17 @@ import math
 import sys
 import warnings
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from .errors import OptionError
+from .parameterizations.base import Parameterization
 from .reference import REFERENCES, ReferenceKinematics, read_urdf
+
+if TYPE_CHECKING:
+    from .robot import Robot
 
 REFERENCE_ATOL = 1e-10
 YOURDFPY_ATOL = 1e-9
@@ -95,7 +100,7 @@ class VerifyReport:
         }
 
 
-def verify(robot, samples: int = 20, seed: int = 0, progress: bool = False) -> VerifyReport:
+def verify(robot: Robot, samples: int = 20, seed: int = 0, progress: bool = False) -> VerifyReport:
     """Run every check on ``robot`` (a :class:`kinengine.Robot`) and return the report.
 
     ``samples``: random configurations, a whole number in [0, MAX_SAMPLES]; ``seed``: a whole number >= 0.
@@ -158,7 +163,7 @@ def verify(robot, samples: int = 20, seed: int = 0, progress: bool = False) -> V
     return VerifyReport(robot.name, robot.dof, len(frames), len(q_all), tuple(checks))
 
 
-def _box(robot) -> tuple[np.ndarray, np.ndarray]:
+def _box(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     """The sampled joint box: the limits, or [-π, π] where they are infinite or empty (lower >= upper)."""
     lower, upper = np.asarray(robot.lower_limits, float), np.asarray(robot.upper_limits, float)
     lower, upper = np.clip(lower, -BOX, BOX), np.clip(upper, -BOX, BOX)
@@ -168,7 +173,7 @@ def _box(robot) -> tuple[np.ndarray, np.ndarray]:
 
 def _check_count(value: object, name: str, most: int) -> None:
     whole = isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_))
-    if not whole or not 0 <= value <= most:
+    if not (whole and isinstance(value, (int, np.integer)) and 0 <= value <= most):
         raise OptionError(f"{name} must be a whole number in [0, {most}], got {value!r:.40}")
 
 
@@ -182,7 +187,7 @@ def _corners(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> 
     return np.where(pick, upper, lower)
 
 
-def _fd_jacobian(robot, q: np.ndarray, frame: str, reference: str) -> np.ndarray:
+def _fd_jacobian(robot: Robot, q: np.ndarray, frame: str, reference: str) -> np.ndarray:
     """(M, 6, dof) Jacobians by central differences of T_IF(q), each reference from its definition:
     local_world_aligned [ṗ; log(C+ C-^T)/2h], local T^-1·dT/dq, world dT/dq·T^-1 (twists [v; ω])."""
     M, dof = q.shape
@@ -205,7 +210,7 @@ def _fd_jacobian(robot, q: np.ndarray, frame: str, reference: str) -> np.ndarray
     return np.swapaxes(np.concatenate([v, w], axis=-1), 1, 2)
 
 
-def _yourdfpy_check(robot, q: np.ndarray) -> CheckResult:
+def _yourdfpy_check(robot: Robot, q: np.ndarray) -> CheckResult:
     """Every link's pose vs yourdfpy's scene-graph forward kinematics (URDF.update_cfg)."""
     urdf = read_urdf(robot.urdf_text, source=robot.source, scene_graph=True)
     for joint in urdf.robot.joints:  # yourdfpy translates by q·axis without normalizing the axis
@@ -236,7 +241,7 @@ def _or(value: float | None, default: float) -> float:
     return default if value is None else float(value)
 
 
-def _parameterizations(robot) -> list[tuple[str, str, object]] | None:
+def _parameterizations(robot: Robot) -> list[tuple[str, str, Parameterization]] | None:
     """(kind, name, parameterization) for every position and rotation parameterization, or None
     when this robot has no analytic Jacobians yet."""
     if not (hasattr(robot, "analytic_jacobian") and hasattr(robot, "pose_parameters")):
@@ -248,16 +253,19 @@ def _parameterizations(robot) -> list[tuple[str, str, object]] | None:
     ]
 
 
-def _analytic_check(robot, q: np.ndarray, kind: str, name: str, param) -> CheckResult:
+def _analytic_check(
+    robot: Robot, q: np.ndarray, kind: str, name: str, param: Parameterization
+) -> CheckResult:
     """J_A of the end effector vs central differences of χ(q), away from singularities and branch cuts."""
     row = f"analytic {name} vs finite differences"
     frame, dof = robot.end_effector, robot.dof
-    choice = {"position": None, "rotation": None, kind: name}
+    position = name if kind == "position" else None  # kind is "position" or "rotation"
+    rotation = name if kind == "rotation" else None
 
     def chi(qs: np.ndarray) -> np.ndarray:
         with warnings.catch_warnings():  # χ at a singular pose warns; such samples are skipped
             warnings.simplefilter("ignore")
-            return robot.pose_parameters(qs, frame, **choice)
+            return robot.pose_parameters(qs, frame, position=position, rotation=rotation)
 
     chi0 = chi(q)
     regular = np.atleast_1d(param.singularity_distance(chi0)) >= SINGULARITY_MARGIN
@@ -274,7 +282,11 @@ def _analytic_check(robot, q: np.ndarray, kind: str, name: str, param) -> CheckR
     smooth = smooth.all(axis=2)[:, None, :]  # per (sample, column)
     J_fd = np.swapaxes((chi_p - chi_m) / (2 * FD_STEP), 1, 2)
     scale = np.maximum(1.0, np.max(np.abs(J_fd), axis=(1, 2), keepdims=True))
-    err = np.where(smooth, np.abs(robot.analytic_jacobian(q, frame, **choice) - J_fd) / scale, 0.0)
+    err = np.where(
+        smooth,
+        np.abs(robot.analytic_jacobian(q, frame, position=position, rotation=rotation) - J_fd) / scale,
+        0.0,
+    )
     skipped = [f"{int(np.sum(~regular))} samples near a singularity"] if not regular.all() else []
     skipped += [f"{int(np.sum(~smooth))} columns at a branch cut"] if not smooth.all() else []
     return CheckResult(
@@ -294,12 +306,19 @@ def _relative(J: np.ndarray, J_fd: np.ndarray) -> float:
     return float(np.max(np.max(np.abs(J - J_fd), axis=(1, 2)) / scale))
 
 
+class _Bar(Protocol):
+    """The part of a tqdm progress bar verify uses."""
+
+    def update(self) -> object: ...
+    def close(self) -> object: ...
+
+
 class _NoBar:
     def update(self) -> None: ...
     def close(self) -> None: ...
 
 
-def _progress_bar(enabled: bool, total: int, name: str):
+def _progress_bar(enabled: bool, total: int, name: str) -> _Bar:
     if not enabled:
         return _NoBar()
     from tqdm import tqdm

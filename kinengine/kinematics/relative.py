@@ -18,7 +18,10 @@ Every function takes the Kinematics engine, a checked q (dof,) or Q (N, dof) and
 
 from __future__ import annotations
 
+from typing import Literal, overload
+
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from . import batch
@@ -37,9 +40,21 @@ def _inverse_times(TB: np.ndarray, TA: np.ndarray) -> np.ndarray:
     return out
 
 
-def _poses(kin: Kinematics, q: np.ndarray, fid: int, jacobian: bool) -> tuple[np.ndarray, np.ndarray | None]:
+@overload
+def _poses(
+    kin: Kinematics, q: np.ndarray, fid: int, jacobian: Literal[True]
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
+@overload
+def _poses(
+    kin: Kinematics, q: np.ndarray, fid: int, jacobian: Literal[False]
+) -> tuple[npt.NDArray[np.float64], None]: ...
+def _poses(
+    kin: Kinematics, q: np.ndarray, fid: int, jacobian: bool
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64] | None]:
+    """(T_IF, J_e0 in "local_world_aligned" if ``jacobian`` else None) for q (dof,) or Q (N, dof)."""
     if q.ndim == 2:
         T, J = batch.evaluate(kin, q, fid, _LWA, jacobian=jacobian)
+        assert T is not None  # pose=True (the default): the poses are computed
         return T, J
     if not jacobian:
         return kin.pose(q, fid), None
