@@ -17,7 +17,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analytic", ("kinengine.analytic",)),
     ("control", ("kinengine.control",)),
     ("tools and presentation", ("kinengine.verify", "kinengine.presentation")),
-    ("facade", ("kinengine.robot", "kinengine.loading")),
+    ("facade", ("kinengine.facade", "kinengine.robot", "kinengine.loading")),
     ("public API", ("kinengine", "kinengine.layers")),
     ("command line", ("kinengine.cli", "kinengine.__main__")),
 )

@@ -19,41 +19,32 @@ Data, coordinate map), the analytic layer, and the control layer.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
-from .analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_batch, analytic_single, pose_map
-from .analytic.evaluate import analytic_relative
-from .analytic.pose_map import check_on_singularity
-from .control.frame_task import FrameTask
-from .analytic.hessian import analytic_hessian as _analytic_hessian
-from .control import ik as _ik
-from .control import manipulability as _manipulability
-from .control.ik import IKResult
-from .control.ik_batch import IKBatchResult
-from .control.manipulability import DEFAULT_TOLERANCE, Rows, SingularityReport, VelocityEllipsoid
-from .control.task import Task
-from .errors import FrameNotFoundError, OptionError
+from .errors import OptionError
+from .facade.analysis import AnalysisMethods
+from .facade.analytic import AnalyticMethods
+from .facade.editing import EditingMethods
+from .facade.presentation import PresentationMethods
 from .kinematics import REFERENCES, Kinematics, resolve_reference
 from .kinematics import batch as _batch
-from .kinematics.options import (checked_flag, checked_frames, checked_parameterization, checked_rng,
-                                 checked_threshold)
-from .kinematics import derivatives as _derivatives
-from .kinematics import relative as _relative
-from .model.editing import add_frame, edited_urdf_text, lock_joints
 from .kinematics.handle import FrameHandle
+from .kinematics.options import (
+    checked_flag,
+    checked_rng,
+)
 from .urdf import RobotDescription
 
 if TYPE_CHECKING:
-    import matplotlib.axes
+    pass
 
-    from .presentation.viewer import Viewer
 
-class Robot:
+class Robot(AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethods):
     """A fixed-base robot: one coordinate per independent movable joint.
 
     Build it with :func:`kinengine.load` or :func:`kinengine.load_urdf_string`. The
@@ -61,8 +52,15 @@ class Robot:
     Robot may be used from several threads at once. Every returned array is a fresh copy.
     """
 
-    def __init__(self, description: RobotDescription, urdf_text: str, *, name: str | None = None,
-                 end_effector: str | None = None, packages: Mapping[str, str] | None = None) -> None:
+    def __init__(
+        self,
+        description: RobotDescription,
+        urdf_text: str,
+        *,
+        name: str | None = None,
+        end_effector: str | None = None,
+        packages: Mapping[str, str] | None = None,
+    ) -> None:
         self._kin = kin = Kinematics(description)
         self._packages = MappingProxyType(dict(packages or {}))
         self._coords = kin.coordinates
@@ -78,15 +76,23 @@ class Robot:
     name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
     dof = property(lambda self: self._coords.dof, doc="Number of coordinates in q.")
     joint_names = property(lambda self: self._coords.names, doc="Names of q's coordinates, in order.")
-    frame_names = property(lambda self: self._kin.frame_names, doc="Every link and joint frame, in model order.")
+    frame_names = property(
+        lambda self: self._kin.frame_names, doc="Every link and joint frame, in model order."
+    )
     end_effector = property(lambda self: self._end_effector, doc="Default end-effector frame name.")
     description = property(lambda self: self._description, doc="The validated RobotDescription.")
     urdf_text = property(lambda self: self._urdf_text, doc="The URDF text the robot was loaded from.")
     source = property(lambda self: self._description.source, doc="File the robot came from, or '<string>'.")
-    packages = property(lambda self: self._packages, doc="ROS package name -> folder given to load() (read-only "
-                        "mapping) for $(find pkg) and package:// URIs (meshes).")
-    engine = property(lambda self: self._kin, doc="The Kinematics object (Pinocchio model, per-thread Data, "
-                                                  "coordinate map) that the methods below delegate to.")
+    packages = property(
+        lambda self: self._packages,
+        doc="ROS package name -> folder given to load() (read-only "
+        "mapping) for $(find pkg) and package:// URIs (meshes).",
+    )
+    engine = property(
+        lambda self: self._kin,
+        doc="The Kinematics object (Pinocchio model, per-thread Data, "
+        "coordinate map) that the methods below delegate to.",
+    )
 
     @property
     def lower_limits(self) -> np.ndarray:
@@ -104,8 +110,13 @@ class Robot:
     def __reduce__(self) -> tuple:
         """Pickle and deepcopy: rebuilt from its validated description, URDF text, name and end effector
         (a fresh Pinocchio model and Data in the receiving process; nothing per-thread is sent)."""
-        return _rebuild_robot, (self._description, self._urdf_text, self._name, self._end_effector,
-                                dict(self._packages))
+        return _rebuild_robot, (
+            self._description,
+            self._urdf_text,
+            self._name,
+            self._end_effector,
+            dict(self._packages),
+        )
 
     def pinocchio_model(self) -> pin.Model:
         """A copy of Pinocchio's Model: one plain joint (nq = nv = 1) per movable URDF joint, mimic joints
@@ -124,26 +135,32 @@ class Robot:
         0 (e.g. the Panda's joint 4), which then sits at its nearest limit (as MoveIt's default state)."""
         return np.clip(np.zeros(self.dof), self._coords.lower, self._coords.upper)
 
-    def random_configuration(self, rng: np.random.Generator | int | None = None,
-                             size: int | None = None) -> np.ndarray:
+    def random_configuration(
+        self, rng: np.random.Generator | int | None = None, size: int | None = None
+    ) -> np.ndarray:
         """Uniform within limits, (dof,) or (size, dof); continuous joints in [-π, π)."""
         return self._coords.sample(checked_rng(rng), size)
 
-    def configuration(self, values: Mapping[str, float], *, base: object = None,
-                      strict: bool = True) -> np.ndarray:
+    def configuration(
+        self, values: Mapping[str, float], *, base: object = None, strict: bool = True
+    ) -> np.ndarray:
         """q from joint name -> value (e.g. a ROS JointState); unnamed joints at ``base`` (default neutral).
 
         Unknown names raise FrameNotFoundError (``strict=False`` ignores them).
         """
-        start = self.neutral() if base is None else np.array(self._coords.check(base, name="base",
-                                                                               allow_batch=False))
+        start = (
+            self.neutral()
+            if base is None
+            else np.array(self._coords.check(base, name="base", allow_batch=False))
+        )
         return self._coords.from_mapping(values, start, strict=checked_flag(strict, "strict"))
 
     def check_configuration(self, q: object, *, check_limits: bool = True, batch: bool = True) -> np.ndarray:
         """A fresh float64 copy of q, (dof,) or (with ``batch``) (N, dof); ConfigurationError on bad shape,
         values or (optionally) limits."""
-        return np.array(self._coords.check(q, check_limits=check_limits,
-                                           allow_batch=checked_flag(batch, "batch")))
+        return np.array(
+            self._coords.check(q, check_limits=check_limits, allow_batch=checked_flag(batch, "batch"))
+        )
 
     # -- kinematics -------------------------------------------------------------------------
     def frame_id(self, frame: str) -> int:
@@ -171,8 +188,11 @@ class Robot:
         return handle
 
     def _fid(self, frame: str | None) -> int:
-        fid = self._kin.frame_ids.get(self._end_effector if frame is None else frame) \
-            if type(frame) is str or frame is None else None
+        fid = (
+            self._kin.frame_ids.get(self._end_effector if frame is None else frame)
+            if type(frame) is str or frame is None
+            else None
+        )
         return self._kin.frame_id(frame) if fid is None else fid
 
     def frame_pose(self, q: object, frame: str | None = None, *, check_limits: bool = False) -> np.ndarray:
@@ -184,13 +204,23 @@ class Robot:
             handle = self._handles[frame]
         except (KeyError, TypeError):
             handle = self._handle(frame)
-        q = self._coords.check(q) if check_limits is False else self._coords.check(q, check_limits=check_limits)
+        q = (
+            self._coords.check(q)
+            if check_limits is False
+            else self._coords.check(q, check_limits=check_limits)
+        )
         if q.ndim == 2:
             return _batch.evaluate(self._kin, q, handle.frame_id, None, jacobian=False)[0]
         return handle.pose(q)
 
-    def jacobian(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
-                 check_limits: bool = False) -> np.ndarray:
+    def jacobian(
+        self,
+        q: object,
+        frame: str | None = None,
+        reference: object = "local_world_aligned",
+        *,
+        check_limits: bool = False,
+    ) -> np.ndarray:
         """Geometric Jacobian of ``frame`` in ``reference``, rows [linear; angular].
 
         q (dof,) -> (6, dof); q (N, dof) -> (N, 6, dof). See the module doc for the references.
@@ -199,16 +229,30 @@ class Robot:
             handle = self._handles[frame]
         except (KeyError, TypeError):
             handle = self._handle(frame)
-        ref = REFERENCES[reference] if type(reference) is str and reference in REFERENCES else \
-            resolve_reference(reference)
-        q = self._coords.check(q) if check_limits is False else self._coords.check(q, check_limits=check_limits)
+        ref = (
+            REFERENCES[reference]
+            if type(reference) is str and reference in REFERENCES
+            else resolve_reference(reference)
+        )
+        q = (
+            self._coords.check(q)
+            if check_limits is False
+            else self._coords.check(q, check_limits=check_limits)
+        )
         if q.ndim == 2:
             return _batch.evaluate(self._kin, q, handle.frame_id, ref, pose=False)[1]
         return handle.jacobian(q, reference)  # the name: the handle's fast lookup
 
-    def kinematics(self, q: object, frame: str | None = None, reference: object = "local_world_aligned", *,
-                   check_limits: bool = False, out: tuple[np.ndarray, np.ndarray] | None = None,
-                   workers: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def kinematics(
+        self,
+        q: object,
+        frame: str | None = None,
+        reference: object = "local_world_aligned",
+        *,
+        check_limits: bool = False,
+        out: tuple[np.ndarray, np.ndarray] | None = None,
+        workers: int | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(T_IF, J) in one pass: (4, 4) and (6, dof) for q (dof,); (N, 4, 4) and (N, 6, dof) for q (N, dof),
         equal bit for bit to :meth:`frame_pose` and :meth:`jacobian` called separately. Batches only:
         ``out=(T, J)`` preallocated C-contiguous float64 arrays of those shapes, filled and returned;
@@ -218,221 +262,34 @@ class Robot:
         except (KeyError, TypeError):
             handle = self._handle(frame)
         ref = resolve_reference(reference)
-        q = self._coords.check(q) if check_limits is False else self._coords.check(q, check_limits=check_limits)
+        q = (
+            self._coords.check(q)
+            if check_limits is False
+            else self._coords.check(q, check_limits=check_limits)
+        )
         if q.ndim == 2:
-            T, J = _batch.evaluate(self._kin, q, handle.frame_id, ref, out=_batch.checked_out(out, len(q), self.dof),
-                                   workers=_batch.checked_workers(workers))
+            T, J = _batch.evaluate(
+                self._kin,
+                q,
+                handle.frame_id,
+                ref,
+                out=_batch.checked_out(out, len(q), self.dof),
+                workers=_batch.checked_workers(workers),
+            )
             return T, J  # type: ignore[return-value]
         if out is not None:
             raise OptionError("`out=` is for batches q (N, dof); a single q returns fresh arrays")
         _batch.checked_workers(workers)
         return handle.kinematics(q, reference)  # the name: the handle's fast lookup
 
-    # -- analytic Jacobians --------------------------------------------------------------------
-    def pose_parameters(self, q: object, frame: str | None = None, position: str | None = "cartesian",
-                        rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
-                        check_limits: bool = False, relative_to: str | None = None,
-                        on_singularity: str | None = None,
-                        singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD) -> np.ndarray:
-        """χ_e(q) = (χ_P, χ_R) of ``frame`` in the root frame, (m,) or (N, m) for q (N, dof).
 
-        ``position``/``rotation`` name a parameterization (None leaves its rows out);
-        ``rows`` keeps only the named rows (labels or indices), e.g. ("x", "z", "ry").
-        ``relative_to``: χ of T_BA, the pose of ``frame`` in that frame B, instead of T_IA.
-        ``on_singularity`` None (default): near a representation singularity the angles stay valid (a
-        warning is issued at gimbal lock); "raise": RepresentationSingularityError within
-        ``singularity_threshold`` of the singular set; "nan": NaN in that parameterization's rows there.
-        """
-        pmap = pose_map(*checked_parameterization(position, rotation, rows))
-        singularity_threshold = checked_threshold(singularity_threshold)
-        if relative_to is None:
-            T = self.frame_pose(q, frame, check_limits=check_limits)
-        else:
-            T = self.relative_pose(q, frame, relative_to=relative_to, check_limits=check_limits)
-        if on_singularity is None:
-            return pmap.parameters(T)
-        nan = check_on_singularity(on_singularity)
-        qc = self._coords.check(q)
-        fa = self._fid(frame)
-        if relative_to is None:
-            J = (lambda row: self._kin.jacobian(qc if row is None else qc[row], fa, pin.LOCAL_WORLD_ALIGNED))
-        else:
-            fb = self._kin.frame_id(relative_to)
-            J = (lambda row: _relative.relative_jacobian(self._kin, qc if row is None else qc[row], fa, fb))
-        return pmap.parameters(T, singularity_threshold, nan, J)
-
-    def analytic_jacobian(self, q: object, frame: str | None = None, position: str | None = "cartesian",
-                          rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
-                          singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
-                          check_limits: bool = False, relative_to: str | None = None,
-                          on_singularity: str = "raise") -> np.ndarray:
-        """J_eA = ∂χ_e/∂q = E_e(χ_e) · J_e0(q), (m, dof) or (N, m, dof) for q (N, dof).
-
-        Raises RepresentationSingularityError when χ_e is closer than ``singularity_threshold``
-        to its parameterization's singular set (the message names regular alternatives and says whether
-        the robot itself is singular); ``on_singularity="nan"`` gives NaN in that parameterization's rows
-        instead (in a batch, only in the rows of those configurations). ``relative_to``: the analytic
-        Jacobian of χ(T_BA), E(χ)·J_rel with J_rel = :meth:`relative_jacobian` expressed in B.
-        """
-        pmap = pose_map(*checked_parameterization(position, rotation, rows))
-        singularity_threshold = checked_threshold(singularity_threshold)
-        fid = self._fid(frame)
-        nan = on_singularity != "raise" and check_on_singularity(on_singularity)
-        q = self._coords.check(q, check_limits=check_limits)
-        if relative_to is not None:
-            return analytic_relative(self._kin, q, fid, self._kin.frame_id(relative_to), pmap,
-                                     singularity_threshold, nan)
-        if q.ndim == 2:
-            return analytic_batch(self._kin, q, fid, pmap, singularity_threshold, nan)
-        return analytic_single(self._kin, q, fid, pmap, singularity_threshold, nan)
-
-    def task(self, frames: str | FrameTask | Sequence[str | FrameTask] | None = None,
-             position: str | None = "cartesian", rotation: str | None = "euler_zyx", *,
-             rows: Sequence[str | int] | None = None, check_inputs: bool = True, continuous: bool = True,
-             singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD, relative_to: str | None = None,
-             on_singularity: str = "raise") -> Task:
-        """A :class:`~kinengine.control.task.Task` for a control loop: ``task.update(q, qdot)`` fills pose, χ,
-        J_e0, J_A (and with q̇ the twist, J̇_e0, J̇_A) into preallocated read-only arrays.
-
-        ``frames``: one name (default: end_effector), several (blocks stacked), or
-        :class:`~kinengine.FrameTask` entries, each with its own parameterizations, rows and relative_to
-        (names given as strings take ``position``, ``rotation``, ``rows`` and ``relative_to`` of this call).
-        ``on_singularity``: "raise" (default) or "nan"; ``task.singularity_distances`` tells how far each
-        parameterization is from its singular set. See :mod:`kinengine.control.task`.
-        """
-        position, rotation, rows = checked_parameterization(position, rotation, rows)
-        singularity_threshold = checked_threshold(singularity_threshold)
-        continuous, check_inputs = checked_flag(continuous, "continuous"), checked_flag(check_inputs, "check_inputs")
-        checked_frames(frames, (str, FrameTask))
-        return Task(self, self._end_effector if frames is None else frames, position, rotation, rows=rows,
-                    check_inputs=check_inputs, continuous=continuous,
-                    singularity_threshold=singularity_threshold, relative_to=relative_to,
-                    on_singularity=on_singularity)
-
-    # -- relative kinematics --------------------------------------------------------------------
-    def relative_pose(self, q: object, frame: str | None = None, *, relative_to: str,
-                      check_limits: bool = False) -> np.ndarray:
-        """T_BA = T_IB⁻¹ T_IA: the pose of ``frame`` A (default: end_effector) in frame B = ``relative_to``,
-        (4, 4) [m], or (N, 4, 4) for q (N, dof). See :mod:`kinengine.kinematics.relative`."""
-        fa, fb = self._fid(frame), self._kin.frame_id(relative_to)
-        return _relative.relative_pose(self._kin, self._coords.check(q, check_limits=check_limits), fa, fb)
-
-    def relative_jacobian(self, q: object, frame: str | None = None, *, relative_to: str,
-                          expressed_in: str | None = None, check_limits: bool = False) -> np.ndarray:
-        """(6, dof), or (N, 6, dof) for q (N, dof); rows [v; ω]: the velocity of A's origin and the angular
-        velocity of A (A = ``frame``, default end_effector), both relative to B = ``relative_to`` (as seen by
-        an observer fixed in B), in the axes of ``expressed_in`` (any frame name; default B).
-
-        In B: d/dt(B_p_BA) = J[:3]·q̇ and Ċ_BA = [J[3:]·q̇]× C_BA. See :mod:`kinengine.kinematics.relative`.
-        """
-        fa, fb = self._fid(frame), self._kin.frame_id(relative_to)
-        fe = None if expressed_in is None else self._kin.frame_id(expressed_in)
-        return _relative.relative_jacobian(self._kin, self._coords.check(q, check_limits=check_limits),
-                                           fa, fb, fe)
-
-    # -- derivatives, singularities, inverse kinematics ----------------------------------------
-    def jacobian_time_variation(self, q: object, qdot: object, frame: str | None = None,
-                                reference: object = "local_world_aligned") -> np.ndarray:
-        """J̇ = dJ/dt of the geometric Jacobian in ``reference`` along q̇, (6, dof). See
-        :mod:`kinengine.kinematics.derivatives`."""
-        ref, fid = resolve_reference(reference), self._fid(frame)
-        q = self._coords.check(q, allow_batch=False)
-        qdot = self._coords.check(qdot, name="qdot", allow_batch=False)
-        return _derivatives.jacobian_time_variation(self._kin, q, qdot, fid, ref)
-
-    def kinematic_hessian(self, q: object, frame: str | None = None,
-                          reference: object = "local_world_aligned") -> np.ndarray:
-        """∂J/∂q, (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, in ``reference``. See
-        :mod:`kinengine.kinematics.derivatives`."""
-        ref, fid = resolve_reference(reference), self._fid(frame)
-        return _derivatives.kinematic_hessian(self._kin, self._coords.check(q, allow_batch=False), fid, ref)
-
-    def analytic_hessian(self, q: object, frame: str | None = None, position: str | None = "cartesian",
-                         rotation: str | None = "euler_zyx", *, rows: Sequence[str | int] | None = None,
-                         singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD) -> np.ndarray:
-        """∂J_A/∂q, (m, dof, dof) with [:, :, k] = ∂J_A/∂q_k. See :mod:`kinengine.analytic.hessian`."""
-        pmap, fid = pose_map(*checked_parameterization(position, rotation, rows)), self._fid(frame)
-        singularity_threshold = checked_threshold(singularity_threshold)
-        return _analytic_hessian(self._kin, self._coords.check(q, allow_batch=False), fid, pmap,
-                                 singularity_threshold)
-
-    def singularity_report(self, q: object, frame: str | None = None, rows: Rows = "all", *,
-                           tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
-        """Singular values, manipulability, condition number and lost directions of J_e0 (kinematic singularities)."""
-        return _manipulability.singularity_report(self, q, frame, rows, tolerance=tolerance)
-
-    def manipulability(self, q: object, frame: str | None = None, rows: Rows = "all") -> float | np.ndarray:
-        """Yoshikawa's sqrt(det(J Jᵀ)) of the chosen rows of J_e0; (N,) for q (N, dof)."""
-        return _manipulability.manipulability(self, q, frame, rows)
-
-    def velocity_ellipsoid(self, q: object, frame: str | None = None) -> VelocityEllipsoid:
-        """Axes and semi-axes [m/s per unit joint speed] of {J_v u : |u| <= 1} in the root frame."""
-        return _manipulability.velocity_ellipsoid(self, q, frame)
-
-    def require_regular(self, q: object, frame: str | None = None, rows: Rows = "all", *,
-                        tolerance: float = DEFAULT_TOLERANCE) -> SingularityReport:
-        """The singularity report, or KinematicSingularityError if J_e0 (rows) loses rank."""
-        return _manipulability.require_regular(self, q, frame, rows, tolerance=tolerance)
-
-    def inverse_kinematics(self, target: object, frame: str | None = None, q0: object = None, *,
-                           position: str | None = None, rotation: str | None = None,
-                           rows: Sequence[str | int] | None = None, weights: Sequence[float] | None = None,
-                           tol_position: float = 1e-6, tol_rotation: float = 1e-6, max_iterations: int = 100,
-                           restarts: int = 3, rng: np.random.Generator | int | None = None,
-                           nullspace_target: object = None, nullspace_gain: float = 0.1,
-                           min_damping: float = 1e-6) -> IKResult | IKBatchResult:
-        """Differential IK (damped least squares) to a 4x4 pose, a batch of poses (N, 4, 4) (an IKBatchResult
-        of N results, solved vectorized) or a parameter target χ. See
-        :func:`kinengine.control.ik.inverse_kinematics` for the options."""
-        return _ik.inverse_kinematics(self, target, frame, q0, position=position, rotation=rotation,
-                                      rows=rows, weights=weights,
-                                      tol_position=tol_position, tol_rotation=tol_rotation,
-                                      max_iterations=max_iterations, restarts=restarts, rng=rng,
-                                      nullspace_target=nullspace_target, nullspace_gain=nullspace_gain,
-                                      min_damping=min_damping)
-
-    # -- model editing ---------------------------------------------------------------------------
-    def with_frame(self, name: str, parent: str, placement: object) -> Robot:
-        """A new Robot with frame ``name`` fixed to frame ``parent`` (a link or joint) at ``placement``:
-        T_parent,name as a (4, 4) homogeneous transform [m], or a pair (xyz [m], rpy [rad]). The frame is a
-        new link on a fixed joint ``<name>_joint``; it is in ``frame_names``, ``urdf_text`` (edited alike)
-        and everything else. See :func:`kinengine.model.editing.add_frame`."""
-        return self._edited(add_frame(self._description, name, parent, placement))
-
-    def locked(self, values: Mapping[str, float]) -> Robot:
-        """A new Robot with the named joints fixed at their values [rad or m] (mimic followers too, at
-        multiplier·value + offset); the other coordinates keep their order. Its poses and Jacobians equal
-        this robot's at those values with the locked columns removed. ConfigurationError for a value
-        outside the limits. See :func:`kinengine.model.editing.lock_joints`."""
-        return self._edited(lock_joints(self._description, values))
-
-    def _edited(self, description: RobotDescription) -> Robot:
-        """The Robot of an edited description: same name, end effector and packages; URDF text edited alike."""
-        return Robot(description, edited_urdf_text(self._urdf_text, description), name=self._name,
-                     end_effector=self._end_effector, packages=self._packages)
-
-    # -- presentation ---------------------------------------------------------------------------
-    def plot(self, q: object = None, ax: object = None, *, frames: Sequence[str] = (),
-             ellipsoid: str | None = None, axis_length: float | None = None,
-             title: bool | str = True) -> matplotlib.axes.Axes:
-        """A matplotlib 3D picture of the robot at q (None: neutral); returns the axes. See
-        :func:`kinengine.presentation.plotting.plot_robot`."""
-        from .presentation.plotting import plot_robot  # matplotlib only when asked for
-        return plot_robot(self, q, ax, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length, title=title)
-
-    def view(self, q: object = None, *, port: int | None = None, frames: Sequence[str] = (),
-             ellipsoid: str | None = None, parameterization: str = "euler_zyx", meshes: bool = True,
-             host: str = "127.0.0.1") -> Viewer:
-        """Serve the robot at q (None: neutral) in the browser (Viser); returns the running viewer:
-        ``.url``, ``.update(q)`` (moves the robot live), ``.close()``. Needs ``pip install 'kinengine[view]'``.
-        See :func:`kinengine.presentation.viewer.view`."""
-        from .presentation.viewer import view  # viser only when asked for
-        return view(self, q, port=port, host=host, frames=frames, ellipsoid=ellipsoid,
-                    parameterization=parameterization, meshes=meshes)
-
-
-def _rebuild_robot(description: RobotDescription, urdf_text: str, name: str, end_effector: str,
-                   packages: Mapping[str, str] | None = None) -> Robot:
+def _rebuild_robot(
+    description: RobotDescription,
+    urdf_text: str,
+    name: str,
+    end_effector: str,
+    packages: Mapping[str, str] | None = None,
+) -> Robot:
     """The Robot of :meth:`Robot.__reduce__` (the unpickling path)."""
     return Robot(description, urdf_text, name=name, end_effector=end_effector, packages=packages)
 
