@@ -18,11 +18,19 @@ import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from numbers import Real
+from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from ..control.manipulability import VelocityEllipsoid
 from ..errors import KinematicsError
+
+if TYPE_CHECKING:
+    import matplotlib.axes
+    from mpl_toolkits.mplot3d.axes3d import Axes3D  # no type information: Any to the checker
+
+    from ..robot import Robot
 
 AXIS_FRACTION = 0.15
 """Default arrow and triad length as a fraction of the skeleton's largest extent."""
@@ -56,8 +64,8 @@ class Drawing:
 
 
 def drawing(
-    robot,
-    q: object = None,
+    robot: Robot,
+    q: npt.ArrayLike | None = None,
     *,
     frames: Sequence[str] = (),
     ellipsoid: str | None = None,
@@ -103,15 +111,15 @@ def drawing(
 
 
 def plot_robot(
-    robot,
-    q: object = None,
-    ax=None,
+    robot: Robot,
+    q: npt.ArrayLike | None = None,
+    ax: matplotlib.axes.Axes | None = None,
     *,
     frames: Sequence[str] = (),
     ellipsoid: str | None = None,
     axis_length: float | None = None,
     title: bool | str = True,
-):
+) -> matplotlib.axes.Axes:
     """Draw ``robot`` at q (None: neutral) into a 3D axes (new figure if ``ax`` is None); returns the axes.
 
     ``frames``: names drawn as RGB triads; ``ellipsoid``: frame whose velocity ellipsoid is drawn;
@@ -126,9 +134,8 @@ def plot_robot(
     if ax is not None and getattr(ax, "name", None) != "3d":
         raise KinematicsError("`ax` must be a 3D axes, e.g. fig.add_subplot(projection='3d')")
     d = drawing(robot, q, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length)
-    if ax is None:
-        ax = plt.figure(figsize=(6, 6)).add_subplot(projection="3d")
-    ax.computed_zorder = False  # painter's order below: ellipsoid, links, joint axes, triads
+    ax3d: Axes3D = plt.figure(figsize=(6, 6)).add_subplot(projection="3d") if ax is None else ax
+    ax3d.computed_zorder = False  # painter's order below: ellipsoid, links, joint axes, triads
     points = [np.zeros((1, 3)), d.skeleton.reshape(-1, 3)]
 
     if d.ellipsoid is not None:
@@ -137,7 +144,7 @@ def plot_robot(
         surface = d.ellipsoid.center[:, None, None] + np.einsum(
             "ij,jkl->ikl", d.ellipsoid.axes * (d.ellipsoid_scale * d.ellipsoid.semi_axes), sphere
         )
-        ax.plot_wireframe(
+        ax3d.plot_wireframe(
             *surface,
             color="tab:cyan",
             linewidth=0.5,
@@ -149,7 +156,7 @@ def plot_robot(
         points.append(surface.reshape(3, -1).T)
 
     if len(d.skeleton):  # a robot of one link has no segment to draw
-        ax.add_collection3d(
+        ax3d.add_collection3d(
             Line3DCollection(
                 d.skeleton,
                 colors="0.25",
@@ -158,8 +165,8 @@ def plot_robot(
                 label="links (joint origin to joint origin)",
             )
         )
-        ax.scatter(*d.skeleton.reshape(-1, 3).T, color="0.25", s=12, depthshade=False, zorder=2)
-    ax.scatter(
+        ax3d.scatter(*d.skeleton.reshape(-1, 3).T, color="0.25", s=12, depthshade=False, zorder=2)
+    ax3d.scatter(
         0,
         0,
         0,
@@ -176,7 +183,7 @@ def plot_robot(
         names = [n for n in d.joint_axes if (types[n] == "prismatic") == (kind == "prismatic")]
         if names:
             origin, direction = (np.array([d.joint_axes[n][i] for n in names]) for i in (0, 1))
-            ax.quiver(
+            ax3d.quiver(
                 *origin.T,
                 *direction.T,
                 length=d.axis_length,
@@ -190,7 +197,7 @@ def plot_robot(
 
     for name, T in d.frames.items():
         for k in range(3):
-            ax.quiver(
+            ax3d.quiver(
                 *T[:3, 3],
                 *T[:3, k],
                 length=d.axis_length,
@@ -199,13 +206,13 @@ def plot_robot(
                 arrow_length_ratio=0.2,
                 zorder=4,
             )
-        ax.text(*(T[:3, 3] + 0.3 * d.axis_length * T[:3, :3].sum(axis=1)), name, fontsize=8, zorder=5)
+        ax3d.text(*(T[:3, 3] + 0.3 * d.axis_length * T[:3, :3].sum(axis=1)), name, fontsize=8, zorder=5)
         points.append(T[:3, 3] + d.axis_length * T[:3, :3].T)
 
-    points = np.concatenate(points)
-    centre = (points.max(axis=0) + points.min(axis=0)) / 2
-    half = 0.55 * max(float(np.ptp(points, axis=0).max()), d.axis_length)
-    ax.set(
+    cloud = np.concatenate(points)
+    centre = (cloud.max(axis=0) + cloud.min(axis=0)) / 2
+    half = 0.55 * max(float(np.ptp(cloud, axis=0).max()), d.axis_length)
+    ax3d.set(
         xlim=(centre[0] - half, centre[0] + half),
         ylim=(centre[1] - half, centre[1] + half),
         zlim=(centre[2] - half, centre[2] + half),
@@ -213,15 +220,15 @@ def plot_robot(
         ylabel="y [m]",
         zlabel="z [m]",
     )
-    ax.set_box_aspect((1, 1, 1))
-    ax.legend(loc="upper left", fontsize=7)
+    ax3d.set_box_aspect((1, 1, 1))
+    ax3d.legend(loc="upper left", fontsize=7)
     if title:
-        ax.set_title(d.title if title is True else str(title), fontsize=8)
-    ax.kinengine_drawing = d
-    return ax
+        ax3d.set_title(d.title if title is True else str(title), fontsize=8)
+    ax3d.kinengine_drawing = d
+    return ax3d
 
 
-def _title(robot, q: np.ndarray, frame: str) -> str:
+def _title(robot: Robot, q: np.ndarray, frame: str) -> str:
     """'<robot> at q = (...) [rad]', then ``frame``'s pose in the root frame: p [m], rotation vector [rad]."""
     types = {j.type for j in robot.description.joints if j.movable and j.mimic is None}
     unit = "m" if types == {"prismatic"} else "rad, m" if "prismatic" in types else "rad"
