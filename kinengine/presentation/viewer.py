@@ -24,7 +24,7 @@ import os
 import threading
 import warnings
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -32,6 +32,9 @@ from ..errors import KinematicsError
 from ..parameterizations import ROTATION_PARAMETERIZATIONS, get_rotation
 from . import viewer_nodes as nodes
 from . import viewer_scene as scene
+
+if TYPE_CHECKING:
+    from ..robot import Robot
 
 DEFAULT_PORT = 8080
 SINGULARITY_WARNING = 0.1
@@ -63,7 +66,7 @@ class Viewer:
 
     def __init__(
         self,
-        robot: Any,
+        robot: Robot,
         q: object = None,
         *,
         port: int | None = None,
@@ -266,7 +269,7 @@ class Viewer:
 
 
 def view(
-    robot: Any,
+    robot: Robot,
     q: object = None,
     *,
     port: int | None = None,
