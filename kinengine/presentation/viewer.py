@@ -27,6 +27,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import KinematicsError
 from ..parameterizations import ROTATION_PARAMETERIZATIONS, get_rotation
@@ -67,7 +68,7 @@ class Viewer:
     def __init__(
         self,
         robot: Robot,
-        q: object = None,
+        q: npt.ArrayLike | None = None,
         *,
         port: int | None = None,
         host: str = "127.0.0.1",
@@ -196,7 +197,7 @@ class Viewer:
         self._robot_visible.on_update(lambda _: self.show_robot(self._robot_visible.value))
 
     # -- updates -----------------------------------------------------------------------------
-    def update(self, q: object) -> None:
+    def update(self, q: npt.ArrayLike) -> None:
         """Show configuration q (dof,) [rad or m] in every open page (checked like every kinengine input)."""
         q_checked: np.ndarray = self.robot.check_configuration(q, batch=False, check_limits=False)
         if self._server is None:
@@ -270,7 +271,7 @@ class Viewer:
 
 def view(
     robot: Robot,
-    q: object = None,
+    q: npt.ArrayLike | None = None,
     *,
     port: int | None = None,
     host: str = "127.0.0.1",
