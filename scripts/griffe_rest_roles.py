@@ -73,4 +73,6 @@ class MarkdownDocstrings(griffe.Extension):
                 and isinstance(keyword.value.value, str)
             ):
                 attr.docstring = griffe.Docstring(markdown_docstring(keyword.value.value), parent=attr)
+                attr.labels.clear()  # a property, not a class or instance attribute with a value to show
                 attr.labels.add("property")
+                attr.value = None
