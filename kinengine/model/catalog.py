@@ -14,9 +14,9 @@ that are not arm joints (gripper fingers), which a user usually wants to lock.
 
 from __future__ import annotations
 
+import importlib.metadata
 from dataclasses import dataclass
 from functools import lru_cache
-import importlib.metadata
 from pathlib import Path
 
 from ..errors import URDFError
@@ -97,20 +97,22 @@ def _entries() -> dict[str, CatalogEntry]:
     entries: dict[str, CatalogEntry] = {}
     for urdf in sorted(shipped_robots_dir().glob("*/*.urdf")):
         if urdf.stem == urdf.parent.name:
-            entries[urdf.stem] = CatalogEntry(urdf.stem, urdf, _SHIPPED_END_EFFECTORS.get(urdf.stem),
-                                              "kinengine")
+            entries[urdf.stem] = CatalogEntry(
+                urdf.stem, urdf, _SHIPPED_END_EFFECTORS.get(urdf.stem), "kinengine"
+            )
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError:
         return entries
-    root = Path(dist.locate_file(_ERD_PREFIX))
+    root = Path(str(dist.locate_file(_ERD_PREFIX)))  # a path-like SimplePath, a Path in practice
     for name, (rel, ee) in _ERD_ROBOTS.items():
         path = root / rel
         if path.is_file():
             if ee in _FALLBACK_END_EFFECTORS and f'"{ee}"'.encode() not in path.read_bytes():
                 ee = _FALLBACK_END_EFFECTORS[ee]
-            entries[name] = CatalogEntry(name, path, ee, "example-robot-data", _LOCKED.get(name, ()),
-                                         _EXTRA_COORDINATES.get(name, ()))
+            entries[name] = CatalogEntry(
+                name, path, ee, "example-robot-data", _LOCKED.get(name, ()), _EXTRA_COORDINATES.get(name, ())
+            )
     return entries
 
 
@@ -124,5 +126,6 @@ def catalog_entry(name: str) -> CatalogEntry:
     try:
         return _entries()[name]
     except KeyError:
-        raise URDFError(f"unknown robot {name!r}: pass a path to a .urdf file or one of "
-                        f"{', '.join(available_robots())}") from None
+        raise URDFError(
+            f"unknown robot {name!r}: pass a path to a .urdf file or one of {', '.join(available_robots())}"
+        ) from None

@@ -5,20 +5,20 @@ Owns :func:`add_frame` (a tool frame: a new link on a new fixed joint) and :func
 and validated by :func:`kinengine.urdf.tree.assemble`. :func:`edited_urdf_text` makes the robot's
 URDF text say the same (new links and joints appended, locked joints rewritten as fixed ones, every
 visual, collision and mesh kept): that text is what the independent reference and the viewer read,
-so an edited robot is checked and drawn like any other. Units: metres, radians. Rotations follow the URDF convention
-``rpy = (roll, pitch, yaw)``: C = Rz(yaw) · Ry(pitch) · Rx(roll), about the fixed parent axes.
+so an edited robot is checked and drawn like any other. Units: metres, radians. Rotations follow the URDF
+convention ``rpy = (roll, pitch, yaw)``: C = Rz(yaw) · Ry(pitch) · Rx(roll), about the fixed parent axes.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 import dataclasses
 import math
 import warnings
+from collections.abc import Mapping
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
-
+import numpy.typing as npt
 from lxml import etree
 
 from ..errors import ConfigurationError, FrameNotFoundError, OptionError, URDFError
@@ -40,7 +40,9 @@ def frame_names(description: RobotDescription) -> list[str]:
     return names
 
 
-def add_frame(description: RobotDescription, name: str, parent: str, placement: object) -> RobotDescription:
+def add_frame(
+    description: RobotDescription, name: str, parent: str, placement: npt.ArrayLike
+) -> RobotDescription:
     """``description`` with a new link ``name`` fixed to frame ``parent`` at ``placement``.
 
     ``parent``: a link or a joint name. A joint's frame is its child link's frame (URDF: the child
@@ -52,11 +54,14 @@ def add_frame(description: RobotDescription, name: str, parent: str, placement: 
     """
     known = frame_names(description)
     if not isinstance(name, str) or not name or name != name.strip() or name == "universe":
-        raise URDFError(f"a new frame needs a non-empty name without surrounding spaces (not 'universe'), "
-                        f"got {name!r}")
+        raise URDFError(
+            f"a new frame needs a non-empty name without surrounding spaces (not 'universe'), got {name!r}"
+        )
     if name in known:
-        raise URDFError(f"frame name {name!r} is already used by a link or joint of {description.name!r}; "
-                        f"choose another name (taken: {', '.join(known[:12])}{', ...' if len(known) > 12 else ''})")
+        raise URDFError(
+            f"frame name {name!r} is already used by a link or joint of {description.name!r}; "
+            f"choose another name (taken: {', '.join(known[:12])}{', ...' if len(known) > 12 else ''})"
+        )
     if not isinstance(parent, str) or parent not in known:
         raise FrameNotFoundError(parent, known)
     xyz, rpy = placement_xyz_rpy(placement)
@@ -83,16 +88,20 @@ def lock_joints(description: RobotDescription, values: Mapping[str, float]) -> R
         warnings.simplefilter("ignore")
         coords = CoordinateMap(description)
     if not isinstance(values, Mapping):
-        raise ConfigurationError(f"locked() takes a mapping of joint name to value, e.g. "
-                                 f"{{{coords.names[-1]!r}: 0.0}}, got {type(values).__name__}")
+        raise ConfigurationError(
+            f"locked() takes a mapping of joint name to value, e.g. "
+            f"{{{coords.names[-1]!r}: 0.0}}, got {type(values).__name__}"
+        )
     q = coords.from_mapping(values, np.clip(np.zeros(coords.dof), coords.lower, coords.upper))
     fixed: dict[str, float] = {}
     for joint_name in values:
         i = coords.names.index(joint_name)
         v, lo, hi = float(q[i]), float(coords.lower[i]), float(coords.upper[i])
         if not lo <= v <= hi:
-            raise ConfigurationError(f"cannot lock joint {joint_name!r} at {v!r}: outside its limits "
-                                     f"[{lo!r}, {hi!r}]; pick a value inside them")
+            raise ConfigurationError(
+                f"cannot lock joint {joint_name!r} at {v!r}: outside its limits "
+                f"[{lo!r}, {hi!r}]; pick a value inside them"
+            )
         fixed[joint_name] = v
     grown = True
     while grown:  # followers of locked joints (and their followers) are locked too
@@ -125,8 +134,15 @@ def edited_urdf_text(text: str, description: RobotDescription) -> str:
             root.append(etree.fromstring(_joint_xml(joint)))
         elif joint.type == "fixed" and element.get("type") != "fixed":
             for child in list(element):
-                if child.tag in ("origin", "axis", "limit", "mimic", "dynamics", "calibration",
-                                 "safety_controller"):
+                if child.tag in (
+                    "origin",
+                    "axis",
+                    "limit",
+                    "mimic",
+                    "dynamics",
+                    "calibration",
+                    "safety_controller",
+                ):
                     element.remove(child)
             element.set("type", "fixed")
             element.insert(0, etree.fromstring(f'<origin xyz="{_v(joint.xyz)}" rpy="{_v(joint.rpy)}"/>'))
@@ -136,11 +152,13 @@ def edited_urdf_text(text: str, description: RobotDescription) -> str:
     return etree.tostring(root, encoding="unicode") + "\n"
 
 
-def placement_xyz_rpy(placement: object) -> tuple[Vector3, Vector3]:
-    """(xyz [m], rpy [rad]) of a (4, 4) homogeneous transform or of an (xyz, rpy) pair; OptionError otherwise."""
+def placement_xyz_rpy(placement: npt.ArrayLike) -> tuple[Vector3, Vector3]:
+    """(xyz [m], rpy [rad]) of a (4, 4) homogeneous transform or of an (xyz, rpy) pair; OptionError
+    otherwise."""
     if (isinstance(placement, (tuple, list)) and len(placement) == 2) or np.shape(placement) == (2, 3):
         try:
-            xyz, rpy = (np.asarray(p, dtype=float) for p in placement)
+            pair = placement if isinstance(placement, (tuple, list)) else np.asarray(placement)
+            xyz, rpy = (np.asarray(p, dtype=float) for p in pair)
         except (TypeError, ValueError):
             xyz = rpy = np.zeros(0)
         if xyz.shape == (3,) and rpy.shape == (3,) and np.isfinite(xyz).all() and np.isfinite(rpy).all():
@@ -150,13 +168,20 @@ def placement_xyz_rpy(placement: object) -> tuple[Vector3, Vector3]:
     except (TypeError, ValueError):
         T = np.zeros(0)
     if T.shape != (4, 4) or not np.isfinite(T).all():
-        raise OptionError(f"placement must be a (4, 4) homogeneous transform or a pair (xyz [m], rpy [rad]) of "
-                          f"three numbers each, got {_describe(placement)}")
+        raise OptionError(
+            f"placement must be a (4, 4) homogeneous transform or a pair (xyz [m], rpy [rad]) of "
+            f"three numbers each, got {_describe(placement)}"
+        )
     C = T[:3, :3]
-    if not np.allclose(T[3], (0.0, 0.0, 0.0, 1.0), rtol=0.0, atol=0.0) or \
-            np.abs(C.T @ C - np.eye(3)).max() > _ORTHONORMAL_TOLERANCE or np.linalg.det(C) < 0:
-        raise OptionError("placement (4, 4) must be homogeneous: a rotation matrix (orthonormal, det +1) in "
-                          "[:3, :3] and a last row (0, 0, 0, 1)")
+    if (
+        not np.allclose(T[3], (0.0, 0.0, 0.0, 1.0), rtol=0.0, atol=0.0)
+        or np.abs(C.T @ C - np.eye(3)).max() > _ORTHONORMAL_TOLERANCE
+        or np.linalg.det(C) < 0
+    ):
+        raise OptionError(
+            "placement (4, 4) must be homogeneous: a rotation matrix (orthonormal, det +1) in "
+            "[:3, :3] and a last row (0, 0, 0, 1)"
+        )
     return _vector(T[:3, 3]), rpy_from_matrix(C)
 
 
@@ -164,9 +189,13 @@ def matrix_from_rpy(rpy: Vector3) -> np.ndarray:
     """C = Rz(yaw) · Ry(pitch) · Rx(roll), (3, 3): the URDF's rpy convention."""
     r, p, y = rpy
     cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                     [-sp, cp * sr, cp * cr]])
+    return np.array(
+        [
+            [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+            [-sp, cp * sr, cp * cr],
+        ]
+    )
 
 
 def rpy_from_matrix(C: np.ndarray) -> Vector3:
@@ -187,8 +216,9 @@ def _fold(joint: Joint, value: float) -> Joint:
         p, C = p + C0 @ (value * axis), C0
     else:
         C = C0 @ _axis_angle(axis, value)
-    return dataclasses.replace(joint, type="fixed", xyz=_vector(p), rpy=rpy_from_matrix(C), lower=None,
-                               upper=None, mimic=None)
+    return dataclasses.replace(
+        joint, type="fixed", xyz=_vector(p), rpy=rpy_from_matrix(C), lower=None, upper=None, mimic=None
+    )
 
 
 def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -198,15 +228,18 @@ def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
 
 
-def _reassemble(description: RobotDescription, links: tuple[Link, ...], joints: tuple[Joint, ...]
-                ) -> RobotDescription:
+def _reassemble(
+    description: RobotDescription, links: tuple[Link, ...], joints: tuple[Joint, ...]
+) -> RobotDescription:
     return assemble(description.name, links, joints, source=description.source, warnings=description.warnings)
 
 
 def _joint_xml(joint: Joint) -> str:
     """A fixed joint's URDF element."""
-    return (f"<joint name={quoteattr(joint.name)} type=\"fixed\"><parent link={quoteattr(joint.parent)}/>"
-            f"<child link={quoteattr(joint.child)}/><origin xyz=\"{_v(joint.xyz)}\" rpy=\"{_v(joint.rpy)}\"/></joint>")
+    return (
+        f'<joint name={quoteattr(joint.name)} type="fixed"><parent link={quoteattr(joint.parent)}/>'
+        f'<child link={quoteattr(joint.child)}/><origin xyz="{_v(joint.xyz)}" rpy="{_v(joint.rpy)}"/></joint>'
+    )
 
 
 def _v(v: Vector3) -> str:
@@ -222,4 +255,12 @@ def _describe(value: object) -> str:
     return f"an array of shape {shape}" if shape is not None else f"{type(value).__name__} {value!r:.60}"
 
 
-__all__ = ["add_frame", "edited_urdf_text", "frame_names", "lock_joints", "matrix_from_rpy", "placement_xyz_rpy", "rpy_from_matrix"]
+__all__ = [
+    "add_frame",
+    "edited_urdf_text",
+    "frame_names",
+    "lock_joints",
+    "matrix_from_rpy",
+    "placement_xyz_rpy",
+    "rpy_from_matrix",
+]

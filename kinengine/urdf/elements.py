@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import re
+from typing import overload
 
 from lxml import etree
 
@@ -161,6 +162,10 @@ def _single(children: dict[str, list[etree._Element]], tag: str, where: Where) -
     return found[0] if found else None
 
 
+@overload
+def _number(element: etree._Element, attribute: str, where: Where, default: float) -> float: ...
+@overload
+def _number(element: etree._Element, attribute: str, where: Where, default: None) -> float | None: ...
 def _number(element: etree._Element, attribute: str, where: Where, default: float | None) -> float | None:
     text = element.get(attribute)
     if text is None:
@@ -255,16 +260,23 @@ def _inertial(element: etree._Element, where: Where) -> Inertial:
     children = _children(element)
     xyz, rpy = _origin(children, where)
     mass = _single(children, "mass", where)
-    if mass is None or mass.get("value") is None:
+    mass_text = None if mass is None else mass.get("value")
+    if mass is None or mass_text is None:
         raise where.error("<inertial> needs <mass value=...>", element)
-    value = _number(mass, "value", where, None)
+    value = _parse_float(mass_text.strip(), mass, "value", where)
     if value < 0:
         raise where.error(f"mass {value!r} kg is negative", mass)
     inertia = _single(children, "inertia", where)
     if inertia is None:
         raise where.error(f"<inertial> needs <inertia {' '.join(a + '=...' for a in _INERTIA)}>", element)
-    missing = [a for a in _INERTIA if inertia.get(a) is None]
+    texts = [inertia.get(a) for a in _INERTIA]
+    missing = [a for a, text in zip(_INERTIA, texts, strict=True) if text is None]
     if missing:
         raise where.error(f"<inertia> lacks {', '.join(missing)}", inertia)
-    moments = tuple(_number(inertia, a, where, None) for a in _INERTIA)
+    m = [
+        _parse_float(t.strip(), inertia, a, where)
+        for a, t in zip(_INERTIA, texts, strict=True)
+        if t is not None
+    ]
+    moments = (m[0], m[1], m[2], m[3], m[4], m[5])
     return Inertial(mass=value, xyz=xyz, rpy=rpy, inertia=moments)

@@ -66,7 +66,7 @@ class Limits:
             if (
                 isinstance(value, bool)
                 or not isinstance(value, kinds)
-                or not ((not real or math.isfinite(value)) and low <= value <= high)
+                or not ((not real or math.isfinite(value)) and not value < low and value <= high)
             ):
                 kind = "a finite real number" if real else "a whole number"
                 span = f"[{low:g}, {high:g}]" if real else f"[{low}, {high}]"

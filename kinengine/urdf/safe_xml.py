@@ -119,7 +119,9 @@ def _declare_prefixes(data: bytes, source: str) -> bytes:
         text = data.decode(codec)
     except UnicodeDecodeError:
         return data  # lxml reports the bad encoding
-    root = _ROOT_TAG.match(text, _PROLOG.match(text).end())
+    prolog = _PROLOG.match(text)
+    assert prolog is not None  # every part of _PROLOG is optional: it matches at least the empty string
+    root = _ROOT_TAG.match(text, prolog.end())
     if root is None:
         return data
     used = {a or b for a, b in _USED_PREFIX.findall(text)} - {"xml", "xmlns"}
