@@ -10,7 +10,7 @@ rules, no import cycles, and no import of another module's private (underscore) 
 from __future__ import annotations
 
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("errors", ("kinengine.errors",)),
+    ("errors and array types", ("kinengine.errors", "kinengine.arrays")),
     ("description and math", ("kinengine.urdf", "kinengine.parameterizations", "kinengine.reference")),
     ("model", ("kinengine.model",)),
     ("kinematics", ("kinengine.kinematics",)),

@@ -29,7 +29,7 @@ _WARNINGS_LOCK = threading.Lock()  # catch_warnings swaps process-wide state: tw
 
 
 def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
-         limits: Limits = LIMITS, xacro_args: Mapping[str, object] | None = None,
+         limits: Limits = LIMITS, xacro_args: Mapping[str, str | float | int] | None = None,
          packages: Mapping[str, str | os.PathLike[str]] | None = None) -> Robot:
     """A robot by short name (see :func:`available_robots`) or by path to a .urdf or .xacro file.
 

@@ -12,39 +12,30 @@ Frames and conventions
   - "world": the spatial velocity in I: linear rows are the velocity of the body point
     that currently coincides with I's origin: v_O = v_f − ω × p_f  (p_f = origin of f in I).
 
-The Robot checks its inputs once and hands them to the objects that own the work: the
-:class:`~kinengine.kinematics.Kinematics` engine (``robot.engine``: Pinocchio model, per-thread
-Data, coordinate map), the analytic layer, and the control layer.
+The Robot checks its inputs once and hands them to ``robot.engine`` (Pinocchio model, per-thread
+Data, coordinate map); its other method groups live in :mod:`kinengine.facade`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from types import MappingProxyType
-from typing import TYPE_CHECKING
+from typing import overload
 
-import numpy as np
-import pinocchio as pin
-
+from .arrays import ArrayLike, FloatArray, Matrix, Reference, Stack, Vector
 from .errors import OptionError
 from .facade.analysis import AnalysisMethods
 from .facade.analytic import AnalyticMethods
+from .facade.configurations import ConfigurationMethods
 from .facade.editing import EditingMethods
 from .facade.presentation import PresentationMethods
 from .kinematics import REFERENCES, Kinematics, resolve_reference
 from .kinematics import batch as _batch
 from .kinematics.handle import FrameHandle
-from .kinematics.options import (
-    checked_flag,
-    checked_rng,
-)
 from .urdf import RobotDescription
 
-if TYPE_CHECKING:
-    pass
 
-
-class Robot(AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethods):
+class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethods):
     """A fixed-base robot: one coordinate per independent movable joint.
 
     Build it with :func:`kinengine.load` or :func:`kinengine.load_urdf_string`. The
@@ -95,12 +86,12 @@ class Robot(AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethod
     )
 
     @property
-    def lower_limits(self) -> np.ndarray:
+    def lower_limits(self) -> FloatArray:
         """(dof,) lower limits [rad or m]; -inf if none (a fresh copy)."""
         return self._coords.lower.copy()
 
     @property
-    def upper_limits(self) -> np.ndarray:
+    def upper_limits(self) -> FloatArray:
         """(dof,) upper limits [rad or m]; +inf if none (a fresh copy)."""
         return self._coords.upper.copy()
 
@@ -110,57 +101,8 @@ class Robot(AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethod
     def __reduce__(self) -> tuple:
         """Pickle and deepcopy: rebuilt from its validated description, URDF text, name and end effector
         (a fresh Pinocchio model and Data in the receiving process; nothing per-thread is sent)."""
-        return _rebuild_robot, (
-            self._description,
-            self._urdf_text,
-            self._name,
-            self._end_effector,
-            dict(self._packages),
-        )
-
-    def pinocchio_model(self) -> pin.Model:
-        """A copy of Pinocchio's Model: one plain joint (nq = nv = 1) per movable URDF joint, mimic joints
-        included as ordinary joints; its configuration is :meth:`pinocchio_configuration`."""
-        return pin.Model(self._kin.model)
-
-    def pinocchio_configuration(self, q: object) -> np.ndarray:
-        """Pinocchio's configuration (nq,) for q: q_pin = M q + b (every movable joint's value, mimic
-        joints at multiplier·leader + offset); equal to q for robots without mimic joints."""
-        q = self._coords.check(q, allow_batch=False)
-        return np.array(self._coords.to_pinocchio(q), dtype=float)
-
-    # -- configurations ---------------------------------------------------------------------
-    def neutral(self) -> np.ndarray:
-        """The zero configuration clipped into the joint limits, (dof,): q = 0 unless a joint's limits exclude
-        0 (e.g. the Panda's joint 4), which then sits at its nearest limit (as MoveIt's default state)."""
-        return np.clip(np.zeros(self.dof), self._coords.lower, self._coords.upper)
-
-    def random_configuration(
-        self, rng: np.random.Generator | int | None = None, size: int | None = None
-    ) -> np.ndarray:
-        """Uniform within limits, (dof,) or (size, dof); continuous joints in [-π, π)."""
-        return self._coords.sample(checked_rng(rng), size)
-
-    def configuration(
-        self, values: Mapping[str, float], *, base: object = None, strict: bool = True
-    ) -> np.ndarray:
-        """q from joint name -> value (e.g. a ROS JointState); unnamed joints at ``base`` (default neutral).
-
-        Unknown names raise FrameNotFoundError (``strict=False`` ignores them).
-        """
-        start = (
-            self.neutral()
-            if base is None
-            else np.array(self._coords.check(base, name="base", allow_batch=False))
-        )
-        return self._coords.from_mapping(values, start, strict=checked_flag(strict, "strict"))
-
-    def check_configuration(self, q: object, *, check_limits: bool = True, batch: bool = True) -> np.ndarray:
-        """A fresh float64 copy of q, (dof,) or (with ``batch``) (N, dof); ConfigurationError on bad shape,
-        values or (optionally) limits."""
-        return np.array(
-            self._coords.check(q, check_limits=check_limits, allow_batch=checked_flag(batch, "batch"))
-        )
+        state = (self._description, self._urdf_text, self._name, self._end_effector, dict(self._packages))
+        return _rebuild_robot, state
 
     # -- kinematics -------------------------------------------------------------------------
     def frame_id(self, frame: str) -> int:
@@ -195,7 +137,20 @@ class Robot(AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethod
         )
         return self._kin.frame_id(frame) if fid is None else fid
 
-    def frame_pose(self, q: object, frame: str | None = None, *, check_limits: bool = False) -> np.ndarray:
+    @overload
+    def frame_pose(
+        self, q: Vector | Sequence[float], frame: str | None = ..., *, check_limits: bool = ...
+    ) -> Matrix: ...
+    @overload
+    def frame_pose(
+        self, q: Matrix | Sequence[Sequence[float]], frame: str | None = ..., *, check_limits: bool = ...
+    ) -> Stack: ...
+    @overload
+    def frame_pose(
+        self, q: ArrayLike, frame: str | None = ..., *, check_limits: bool = ...
+    ) -> FloatArray: ...
+
+    def frame_pose(self, q: ArrayLike, frame: str | None = None, *, check_limits: bool = False) -> FloatArray:
         """T_IF: pose of ``frame`` (default: end_effector) in the root link frame.
 
         q (dof,) -> (4, 4); q (N, dof) -> (N, 4, 4). Translation in [m].
@@ -210,17 +165,42 @@ class Robot(AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethod
             else self._coords.check(q, check_limits=check_limits)
         )
         if q.ndim == 2:
-            return _batch.evaluate(self._kin, q, handle.frame_id, None, jacobian=False)[0]
+            T = _batch.evaluate(self._kin, q, handle.frame_id, None, jacobian=False)[0]
+            assert T is not None  # asked for
+            return T
         return handle.pose(q)
+
+    @overload
+    def jacobian(
+        self,
+        q: Vector | Sequence[float],
+        frame: str | None = ...,
+        reference: Reference = ...,
+        *,
+        check_limits: bool = ...,
+    ) -> Matrix: ...
+    @overload
+    def jacobian(
+        self,
+        q: Matrix | Sequence[Sequence[float]],
+        frame: str | None = ...,
+        reference: Reference = ...,
+        *,
+        check_limits: bool = ...,
+    ) -> Stack: ...
+    @overload
+    def jacobian(
+        self, q: ArrayLike, frame: str | None = ..., reference: Reference = ..., *, check_limits: bool = ...
+    ) -> FloatArray: ...
 
     def jacobian(
         self,
-        q: object,
+        q: ArrayLike,
         frame: str | None = None,
-        reference: object = "local_world_aligned",
+        reference: Reference = "local_world_aligned",
         *,
         check_limits: bool = False,
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """Geometric Jacobian of ``frame`` in ``reference``, rows [linear; angular].
 
         q (dof,) -> (6, dof); q (N, dof) -> (N, 6, dof). See the module doc for the references.
@@ -240,19 +220,55 @@ class Robot(AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethod
             else self._coords.check(q, check_limits=check_limits)
         )
         if q.ndim == 2:
-            return _batch.evaluate(self._kin, q, handle.frame_id, ref, pose=False)[1]
+            J = _batch.evaluate(self._kin, q, handle.frame_id, ref, pose=False)[1]
+            assert J is not None  # asked for
+            return J
         return handle.jacobian(q, reference)  # the name: the handle's fast lookup
+
+    @overload
+    def kinematics(
+        self,
+        q: Vector | Sequence[float],
+        frame: str | None = ...,
+        reference: Reference = ...,
+        *,
+        check_limits: bool = ...,
+        out: None = ...,
+        workers: int | None = ...,
+    ) -> tuple[Matrix, Matrix]: ...
+    @overload
+    def kinematics(
+        self,
+        q: Matrix | Sequence[Sequence[float]],
+        frame: str | None = ...,
+        reference: Reference = ...,
+        *,
+        check_limits: bool = ...,
+        out: tuple[FloatArray, FloatArray] | None = ...,
+        workers: int | None = ...,
+    ) -> tuple[Stack, Stack]: ...
+    @overload
+    def kinematics(
+        self,
+        q: ArrayLike,
+        frame: str | None = ...,
+        reference: Reference = ...,
+        *,
+        check_limits: bool = ...,
+        out: tuple[FloatArray, FloatArray] | None = ...,
+        workers: int | None = ...,
+    ) -> tuple[FloatArray, FloatArray]: ...
 
     def kinematics(
         self,
-        q: object,
+        q: ArrayLike,
         frame: str | None = None,
-        reference: object = "local_world_aligned",
+        reference: Reference = "local_world_aligned",
         *,
         check_limits: bool = False,
-        out: tuple[np.ndarray, np.ndarray] | None = None,
+        out: tuple[FloatArray, FloatArray] | None = None,
         workers: int | None = None,
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> tuple[FloatArray, FloatArray]:
         """(T_IF, J) in one pass: (4, 4) and (6, dof) for q (dof,); (N, 4, 4) and (N, 6, dof) for q (N, dof),
         equal bit for bit to :meth:`frame_pose` and :meth:`jacobian` called separately. Batches only:
         ``out=(T, J)`` preallocated C-contiguous float64 arrays of those shapes, filled and returned;

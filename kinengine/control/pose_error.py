@@ -16,6 +16,7 @@ time). ‖ω‖ is the rotation angle between C and C_target (in [0, π]).
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import OptionError
@@ -33,7 +34,9 @@ def _as_pose(T: object, name: str) -> np.ndarray:
     return array
 
 
-def pose_error(T: object, T_target: object, frame: str = "local_world_aligned") -> np.ndarray:
+def pose_error(
+    T: npt.ArrayLike, T_target: npt.ArrayLike, frame: str = "local_world_aligned"
+) -> npt.NDArray[np.float64]:
     """ξ with T · exp(ξ_local) = T_target, (6,) rows [v; ω] [m, rad], in ``frame``'s axes (module doc).
 
     T, T_target: (4, 4) poses in a common frame (e.g. T_IF from ``robot.frame_pose``), or batches

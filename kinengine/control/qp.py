@@ -219,7 +219,7 @@ class DifferentialIK:
     def tasks(self) -> tuple[PoseTarget | PostureTarget, ...]:
         return tuple(t.target for t in self._pose_terms) + tuple(self._postures)
 
-    def solve(self, q: object, dt: float) -> np.ndarray:
+    def solve(self, q: npt.ArrayLike, dt: float) -> npt.NDArray[np.float64]:
         """q̇ (dof,) [rad/s | m/s] for one step of ``dt`` [s] from q (dof,): q + q̇·dt is the QP's step.
 
         ``last_error`` then holds each PoseTarget's 6 error rows [p_target − p; log3(C_Fᵀ C_target)] at q

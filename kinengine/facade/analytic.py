@@ -6,7 +6,7 @@ layers."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -15,6 +15,7 @@ import pinocchio as pin
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_batch, analytic_single, pose_map
 from ..analytic.evaluate import analytic_relative
 from ..analytic.pose_map import check_on_singularity
+from ..arrays import ArrayLike, FloatArray
 from ..control.frame_task import FrameTask
 from ..control.task import Task
 from ..kinematics import relative as _relative
@@ -29,8 +30,8 @@ class AnalyticMethods:
 
     # -- analytic Jacobians --------------------------------------------------------------------
     def pose_parameters(
-        self: Robot,
-        q: object,
+        self,
+        q: ArrayLike,
         frame: str | None = None,
         position: str | None = "cartesian",
         rotation: str | None = "euler_zyx",
@@ -40,7 +41,7 @@ class AnalyticMethods:
         relative_to: str | None = None,
         on_singularity: str | None = None,
         singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """χ_e(q) = (χ_P, χ_R) of ``frame`` in the root frame, (m,) or (N, m) for q (N, dof).
 
         ``position``/``rotation`` name a parameterization (None leaves its rows out);
@@ -50,18 +51,19 @@ class AnalyticMethods:
         warning is issued at gimbal lock); "raise": RepresentationSingularityError within
         ``singularity_threshold`` of the singular set; "nan": NaN in that parameterization's rows there.
         """
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         pmap = pose_map(*checked_parameterization(position, rotation, rows))
         singularity_threshold = checked_threshold(singularity_threshold)
         if relative_to is None:
-            T = self.frame_pose(q, frame, check_limits=check_limits)
+            T = robot.frame_pose(q, frame, check_limits=check_limits)
         else:
-            T = self.relative_pose(q, frame, relative_to=relative_to, check_limits=check_limits)
+            T = robot.relative_pose(q, frame, relative_to=relative_to, check_limits=check_limits)
         if on_singularity is None:
             return pmap.parameters(T)
         nan = check_on_singularity(on_singularity)
-        qc = self.engine.coordinates.check(q)
-        fa = self.engine.frame_id(self.end_effector if frame is None else frame)
-        kin = self.engine
+        qc = robot.engine.coordinates.check(q)
+        fa = robot.engine.frame_id(robot.end_effector if frame is None else frame)
+        kin = robot.engine
         fb = None if relative_to is None else kin.frame_id(relative_to)
 
         def J(row: int | None) -> npt.NDArray[np.float64]:
@@ -73,8 +75,8 @@ class AnalyticMethods:
         return pmap.parameters(T, singularity_threshold, nan, J)
 
     def analytic_jacobian(
-        self: Robot,
-        q: object,
+        self,
+        q: ArrayLike,
         frame: str | None = None,
         position: str | None = "cartesian",
         rotation: str | None = "euler_zyx",
@@ -84,7 +86,7 @@ class AnalyticMethods:
         check_limits: bool = False,
         relative_to: str | None = None,
         on_singularity: str = "raise",
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """J_eA = ∂χ_e/∂q = E_e(χ_e) · J_e0(q), (m, dof) or (N, m, dof) for q (N, dof).
 
         Raises RepresentationSingularityError when χ_e is closer than ``singularity_threshold``
@@ -93,21 +95,22 @@ class AnalyticMethods:
         instead (in a batch, only in the rows of those configurations). ``relative_to``: the analytic
         Jacobian of χ(T_BA), E(χ)·J_rel with J_rel = :meth:`relative_jacobian` expressed in B.
         """
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         pmap = pose_map(*checked_parameterization(position, rotation, rows))
         singularity_threshold = checked_threshold(singularity_threshold)
-        fid = self.engine.frame_id(self.end_effector if frame is None else frame)
+        fid = robot.engine.frame_id(robot.end_effector if frame is None else frame)
         nan = on_singularity != "raise" and check_on_singularity(on_singularity)
-        q = self.engine.coordinates.check(q, check_limits=check_limits)
+        qc: FloatArray = robot.engine.coordinates.check(q, check_limits=check_limits)
         if relative_to is not None:
             return analytic_relative(
-                self.engine, q, fid, self.engine.frame_id(relative_to), pmap, singularity_threshold, nan
+                robot.engine, qc, fid, robot.engine.frame_id(relative_to), pmap, singularity_threshold, nan
             )
-        if q.ndim == 2:
-            return analytic_batch(self.engine, q, fid, pmap, singularity_threshold, nan)
-        return analytic_single(self.engine, q, fid, pmap, singularity_threshold, nan)
+        if qc.ndim == 2:
+            return analytic_batch(robot.engine, qc, fid, pmap, singularity_threshold, nan)
+        return analytic_single(robot.engine, qc, fid, pmap, singularity_threshold, nan)
 
     def task(
-        self: Robot,
+        self,
         frames: str | FrameTask | Sequence[str | FrameTask] | None = None,
         position: str | None = "cartesian",
         rotation: str | None = "euler_zyx",
@@ -128,6 +131,7 @@ class AnalyticMethods:
         ``on_singularity``: "raise" (default) or "nan"; ``task.singularity_distances`` tells how far each
         parameterization is from its singular set. See :mod:`kinengine.control.task`.
         """
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         position, rotation, rows = checked_parameterization(position, rotation, rows)
         singularity_threshold = checked_threshold(singularity_threshold)
         continuous, check_inputs = (
@@ -136,8 +140,8 @@ class AnalyticMethods:
         )
         checked_frames(frames, (str, FrameTask))
         return Task(
-            self,
-            self.end_effector if frames is None else frames,
+            robot,
+            robot.end_effector if frames is None else frames,
             position,
             rotation,
             rows=rows,
@@ -150,38 +154,40 @@ class AnalyticMethods:
 
     # -- relative kinematics --------------------------------------------------------------------
     def relative_pose(
-        self: Robot, q: object, frame: str | None = None, *, relative_to: str, check_limits: bool = False
-    ) -> np.ndarray:
+        self, q: ArrayLike, frame: str | None = None, *, relative_to: str, check_limits: bool = False
+    ) -> FloatArray:
         """T_BA = T_IB⁻¹ T_IA: the pose of ``frame`` A (default: end_effector) in frame B = ``relative_to``,
         (4, 4) [m], or (N, 4, 4) for q (N, dof). See :mod:`kinengine.kinematics.relative`."""
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         fa, fb = (
-            self.engine.frame_id(self.end_effector if frame is None else frame),
-            self.engine.frame_id(relative_to),
+            robot.engine.frame_id(robot.end_effector if frame is None else frame),
+            robot.engine.frame_id(relative_to),
         )
         return _relative.relative_pose(
-            self.engine, self.engine.coordinates.check(q, check_limits=check_limits), fa, fb
+            robot.engine, robot.engine.coordinates.check(q, check_limits=check_limits), fa, fb
         )
 
     def relative_jacobian(
-        self: Robot,
-        q: object,
+        self,
+        q: ArrayLike,
         frame: str | None = None,
         *,
         relative_to: str,
         expressed_in: str | None = None,
         check_limits: bool = False,
-    ) -> np.ndarray:
+    ) -> FloatArray:
         """(6, dof), or (N, 6, dof) for q (N, dof); rows [v; ω]: the velocity of A's origin and the angular
         velocity of A (A = ``frame``, default end_effector), both relative to B = ``relative_to`` (as seen by
         an observer fixed in B), in the axes of ``expressed_in`` (any frame name; default B).
 
         In B: d/dt(B_p_BA) = J[:3]·q̇ and Ċ_BA = [J[3:]·q̇]× C_BA. See :mod:`kinengine.kinematics.relative`.
         """
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         fa, fb = (
-            self.engine.frame_id(self.end_effector if frame is None else frame),
-            self.engine.frame_id(relative_to),
+            robot.engine.frame_id(robot.end_effector if frame is None else frame),
+            robot.engine.frame_id(relative_to),
         )
-        fe = None if expressed_in is None else self.engine.frame_id(expressed_in)
+        fe = None if expressed_in is None else robot.engine.frame_id(expressed_in)
         return _relative.relative_jacobian(
-            self.engine, self.engine.coordinates.check(q, check_limits=check_limits), fa, fb, fe
+            robot.engine, robot.engine.coordinates.check(q, check_limits=check_limits), fa, fb, fe
         )

@@ -4,8 +4,9 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
+from ..arrays import ArrayLike
 from ..model.editing import add_frame, edited_urdf_text, lock_joints
 from ..urdf import RobotDescription
 
@@ -17,19 +18,21 @@ class EditingMethods:
     """Tool frames (:meth:`with_frame`) and locked joints (:meth:`locked`)."""
 
     # -- model editing ---------------------------------------------------------------------------
-    def with_frame(self: Robot, name: str, parent: str, placement: object) -> Robot:
+    def with_frame(self, name: str, parent: str, placement: ArrayLike) -> Robot:
         """A new Robot with frame ``name`` fixed to frame ``parent`` (a link or joint) at ``placement``:
         T_parent,name as a (4, 4) homogeneous transform [m], or a pair (xyz [m], rpy [rad]). The frame is a
         new link on a fixed joint ``<name>_joint``; it is in ``frame_names``, ``urdf_text`` (edited alike)
         and everything else. See :func:`kinengine.model.editing.add_frame`."""
-        return _edited(self, add_frame(self.description, name, parent, placement))
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
+        return _edited(robot, add_frame(robot.description, name, parent, placement))
 
-    def locked(self: Robot, values: Mapping[str, float]) -> Robot:
+    def locked(self, values: Mapping[str, float]) -> Robot:
         """A new Robot with the named joints fixed at their values [rad or m] (mimic followers too, at
         multiplier·value + offset); the other coordinates keep their order. Its poses and Jacobians equal
         this robot's at those values with the locked columns removed. ConfigurationError for a value
         outside the limits. See :func:`kinengine.model.editing.lock_joints`."""
-        return _edited(self, lock_joints(self.description, values))
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
+        return _edited(robot, lock_joints(robot.description, values))
 
 
 def _edited(robot: Robot, description: RobotDescription) -> Robot:

@@ -4,7 +4,9 @@ libraries are imported only when asked for."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
+
+from ..arrays import ArrayLike
 
 if TYPE_CHECKING:
     import matplotlib.axes
@@ -18,9 +20,9 @@ class PresentationMethods:
 
     # -- presentation ---------------------------------------------------------------------------
     def plot(
-        self: Robot,
-        q: object = None,
-        ax: object = None,
+        self,
+        q: ArrayLike | None = None,
+        ax: matplotlib.axes.Axes | None = None,
         *,
         frames: Sequence[str] = (),
         ellipsoid: str | None = None,
@@ -29,15 +31,16 @@ class PresentationMethods:
     ) -> matplotlib.axes.Axes:
         """A matplotlib 3D picture of the robot at q (None: neutral); returns the axes. See
         :func:`kinengine.presentation.plotting.plot_robot`."""
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         from ..presentation.plotting import plot_robot  # matplotlib only when asked for
 
         return plot_robot(
-            self, q, ax, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length, title=title
+            robot, q, ax, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length, title=title
         )
 
     def view(
-        self: Robot,
-        q: object = None,
+        self,
+        q: ArrayLike | None = None,
         *,
         port: int | None = None,
         frames: Sequence[str] = (),
@@ -49,10 +52,11 @@ class PresentationMethods:
         """Serve the robot at q (None: neutral) in the browser (Viser); returns the running viewer:
         ``.url``, ``.update(q)`` (moves the robot live), ``.close()``. Needs
         ``pip install 'kinengine[view]'``. See :func:`kinengine.presentation.viewer.view`."""
+        robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         from ..presentation.viewer import view  # viser only when asked for
 
         return view(
-            self,
+            robot,
             q,
             port=port,
             host=host,
