@@ -6,22 +6,25 @@
 >>> J = robot.jacobian(robot.neutral(), "tool0")              # (6, 6), rows [linear; angular]
 """
 
-from .errors import (
-    ConfigurationError,
-    FrameNotFoundError,
-    KinematicSingularityError,
-    KinematicsError,
-    OptionError,
-    ParameterizationError,
-    RepresentationSingularityError,
-    URDFError,
-)
-from .control.ik import IKResult
-from .control.manipulability import SingularityReport
 from .control.frame_task import FrameTask
+from .control.ik import IKResult
+from .control.ik_batch import IKBatchResult
+from .control.manipulability import SingularityReport
 from .control.pose_error import pose_error
 from .control.qp import DifferentialIK, PoseTarget, PostureTarget
 from .control.task import Task
+from .errors import (
+    ConfigurationError,
+    FrameNotFoundError,
+    KinematicsError,
+    KinematicSingularityError,
+    OptionError,
+    ParameterizationError,
+    RepresentationSingularityError,
+    ResourceLimitError,
+    URDFError,
+)
+from .kinematics.handle import FrameHandle
 from .loading import load, load_urdf_string
 from .model import available_robots
 from .robot import Robot
@@ -31,8 +34,10 @@ __version__ = "0.1.0"
 __all__ = [
     "ConfigurationError",
     "DifferentialIK",
+    "FrameHandle",
     "FrameNotFoundError",
     "FrameTask",
+    "IKBatchResult",
     "IKResult",
     "KinematicSingularityError",
     "KinematicsError",
@@ -41,6 +46,7 @@ __all__ = [
     "PoseTarget",
     "PostureTarget",
     "RepresentationSingularityError",
+    "ResourceLimitError",
     "Robot",
     "SingularityReport",
     "Task",
