@@ -5,5 +5,14 @@ from .catalog import CatalogEntry, available_robots, catalog_entry, shipped_robo
 from .coordinates import CoordinateMap, mimic_roots
 from .pinocchio_model import build_pinocchio_model, check_pinocchio_model, pinocchio_xml
 
-__all__ = ["CatalogEntry", "CoordinateMap", "available_robots", "build_pinocchio_model", "catalog_entry",
-           "check_pinocchio_model", "mimic_roots", "pinocchio_xml", "shipped_robots_dir"]
+__all__ = [
+    "CatalogEntry",
+    "CoordinateMap",
+    "available_robots",
+    "build_pinocchio_model",
+    "catalog_entry",
+    "check_pinocchio_model",
+    "mimic_roots",
+    "pinocchio_xml",
+    "shipped_robots_dir",
+]

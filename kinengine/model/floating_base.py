@@ -14,15 +14,33 @@ import re
 
 from ..urdf import RobotDescription
 
-LEGGED_WORDS = frozenset({"hip", "knee", "ankle", "foot", "feet", "leg", "legs", "pelvis", "thigh", "calf",
-                          "shin", "sole", "haa", "hfe", "kfe"})
+LEGGED_WORDS = frozenset(
+    {
+        "hip",
+        "knee",
+        "ankle",
+        "foot",
+        "feet",
+        "leg",
+        "legs",
+        "pelvis",
+        "thigh",
+        "calf",
+        "shin",
+        "sole",
+        "haa",
+        "hfe",
+        "kfe",
+    }
+)
 FLYING_WORDS = frozenset({"rotor", "propeller", "prop", "flying", "quadrotor", "multirotor", "drone"})
 MOBILE_WORDS = frozenset({"footprint", "wheel", "caster"})
 _WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+|[0-9]+")
 
 
 def name_words(name: str) -> set[str]:
-    """Lower-case words of a snake_case, kebab-case or CamelCase name: 'LKneePitch' -> {'l', 'knee', 'pitch'}."""
+    """Lower-case words of a snake_case, kebab-case or CamelCase name:
+    'LKneePitch' -> {'l', 'knee', 'pitch'}."""
     return {w.lower() for w in _WORD.findall(name)}
 
 
@@ -32,16 +50,19 @@ def floating_base_note(description: RobotDescription) -> str | None:
     words: set[str] = set()
     for name in [link.name for link in description.links] + [joint.name for joint in description.joints]:
         words |= name_words(name)
-    for kind, vocabulary in (("a legged or humanoid robot", LEGGED_WORDS), ("a flying robot", FLYING_WORDS),
-                             ("a mobile robot", MOBILE_WORDS)):
+    for kind, vocabulary in (
+        ("a legged or humanoid robot", LEGGED_WORDS),
+        ("a flying robot", FLYING_WORDS),
+        ("a mobile robot", MOBILE_WORDS),
+    ):
         found = sorted(words & vocabulary)
         if found:
-            break
-    else:
-        return None
-    return (f"{description.name!r} looks like {kind} (its names mention {', '.join(found[:3])}); "
-            f"it is loaded with its root link {description.root!r} held fixed: poses are given in that link's "
-            f"frame and the base's own motion is not a coordinate")
+            return (
+                f"{description.name!r} looks like {kind} (its names mention {', '.join(found[:3])}); "
+                f"it is loaded with its root link {description.root!r} held fixed: poses are given in that "
+                f"link's frame and the base's own motion is not a coordinate"
+            )
+    return None
 
 
 __all__ = ["FLYING_WORDS", "LEGGED_WORDS", "MOBILE_WORDS", "floating_base_note", "name_words"]

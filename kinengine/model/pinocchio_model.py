@@ -29,9 +29,14 @@ def pinocchio_xml(description: RobotDescription) -> str:
     for j in description.joints:
         if j.movable:
             j = dataclasses.replace(
-                j, type="revolute" if j.type == "continuous" else j.type, mimic=None,
-                lower=-np.pi if j.lower is None else j.lower, upper=np.pi if j.upper is None else j.upper,
-                effort=_nonnegative(j.effort), velocity=_nonnegative(j.velocity))
+                j,
+                type="revolute" if j.type == "continuous" else j.type,
+                mimic=None,
+                lower=-np.pi if j.lower is None else j.lower,
+                upper=np.pi if j.upper is None else j.upper,
+                effort=_nonnegative(j.effort),
+                velocity=_nonnegative(j.velocity),
+            )
         joints.append(j)
     return dataclasses.replace(description, joints=tuple(joints)).to_xml()
 
@@ -57,8 +62,10 @@ def check_pinocchio_model(description: RobotDescription, model: pin.Model) -> No
     movable = [j for j in description.joints if j.movable]
     names = list(model.names)[1:]
     if names != [j.name for j in movable]:
-        raise URDFError(f"Pinocchio built the joints {names} from {description.source}, "
-                        f"the description has {[j.name for j in movable]}")
+        raise URDFError(
+            f"Pinocchio built the joints {names} from {description.source}, "
+            f"the description has {[j.name for j in movable]}"
+        )
     index = {j.name: i for i, j in enumerate(movable, start=1)}
     parent_joint = {j.child: j for j in description.joints}
     for i, joint in enumerate(movable, start=1):
@@ -68,8 +75,10 @@ def check_pinocchio_model(description: RobotDescription, model: pin.Model) -> No
             ancestor = parent_joint.get(ancestor.parent)
         parent = 0 if ancestor is None else index[ancestor.name]
         if got != (1, 1) or model.parents[i] != parent or model.joints[i].idx_q != i - 1:
-            raise URDFError(f"Pinocchio's joint {joint.name!r} has (nq, nv) = {got} and parent "
-                            f"{model.parents[i]}, expected (1, 1) and parent {parent}")
+            raise URDFError(
+                f"Pinocchio's joint {joint.name!r} has (nq, nv) = {got} and parent "
+                f"{model.parents[i]}, expected (1, 1) and parent {parent}"
+            )
 
 
 def _pinocchio_error(description: RobotDescription, exc: Exception) -> URDFError:
@@ -79,7 +88,9 @@ def _pinocchio_error(description: RobotDescription, exc: Exception) -> URDFError
     lo, hi = 0, len(description.joints)  # the prefix of lo joints builds, of hi joints fails
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        sub = dataclasses.replace(description, joints=description.joints[:mid], links=description.links[:mid + 1])
+        sub = dataclasses.replace(
+            description, joints=description.joints[:mid], links=description.links[: mid + 1]
+        )
         try:
             _build(pinocchio_xml(sub), _depth(sub))
             lo = mid

@@ -15,8 +15,8 @@ module.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import threading
+from collections.abc import Callable
 from typing import TypeVar
 
 try:
@@ -85,9 +85,11 @@ def call_with_big_stack(function: Callable[[], T], stack: int = BUILD_STACK, nee
             threading.stack_size(previous)
     if not started:
         if stack > BUILD_STACK:
-            raise ResourceLimitError(f"cannot start a thread with the {stack // 1024**2} MiB of stack that "
-                                     "Pinocchio needs to build this tree: raise the memory limit or load a "
-                                     "shallower tree")
+            raise ResourceLimitError(
+                f"cannot start a thread with the {stack // 1024**2} MiB of stack that "
+                "Pinocchio needs to build this tree: raise the memory limit or load a "
+                "shallower tree"
+            )
         return function()
     thread.join()
     returned, value = box[0]
@@ -101,5 +103,12 @@ def stack_needed(depth: int) -> int:
     return depth * PER_LEVEL + 1024 * 1024
 
 
-__all__ = ["BUILD_STACK", "IN_PLACE_MAX", "PER_LEVEL", "call_with_big_stack", "main_thread_has", "stack_for_depth",
-           "stack_needed"]
+__all__ = [
+    "BUILD_STACK",
+    "IN_PLACE_MAX",
+    "PER_LEVEL",
+    "call_with_big_stack",
+    "main_thread_has",
+    "stack_for_depth",
+    "stack_needed",
+]
