@@ -112,7 +112,7 @@ class VelocityEllipsoid:
 
 
 def analyze_jacobian(
-    J: object, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE, frame: str | None = None
+    J: npt.ArrayLike, rows: Rows = "all", *, tolerance: float = DEFAULT_TOLERANCE, frame: str | None = None
 ) -> SingularityReport:
     """The :class:`SingularityReport` of a geometric Jacobian J_e0 (6, dof) in "local_world_aligned"."""
     tolerance = checked_tolerance(tolerance)

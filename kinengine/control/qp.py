@@ -140,7 +140,7 @@ class DifferentialIK:
         *,
         damping: float = 1e-12,
         lm_damping: float = 1e-3,
-        velocity_limits: object = None,
+        velocity_limits: npt.ArrayLike | Mapping[str, float] | None = None,
         position_limits: bool = True,
         solver: str = "daqp",
     ) -> None:
@@ -193,7 +193,9 @@ class DifferentialIK:
         """How many solves needed the QP solver (a bound active); the others were one linear solve."""
 
     @staticmethod
-    def _velocity_limits(robot: QPRobot, limits: object) -> npt.NDArray[np.float64]:
+    def _velocity_limits(
+        robot: QPRobot, limits: npt.ArrayLike | Mapping[str, float] | None
+    ) -> npt.NDArray[np.float64]:
         urdf = {j.name: j.velocity for j in robot.description.joints}
         out = np.array(
             [urdf.get(name) if urdf.get(name) else np.inf for name in robot.joint_names], dtype=float
@@ -283,7 +285,7 @@ class DifferentialIK:
             if step is None:  # cannot happen for a box QP with H > 0; a safe answer anyway
                 step = np.zeros(self.dof)
             np.clip(step, lb, ub, out=step)  # the solver's tolerance (~1e-14) off a bound: onto it
-        return step / dt
+        return np.asarray(step / dt, dtype=np.float64)  # float64 already (H, c are): no copy
 
     def _pose_rows(
         self, term: _PoseTerm, model: pin.Model, data: pin.Data
