@@ -59,11 +59,11 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
 
     def state():
         """This thread's (Data, q_pin buffer): the engine's Data of this thread, a buffer of our own."""
-        local.data, local.buffer = kin.data(), np.empty(coords.nq)
+        local.data, local.buffer = kin.data(), np.zeros(coords.nq)
         return local.data
 
     mimic = kin.mimic
-    q_pin, fold_mimic = mimic.q_pin, mimic.fold
+    q_pin = mimic.q_pin_for(model, fid)  # only the mimic joints that move this frame are written
 
     def pinocchio_q(q):
         return q_pin(q, local.buffer)
@@ -139,7 +139,8 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             return place(model, data, fid).homogeneous, J
         return pose, jacobian, kinematics
 
-    fold = fold_mimic if not identity else (lambda J: J.reshape(6, -1))  # J_pin · M; (6,) → (6, 1)
+    # J_pin · M (only the mimic joints that move this frame); (6,) → (6, 1)
+    fold = mimic.folder(model, fid) if not identity else (lambda J: J.reshape(6, -1))
 
     def jacobian(q, reference="local_world_aligned"):
         ref = resolve(reference)
