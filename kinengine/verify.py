@@ -24,6 +24,7 @@ from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
+import numpy.typing as npt
 from scipy.spatial.transform import Rotation
 
 from .errors import OptionError
@@ -163,7 +164,7 @@ def verify(robot: Robot, samples: int = 20, seed: int = 0, progress: bool = Fals
     return VerifyReport(robot.name, robot.dof, len(frames), len(q_all), tuple(checks))
 
 
-def _box(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+def _box(robot: Robot) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """The sampled joint box: the limits, or [-π, π] where they are infinite or empty (lower >= upper)."""
     lower, upper = np.asarray(robot.lower_limits, float), np.asarray(robot.upper_limits, float)
     lower, upper = np.clip(lower, -BOX, BOX), np.clip(upper, -BOX, BOX)
@@ -177,7 +178,7 @@ def _check_count(value: object, name: str, most: int) -> None:
         raise OptionError(f"{name} must be a whole number in [0, {most}], got {value!r:.40}")
 
 
-def _corners(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+def _corners(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> npt.NDArray[np.float64]:
     """Corners of the joint box: all 2^dof if dof <= 8, else MAX_CORNERS drawn at random."""
     dof = len(lower)
     if dof <= 8:
@@ -187,7 +188,7 @@ def _corners(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> 
     return np.where(pick, upper, lower)
 
 
-def _fd_jacobian(robot: Robot, q: np.ndarray, frame: str, reference: str) -> np.ndarray:
+def _fd_jacobian(robot: Robot, q: np.ndarray, frame: str, reference: str) -> npt.NDArray[np.float64]:
     """(M, 6, dof) Jacobians by central differences of T_IF(q), each reference from its definition:
     local_world_aligned [ṗ; log(C+ C-^T)/2h], local T^-1·dT/dq, world dT/dq·T^-1 (twists [v; ω])."""
     M, dof = q.shape
@@ -262,7 +263,7 @@ def _analytic_check(
     position = name if kind == "position" else None  # kind is "position" or "rotation"
     rotation = name if kind == "rotation" else None
 
-    def chi(qs: np.ndarray) -> np.ndarray:
+    def chi(qs: np.ndarray) -> npt.NDArray[np.float64]:
         with warnings.catch_warnings():  # χ at a singular pose warns; such samples are skipped
             warnings.simplefilter("ignore")
             return robot.pose_parameters(qs, frame, position=position, rotation=rotation)

@@ -6,6 +6,7 @@ batches, the single path row by row for small ones). q is checked by the caller.
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ..kinematics import batch, relative
@@ -17,7 +18,7 @@ ANALYTIC_CALLS = 100
 of the analytic single-call loop costs about twice a row of Pinocchio's pose and Jacobian loop."""
 
 
-def frame_views(data: pin.Data, fid: int) -> tuple[np.ndarray, np.ndarray]:
+def frame_views(data: pin.Data, fid: int) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """(C_IF (3, 3), p (3,)) as live views of ``data.oMf[fid]``: every placement update shows in them.
 
     Valid as long as ``data`` lives; reading them costs a third of building ``.homogeneous``.
@@ -35,7 +36,7 @@ def analytic_at(
     threshold: float,
     row: int | None = None,
     nan: bool = False,
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """J_A (m, dof) at one checked q (dof,). ``views``: :func:`frame_views` of this thread's Data and frame.
     ``nan``: NaN rows for a parameterization within ``threshold`` of its singular set instead of the error."""
     if kin.dof == 0:
@@ -51,7 +52,7 @@ def analytic_at(
 
 def analytic_single(
     kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float, nan: bool = False
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """J_A (m, dof) at one checked q, with this thread's cached views of the frame."""
     views = kin.per_thread(("frame views", fid), lambda: frame_views(kin.data(), fid))
     return analytic_at(kin, q, fid, views, pmap, threshold, nan=nan)
@@ -59,7 +60,7 @@ def analytic_single(
 
 def analytic_batch(
     kin: Kinematics, Q: np.ndarray, fid: int, pmap: PoseMap, threshold: float, nan: bool = False
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """J_A = E(χ)·J_e0 for every row of a checked Q (N, dof) -> (N, m, dof).
 
     Small batches take the single-call path row by row; larger ones evaluate χ, E and E·J_e0 with numpy
@@ -82,7 +83,7 @@ def analytic_batch(
         pmap.nan_where_singular(distances, threshold, out)
         return out
 
-    def pose(row: int) -> np.ndarray:
+    def pose(row: int) -> npt.NDArray[np.float64]:
         T, _ = batch.evaluate(kin, Q[row : row + 1], fid, None, jacobian=False)
         assert T is not None  # pose=True (the default): the poses are computed
         return T[0]
@@ -98,7 +99,7 @@ def analytic_batch(
 
 def analytic_relative(
     kin: Kinematics, q: np.ndarray, fa: int, fb: int, pmap: PoseMap, threshold: float, nan: bool = False
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """J_A of frame A relative to frame B: E(χ(T_BA))·J_rel with J_rel the relative Jacobian expressed in B
     (see :mod:`kinengine.kinematics.relative`); q (dof,) -> (m, dof), q (N, dof) -> (N, m, dof)."""
     T = relative.relative_pose(kin, q, fa, fb)
@@ -128,7 +129,7 @@ def _analytic_loop(
     threshold: float,
     out: np.ndarray,
     nan: bool = False,
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     views = frame_views(kin.data(), fid)
     for i, qi in enumerate(Q):
         out[i] = analytic_at(kin, qi, fid, views, pmap, threshold, i, nan)

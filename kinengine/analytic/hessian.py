@@ -7,6 +7,7 @@
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ..kinematics.derivatives import kinematic_hessian
@@ -15,7 +16,9 @@ from ..parameterizations.base import PositionParameterization
 from .pose_map import PoseMap
 
 
-def analytic_hessian(kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float) -> np.ndarray:
+def analytic_hessian(
+    kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float
+) -> npt.NDArray[np.float64]:
     """∂J_A/∂q, (m, dof, dof) with [:, :, k] = ∂J_A/∂q_k, at a checked q. Raises
     RepresentationSingularityError where J_A itself would."""
     T, J = kin.pose(q, fid), kin.jacobian(q, fid, pin.LOCAL_WORLD_ALIGNED)

@@ -14,6 +14,7 @@ import warnings
 from collections.abc import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import OptionError, RepresentationSingularityError
 from ..parameterizations import POSITION_PARAMETERIZATIONS, ROTATION_PARAMETERIZATIONS
@@ -88,7 +89,7 @@ def singularity_error(
     )
 
 
-def pose_of(C: Sequence[Sequence[float]], p: Sequence[float]) -> np.ndarray:
+def pose_of(C: Sequence[Sequence[float]], p: Sequence[float]) -> npt.NDArray[np.float64]:
     """T (4, 4) from C (3x3 nested floats) and p (3 floats)."""
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = C, p

@@ -243,7 +243,7 @@ def _rows(rows: Rows) -> tuple[int, ...]:
     return tuple(index)
 
 
-def _readable_basis(N: np.ndarray) -> np.ndarray:
+def _readable_basis(N: np.ndarray) -> npt.NDArray[np.float64]:
     """The same subspace as N's orthonormal columns (m, r), rotated so that coordinate axes lying in it
     come out as basis vectors (pivoted QR of the projector picks the most axis-aligned first);
     each vector's largest entry is positive. Returns (r, m)."""

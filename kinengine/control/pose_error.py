@@ -24,7 +24,7 @@ from ..errors import OptionError
 FRAMES = ("local", "local_world_aligned", "world")
 
 
-def _as_pose(T: object, name: str) -> np.ndarray:
+def _as_pose(T: object, name: str) -> npt.NDArray[np.float64]:
     array = np.asarray(T, dtype=float)
     if array.shape[-2:] != (4, 4) or array.ndim not in (2, 3) or not np.isfinite(array).all():
         raise OptionError(
@@ -51,7 +51,7 @@ def pose_error(
     return np.array([_single(a, b, frame) for a, b in zip(A, B, strict=False)]).reshape(-1, 6)
 
 
-def _single(T: np.ndarray, T_target: np.ndarray, frame: str) -> np.ndarray:
+def _single(T: np.ndarray, T_target: np.ndarray, frame: str) -> npt.NDArray[np.float64]:
     M, M_target = pin.SE3(T[:3, :3], T[:3, 3]), pin.SE3(T_target[:3, :3], T_target[:3, 3])
     xi = pin.log6(M.actInv(M_target))
     if frame == "local":

@@ -44,6 +44,7 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
@@ -239,7 +240,7 @@ class Task:
         self._rates_valid = False
 
 
-def _readonly(array: np.ndarray) -> np.ndarray:
+def _readonly(array: np.ndarray) -> npt.NDArray[np.float64]:
     view = array.view()
     view.flags.writeable = False
     return view

@@ -23,6 +23,7 @@ J_local = blockdiag(Cᵀ, Cᵀ)·J_lwa, ∂J_local = blockdiag(Cᵀ, Cᵀ)·(∂
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from .engine import Kinematics
@@ -30,7 +31,7 @@ from .engine import Kinematics
 
 def jacobian_time_variation(
     kin: Kinematics, q: np.ndarray, qdot: np.ndarray, fid: int, ref: pin.ReferenceFrame
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """J̇ = d/dt J(q(t), frame, reference) at checked q [rad | m] moving with q̇ [rad/s | m/s], (6, dof).
 
     In LOCAL_WORLD_ALIGNED this is d/dt(I J_e0) of the lecture notes: a_F = J_e0·q̈ + J̇_e0·q̇ is the
@@ -50,7 +51,9 @@ def jacobian_time_variation(
     return _change_reference(Jw, dJw[:, :, None], qdot[:, None], M.rotation, M.translation, ref)[:, :, 0]
 
 
-def kinematic_hessian(kin: Kinematics, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> np.ndarray:
+def kinematic_hessian(
+    kin: Kinematics, q: np.ndarray, fid: int, ref: pin.ReferenceFrame
+) -> npt.NDArray[np.float64]:
     """H[:, j, k] = ∂J[:, j]/∂q_k of the geometric Jacobian J(q, frame, reference), (6, dof, dof).
 
     Not symmetric in (j, k) in general (the angular rows are no gradient). Units: [m/rad], [1/rad]
@@ -99,7 +102,7 @@ def _change_reference(
     C: np.ndarray,
     p: np.ndarray,
     ref: pin.ReferenceFrame,
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """Derivatives dJw (6, dof, K) of the WORLD Jacobian Jw (6, dof) along K directions of q (dof, K)
     turned into derivatives of the Jacobian in ``ref`` (see the module doc), (6, dof, K)."""
     if ref == pin.WORLD:

@@ -30,7 +30,7 @@ from .engine import Kinematics
 _LWA = pin.LOCAL_WORLD_ALIGNED
 
 
-def _inverse_times(TB: np.ndarray, TA: np.ndarray) -> np.ndarray:
+def _inverse_times(TB: np.ndarray, TA: np.ndarray) -> npt.NDArray[np.float64]:
     """T_IB⁻¹ · T_IA for (4, 4) or (N, 4, 4) rigid transforms."""
     CBt = np.swapaxes(TB[..., :3, :3], -1, -2)
     out = np.zeros(np.broadcast_shapes(TA.shape, TB.shape))
@@ -61,14 +61,14 @@ def _poses(
     return kin.pose(q, fid).copy(), kin.jacobian(q, fid, _LWA).copy()
 
 
-def relative_pose(kin: Kinematics, q: np.ndarray, fa: int, fb: int) -> np.ndarray:
+def relative_pose(kin: Kinematics, q: np.ndarray, fa: int, fb: int) -> npt.NDArray[np.float64]:
     """T_BA = T_IB⁻¹ T_IA: q (dof,) -> (4, 4), q (N, dof) -> (N, 4, 4); translation [m]."""
     TA = _poses(kin, q, fa, False)[0].copy()
     TB = _poses(kin, q, fb, False)[0]
     return _inverse_times(TB, TA)
 
 
-def relative_terms(TA: np.ndarray, JA: np.ndarray, TB: np.ndarray, JB: np.ndarray) -> np.ndarray:
+def relative_terms(TA: np.ndarray, JA: np.ndarray, TB: np.ndarray, JB: np.ndarray) -> npt.NDArray[np.float64]:
     """[v_rel; ω_rel] Jacobian (6, dof) or (N, 6, dof) in I's axes from the frames' poses and
     "local_world_aligned" Jacobians (see the module doc)."""
     d = TA[..., :3, 3] - TB[..., :3, 3]
@@ -81,7 +81,9 @@ def relative_terms(TA: np.ndarray, JA: np.ndarray, TB: np.ndarray, JB: np.ndarra
     return out
 
 
-def relative_jacobian(kin: Kinematics, q: np.ndarray, fa: int, fb: int, fe: int | None = None) -> np.ndarray:
+def relative_jacobian(
+    kin: Kinematics, q: np.ndarray, fa: int, fb: int, fe: int | None = None
+) -> npt.NDArray[np.float64]:
     """J_rel (6, dof) or (N, 6, dof): rows [v; ω] of A relative to B (module doc), in the axes of frame
     ``fe`` (default ``fb``). Units: [m/s] and [rad/s] per unit joint speed."""
     TA, JA = _poses(kin, q, fa, True)

@@ -185,7 +185,7 @@ def placement_xyz_rpy(placement: npt.ArrayLike) -> tuple[Vector3, Vector3]:
     return _vector(T[:3, 3]), rpy_from_matrix(C)
 
 
-def matrix_from_rpy(rpy: Vector3) -> np.ndarray:
+def matrix_from_rpy(rpy: Vector3) -> npt.NDArray[np.float64]:
     """C = Rz(yaw) · Ry(pitch) · Rx(roll), (3, 3): the URDF's rpy convention."""
     r, p, y = rpy
     cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
@@ -221,7 +221,7 @@ def _fold(joint: Joint, value: float) -> Joint:
     )
 
 
-def _axis_angle(axis: np.ndarray, angle: float) -> np.ndarray:
+def _axis_angle(axis: np.ndarray, angle: float) -> npt.NDArray[np.float64]:
     """Rodrigues: rotation by ``angle`` [rad] about the unit ``axis``, (3, 3)."""
     x, y, z = axis
     K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])

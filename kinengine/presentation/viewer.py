@@ -242,7 +242,7 @@ class Viewer:
         labels = ("x", "y", "z", *get_rotation(name).labels)
         self._readout.content = nodes.readout_html(labels, chi, name, distance, self.singularity_warning)
 
-    def shown_pose(self, link: str) -> np.ndarray:
+    def shown_pose(self, link: str) -> npt.NDArray[np.float64]:
         """T_IL (4, 4) [m] of ``link`` as sent to the browser (position and quaternion of its scene node)."""
         return nodes.node_pose(self._link_nodes[link])
 

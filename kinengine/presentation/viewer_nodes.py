@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from . import viewer_scene as scene
 
@@ -36,7 +37,7 @@ def add_visual(server: Any, name: str, v: scene.Visual) -> None:
         server.scene.add_mesh_trimesh(name, v.mesh, wxyz=wxyz, position=position)
 
 
-def node_pose(node: Any) -> np.ndarray:
+def node_pose(node: Any) -> npt.NDArray[np.float64]:
     """T (4, 4) [m] of a Viser scene node from its ``position`` and unit quaternion ``wxyz``."""
     w, x, y, z = np.asarray(node.wxyz, dtype=float)
     T = np.eye(4)

@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import KinematicsError
 from ..urdf.packages import resolve_uri
@@ -150,7 +151,7 @@ def link_poses(robot: Robot, q: np.ndarray, links: tuple[str, ...]) -> dict[str,
     return {name: robot.frame_pose(q, name) for name in links}
 
 
-def skeleton(robot: Robot, poses: dict[str, np.ndarray]) -> np.ndarray:
+def skeleton(robot: Robot, poses: dict[str, np.ndarray]) -> npt.NDArray[np.float64]:
     """(M, 2, 3) [m]: parent link origin -> child link origin of every URDF joint (fixed ones included)."""
     segments = [(poses[j.parent][:3, 3], poses[j.child][:3, 3]) for j in robot.description.joints]
     return np.array(segments, dtype=float).reshape(-1, 2, 3)
@@ -167,7 +168,7 @@ def slider_ranges(robot: Robot) -> list[tuple[float, float]]:
     return out
 
 
-def camera(points: np.ndarray, fov: float) -> tuple[np.ndarray, np.ndarray]:
+def camera(points: np.ndarray, fov: float) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """(position, look_at) [m] of a camera with vertical field of view ``fov`` [rad] that sees
     ``points`` (N, 3) whole, from the direction (1.6, 1.0, 0.9) (in front of +x, to the left, above), z up.
     The points sit left of the image centre, clear of the control panel on the right."""
@@ -185,7 +186,7 @@ def camera(points: np.ndarray, fov: float) -> tuple[np.ndarray, np.ndarray]:
 
 def project(
     points: np.ndarray, position: np.ndarray, look_at: np.ndarray, fov: float, width: int, height: int
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """Pixel (column, row) (N, 2) of points (N, 3) [m] for a pinhole camera at ``position`` looking at
     ``look_at`` with z up and vertical field of view ``fov`` [rad] (three.js' PerspectiveCamera)."""
     forward = np.asarray(look_at, float) - np.asarray(position, float)
@@ -199,7 +200,7 @@ def project(
     return np.stack([width / 2.0 + f * (rel @ right) / depth, height / 2.0 - f * (rel @ up) / depth], axis=1)
 
 
-def wxyz(C: np.ndarray) -> np.ndarray:
+def wxyz(C: np.ndarray) -> npt.NDArray[np.float64]:
     """Unit quaternion (w, x, y, z), w >= 0, of a rotation matrix C (3, 3) (scipy's Rotation)."""
     from scipy.spatial.transform import Rotation
 
@@ -212,7 +213,7 @@ def node_name(name: str) -> str:
     return "".join(c if c.isalnum() or c in "_-." else "_" for c in name)
 
 
-def unit_sphere() -> tuple[np.ndarray, np.ndarray]:
+def unit_sphere() -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """Vertices (V, 3) float32 and faces (F, 3) uint32 of a unit icosphere (the ellipsoid's template)."""
     import trimesh
 
