@@ -46,8 +46,9 @@ class URDFError(KinematicsError, ValueError):
     element (e.g. ``"joint 'elbow'"``) and ``line`` its line number when known.
     """
 
-    def __init__(self, message: str, *, source: str | None = None,
-                 element: str | None = None, line: int | None = None) -> None:
+    def __init__(
+        self, message: str, *, source: str | None = None, element: str | None = None, line: int | None = None
+    ) -> None:
         self._init = ((message,), {"source": source, "element": element, "line": line})
         self.source = source
         self.element = element
@@ -73,9 +74,13 @@ class FrameNotFoundError(KinematicsError, KeyError):
         self.known = list(known)
         self._init = ((name, self.known), {"kind": kind})
         close = difflib.get_close_matches(str(name), self.known, n=3, cutoff=0.5)
-        hint = (f" Did you mean {', '.join(repr(c) for c in close)}?" if close
-                else f" Known {kind}s: {', '.join(self.known[:12])}"
-                + (", ..." if len(self.known) > 12 else "") + ".")
+        hint = (
+            f" Did you mean {', '.join(repr(c) for c in close)}?"
+            if close
+            else f" Known {kind}s: {', '.join(self.known[:12])}"
+            + (", ..." if len(self.known) > 12 else "")
+            + "."
+        )
         shown = " ".join(repr(name).split())  # one line, e.g. for a numpy array
         shown = shown if len(shown) <= 80 else shown[:77] + "..."
         self.message = f"unknown {kind} {shown}.{hint}"
@@ -112,9 +117,16 @@ class RepresentationSingularityError(KinematicsError, ValueError):
     involved (a parameterization evaluated on its own). The message says which is the case.
     """
 
-    def __init__(self, parameterization: str, distance: float, threshold: float,
-                 alternatives: Sequence[str], detail: str = "", robot_rank: int | None = None,
-                 full_rank: int | None = None) -> None:
+    def __init__(
+        self,
+        parameterization: str,
+        distance: float,
+        threshold: float,
+        alternatives: Sequence[str],
+        detail: str = "",
+        robot_rank: int | None = None,
+        full_rank: int | None = None,
+    ) -> None:
         self.parameterization = parameterization
         self.distance = distance
         self.threshold = threshold
@@ -124,21 +136,27 @@ class RepresentationSingularityError(KinematicsError, ValueError):
         self.full_rank = full_rank
         args = (parameterization, distance, threshold, self.alternatives, detail, robot_rank, full_rank)
         self._init: tuple[tuple[object, ...], dict[str, object]] = (args, {})
-        msg = (f"{parameterization!r} is at a representation singularity "
-               f"(distance {distance:.3g} < threshold {threshold:.3g})")
+        msg = (
+            f"{parameterization!r} is at a representation singularity "
+            f"(distance {distance:.3g} < threshold {threshold:.3g})"
+        )
         if detail:
             msg += f": {detail}"
         if robot_rank is None or full_rank is None:
             robot = ". This is a property of the parameterization, not of a robot"
         elif robot_rank < full_rank:
-            robot = (f". The robot itself is also kinematically singular here "
-                     f"(rank {robot_rank} of {full_rank}), "
-                     "which no parameterization removes. For the representation singularity")
+            robot = (
+                f". The robot itself is also kinematically singular here "
+                f"(rank {robot_rank} of {full_rank}), "
+                "which no parameterization removes. For the representation singularity"
+            )
         else:
             robot = f". The robot itself is not singular here (rank {robot_rank} of {full_rank})"
-        msg += (f"{robot}: use a parameterization that is regular at this pose, e.g. "
-                f"{', '.join(repr(a) for a in self.alternatives)}, or lower singularity_threshold to accept "
-                "huge entries, or pass on_singularity='nan'.")
+        msg += (
+            f"{robot}: use a parameterization that is regular at this pose, e.g. "
+            f"{', '.join(repr(a) for a in self.alternatives)}, or lower singularity_threshold to accept "
+            "huge entries, or pass on_singularity='nan'."
+        )
         super().__init__(msg)
 
 

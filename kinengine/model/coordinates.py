@@ -12,10 +12,10 @@ J = J_pin · M. Without mimic joints M is the identity and q passes to Pinocchio
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 import math
 import numbers
 import warnings
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -84,10 +84,17 @@ class CoordinateMap:
         self._shape = (self.dof,)
         self._mimics = {name: root[0] for name, root in roots.items()}
 
-    def _narrow_by_mimics(self, description: RobotDescription, roots: dict[str, tuple[str, float, float]],
-                          index: dict[str, int], lower: np.ndarray, upper: np.ndarray) -> None:
+    def _narrow_by_mimics(
+        self,
+        description: RobotDescription,
+        roots: dict[str, tuple[str, float, float]],
+        index: dict[str, int],
+        lower: np.ndarray,
+        upper: np.ndarray,
+    ) -> None:
         """A coordinate's limits also keep each mimic joint that follows it within that joint's own limits:
-        lower ≤ m·q + o ≤ upper of the follower, i.e. q within [(lower − o)/m, (upper − o)/m] (swapped if m < 0).
+        lower ≤ m·q + o ≤ upper of the follower, i.e. q within [(lower − o)/m, (upper − o)/m]
+        (swapped if m < 0).
         A follower whose limits would leave the leader an empty or zero-width range (sloppy gripper URDFs,
         e.g. a vendor's Robotiq 2F-85) is not enforced; one warning per leader names every such follower,
         and the leader keeps its own limits (narrowed by its other followers only)."""
@@ -109,13 +116,18 @@ class CoordinateMap:
                 self._narrowed_by.setdefault(i, []).append(follows)
         for i, ((what, follows), *more) in ignored.items():
             likewise = "".join(f"; likewise mimic joint {f} ({w})" for w, f in more)
-            warnings.warn(f"{description.source}: {what} of joint {self.names[i]!r} keeps it within its limits and "
-                          f"mimic joint {follows}; the mimic joint's limits are not enforced{likewise}; "
-                          f"{self.names[i]!r} keeps [{lower[i]:g}, {upper[i]:g}]", UserWarning, stacklevel=3)
+            warnings.warn(
+                f"{description.source}: {what} of joint {self.names[i]!r} keeps it within its limits and "
+                f"mimic joint {follows}; the mimic joint's limits are not enforced{likewise}; "
+                f"{self.names[i]!r} keeps [{lower[i]:g}, {upper[i]:g}]",
+                UserWarning,
+                stacklevel=3,
+            )
 
     # -- the map ------------------------------------------------------------------------------
     def to_pinocchio(self, q: np.ndarray) -> np.ndarray:
-        """Pinocchio's configuration for a checked q: (dof,) -> (nq,), (N, dof) -> (N, nq); q itself if M = I."""
+        """Pinocchio's configuration for a checked q: (dof,) -> (nq,), (N, dof) -> (N, nq); q itself
+        if M = I."""
         if self.identity:
             return q
         out = q[..., self.leader] * self.multiplier
@@ -136,8 +148,9 @@ class CoordinateMap:
         return J_pin if self.identity else J_pin @ self.matrix
 
     # -- checking -----------------------------------------------------------------------------
-    def check(self, q: object, *, name: str = "q", check_limits: bool = False,
-              allow_batch: bool = True) -> np.ndarray:
+    def check(
+        self, q: object, *, name: str = "q", check_limits: bool = False, allow_batch: bool = True
+    ) -> np.ndarray:
         """q as a C-contiguous float64 array of shape (dof,) or (N >= 1, dof); ConfigurationError otherwise.
 
         ints, float32, lists, tuples, strided, Fortran-ordered and read-only arrays are
@@ -146,12 +159,20 @@ class CoordinateMap:
         and wrongly shaped input are refused with the expected shape in the message.
         """
         # Hot path: a contiguous float64 vector (strides (8,): one axis, no gaps) of the right length costs
-        # one float sum to check; a sum beyond ±MAX_MAGNITUDE (NaN, inf, overflow, large) is looked at entry-wise.
+        # one float sum to check; a sum beyond ±MAX_MAGNITUDE (NaN, inf, overflow, large) is looked at
+        # entry-wise.
         if type(q) is np.ndarray and q.dtype is _F64 and q.strides == _STRIDES and len(q) == self.dof:
             if not -MAX_MAGNITUDE <= sum(q.tolist()) <= MAX_MAGNITUDE:  # NaN, inf, overflow or large
                 self._check_values(q, name)
-        elif (allow_batch and type(q) is np.ndarray and q.dtype is _F64 and q.ndim == 2 and q.shape[0]
-              and q.shape[1] == self.dof and q.flags.c_contiguous):  # a ready batch: one sum as well
+        elif (
+            allow_batch
+            and type(q) is np.ndarray
+            and q.dtype is _F64
+            and q.ndim == 2
+            and q.shape[0]
+            and q.shape[1] == self.dof
+            and q.flags.c_contiguous
+        ):  # a ready batch: one sum as well
             total = sum(q.ravel().tolist()) if q.size <= 256 else float(q.sum())
             if not -MAX_MAGNITUDE <= total <= MAX_MAGNITUDE:
                 self._check_values(q, name)
@@ -171,24 +192,33 @@ class CoordinateMap:
         if isinstance(q, (str, bytes)):
             raise ConfigurationError(f"Expected `{name}` to be numeric with shape {expected}, got a string")
         if np.ma.is_masked(q):
-            raise ConfigurationError(f"Expected `{name}` to have a value for every joint, got a masked array "
-                                     "with masked entries; fill them (q.filled(...)) first")
+            raise ConfigurationError(
+                f"Expected `{name}` to have a value for every joint, got a masked array "
+                "with masked entries; fill them (q.filled(...)) first"
+            )
         try:
             arr = np.asarray(q)
         except Exception as exc:  # ragged sequences and the like
-            raise ConfigurationError(f"Expected `{name}` to be numeric with shape {expected}: {exc}") from None
+            raise ConfigurationError(
+                f"Expected `{name}` to be numeric with shape {expected}: {exc}"
+            ) from None
         if arr.dtype.kind == "O":
             arr = self._from_objects(arr, q, name, expected)
         elif arr.dtype.kind not in "iuf":
             raise ConfigurationError(
-                f"Expected `{name}` to hold real numbers with shape {expected}, got dtype {arr.dtype}")
+                f"Expected `{name}` to hold real numbers with shape {expected}, got dtype {arr.dtype}"
+            )
         if arr.ndim == 0 or arr.shape[-1] != self.dof or arr.ndim > (2 if allow_batch else 1):
-            hint = ("; this function takes one configuration: call it once per row"
-                    if not allow_batch and arr.ndim == 2 and arr.shape[-1] == self.dof else "")
+            hint = (
+                "; this function takes one configuration: call it once per row"
+                if not allow_batch and arr.ndim == 2 and arr.shape[-1] == self.dof
+                else ""
+            )
             raise ConfigurationError(f"Expected `{name}` to have shape {expected}, got {arr.shape}{hint}")
         if arr.ndim == 2 and arr.shape[0] == 0:
-            raise ConfigurationError(f"Expected `{name}` to hold at least one configuration, "
-                                     f"got an empty batch {arr.shape}")
+            raise ConfigurationError(
+                f"Expected `{name}` to hold at least one configuration, got an empty batch {arr.shape}"
+            )
         arr = np.ascontiguousarray(arr, dtype=np.float64)
         self._check_values(arr, name)
         return arr
@@ -198,16 +228,21 @@ class CoordinateMap:
         """An object array (e.g. Python numbers) as float64; ConfigurationError if an entry is not one."""
         what = f"a {type(q).__name__}" if arr.ndim == 0 else "an object array"
         if any(v is None for v in arr.flat):
-            raise ConfigurationError(f"Expected `{name}` to hold real numbers with shape {expected}, "
-                                     f"got {what} with None entries")
+            raise ConfigurationError(
+                f"Expected `{name}` to hold real numbers with shape {expected}, got {what} with None entries"
+            )
         try:
             return arr.astype(np.float64)
         except OverflowError:
-            raise ConfigurationError(f"Expected `{name}` to hold real numbers with shape {expected}, "
-                                     f"got {what} with a number too large for a float64") from None
+            raise ConfigurationError(
+                f"Expected `{name}` to hold real numbers with shape {expected}, "
+                f"got {what} with a number too large for a float64"
+            ) from None
         except (TypeError, ValueError):
-            raise ConfigurationError(f"Expected `{name}` to hold real numbers with shape {expected}, "
-                                     f"got {what} with non-numeric entries") from None
+            raise ConfigurationError(
+                f"Expected `{name}` to hold real numbers with shape {expected}, "
+                f"got {what} with non-numeric entries"
+            ) from None
 
     def _check_values(self, q: np.ndarray, name: str) -> None:
         """ConfigurationError for a NaN/inf entry or one beyond ±MAX_MAGNITUDE (the slow path of check)."""
@@ -216,16 +251,20 @@ class CoordinateMap:
         if (np.abs(q) > MAX_MAGNITUDE).any():
             bad = np.argwhere(np.abs(q) > MAX_MAGNITUDE)[0]
             where = f"[{', '.join(map(str, bad))}]"
-            raise ConfigurationError(f"`{name}`{where} (joint {self.names[bad[-1]]!r}) is {float(q[tuple(bad)])!r}: "
-                                     f"coordinates beyond ±{MAX_MAGNITUDE:g} (m or rad) are refused, so that poses and "
-                                     "Jacobians cannot overflow; wrap angles into [-π, π)")
+            raise ConfigurationError(
+                f"`{name}`{where} (joint {self.names[bad[-1]]!r}) is {float(q[tuple(bad)])!r}: "
+                f"coordinates beyond ±{MAX_MAGNITUDE:g} (m or rad) are refused, so that poses and "
+                "Jacobians cannot overflow; wrap angles into [-π, π)"
+            )
 
     def _raise_nonfinite(self, q: np.ndarray, name: str) -> None:
         bad = np.argwhere(~np.isfinite(q))[0]
         joint = self.names[bad[-1]]
         where = f"[{', '.join(map(str, bad))}]"
-        raise ConfigurationError(f"`{name}`{where} (joint {joint!r}) is {float(q[tuple(bad)])}: "
-                                 "every coordinate must be a finite number")
+        raise ConfigurationError(
+            f"`{name}`{where} (joint {joint!r}) is {float(q[tuple(bad)])}: "
+            "every coordinate must be a finite number"
+        )
 
     def check_limits(self, q: np.ndarray, *, name: str = "q") -> None:
         """ConfigurationError naming the first joint outside [lower, upper] (and its row in a batch)."""
@@ -234,17 +273,26 @@ class CoordinateMap:
             bad = np.argwhere(outside)[0]
             i = bad[-1]
             row = f"[{bad[0]}]" if q.ndim == 2 else ""
-            why = (f" (narrowed so that mimic joint {', '.join(self._narrowed_by[i])})"
-                   if i in self._narrowed_by else "")
+            why = (
+                f" (narrowed so that mimic joint {', '.join(self._narrowed_by[i])})"
+                if i in self._narrowed_by
+                else ""
+            )
             raise ConfigurationError(
                 f"`{name}`{row} puts joint {self.names[i]!r} at {float(q[tuple(bad)])!r}, outside its limits "
-                f"[{float(self.lower[i])!r}, {float(self.upper[i])!r}]{why}; clip q or pass check_limits=False")
+                f"[{float(self.lower[i])!r}, {float(self.upper[i])!r}]{why}; "
+                "clip q or pass check_limits=False"
+            )
 
     # -- construction -------------------------------------------------------------------------
-    def from_mapping(self, values: Mapping[str, float], base: np.ndarray, *, strict: bool = True) -> np.ndarray:
+    def from_mapping(
+        self, values: Mapping[str, float], base: np.ndarray, *, strict: bool = True
+    ) -> np.ndarray:
         """q from joint name -> value (e.g. a ROS JointState); joints not named keep ``base``."""
         if not isinstance(values, Mapping):
-            raise ConfigurationError(f"Expected a mapping of joint name to value, got {type(values).__name__}")
+            raise ConfigurationError(
+                f"Expected a mapping of joint name to value, got {type(values).__name__}"
+            )
         q = base.copy()
         for joint, value in values.items():
             i = self._index.get(joint)
@@ -254,31 +302,41 @@ class CoordinateMap:
                 if joint in self._mimics:
                     raise ConfigurationError(
                         f"joint {joint!r} is a mimic joint that follows {self._mimics[joint]!r} and takes no "
-                        "coordinate; set the leader instead (or pass strict=False to ignore it)")
+                        "coordinate; set the leader instead (or pass strict=False to ignore it)"
+                    )
                 raise FrameNotFoundError(joint, self.names, kind="joint")
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (numbers.Real, np.floating, np.integer)):
-                raise ConfigurationError(f"joint {joint!r}: expected a real number, got {type(value).__name__} "
-                                         f"{_short(value)}")
+            if isinstance(value, (bool, np.bool_)) or not isinstance(
+                value, (numbers.Real, np.floating, np.integer)
+            ):
+                raise ConfigurationError(
+                    f"joint {joint!r}: expected a real number, got {type(value).__name__} {_short(value)}"
+                )
             try:
                 v = float(value)
             except (TypeError, ValueError, OverflowError):
-                raise ConfigurationError(f"joint {joint!r}: expected a number that fits a float64, got "
-                                         f"{_short(value)}") from None
+                raise ConfigurationError(
+                    f"joint {joint!r}: expected a number that fits a float64, got {_short(value)}"
+                ) from None
             if not math.isfinite(v) or abs(v) > MAX_MAGNITUDE:
-                raise ConfigurationError(f"joint {joint!r}: expected a finite number within ±{MAX_MAGNITUDE:g}, "
-                                         f"got {v}")
+                raise ConfigurationError(
+                    f"joint {joint!r}: expected a finite number within ±{MAX_MAGNITUDE:g}, got {v}"
+                )
             q[i] = v
         return q
 
     def sample(self, rng: np.random.Generator, size: int | None) -> np.ndarray:
         """Uniform samples within limits; unbounded (continuous) joints in [-π, π)."""
-        if size is not None and (isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0):
+        if size is not None and (
+            isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0
+        ):
             raise OptionError(f"`size` must be None or a number of configurations >= 0, got {size!r}")
         lo = np.clip(np.where(np.isfinite(self.lower), self.lower, -np.pi), -MAX_MAGNITUDE, MAX_MAGNITUDE)
         hi = np.clip(np.where(np.isfinite(self.upper), self.upper, np.pi), -MAX_MAGNITUDE, MAX_MAGNITUDE)
         if size is not None and size * max(self.dof, 1) > MAX_SAMPLES:
-            raise OptionError(f"`size` = {size} asks for {size * self.dof} numbers, more than {MAX_SAMPLES:g}; "
-                              "sample in smaller batches")
+            raise OptionError(
+                f"`size` = {size} asks for {size * self.dof} numbers, more than {MAX_SAMPLES:g}; "
+                "sample in smaller batches"
+            )
         shape = (self.dof,) if size is None else (size, self.dof)
         return rng.uniform(lo, hi, size=shape)
 
