@@ -6,9 +6,9 @@ from __future__ import annotations
 
 import os
 
-from hypothesis import settings
 import pytest
 from custom_robots import mixed_chain_urdf
+from hypothesis import settings
 
 import kinengine
 

@@ -8,8 +8,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 
-def pose_jacobian_fd(pose: Callable[[np.ndarray], np.ndarray], q: np.ndarray, reference: str,
-                     h: float = 1e-6) -> np.ndarray:
+def pose_jacobian_fd(
+    pose: Callable[[np.ndarray], np.ndarray], q: np.ndarray, reference: str, h: float = 1e-6
+) -> np.ndarray:
     """(6, dof) geometric Jacobian of T_IF(q) by central differences, rows [linear; angular].
 
     Linear: (p(q + h e_k) − p(q − h e_k)) / 2h; angular: log(C(q + h e_k) C(q − h e_k)^T) / 2h,

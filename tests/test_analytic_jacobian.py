@@ -6,10 +6,10 @@ import warnings
 
 import numpy as np
 import pytest
-
-import kinengine
 from custom_robots import mixed_chain_urdf
 from finite_differences import assert_close_relative
+
+import kinengine
 from kinengine.parameterizations import POSITION_PARAMETERIZATIONS, ROTATION_PARAMETERIZATIONS
 
 POSITIONS = sorted(POSITION_PARAMETERIZATIONS)
@@ -41,14 +41,18 @@ def _regular_samples(robot, position, rotation, count, seed):
             chi_p = pmap_p.from_position(T[:3, 3])
             chi_r = pmap_r.from_rotation(T[:3, :3])
         angle = np.linalg.norm(kinengine_rotvec(T[:3, :3]))
-        if (np.min(pmap_p.singularity_distance(chi_p)) > 0.05 and np.min(pmap_r.singularity_distance(chi_r)) > 0.05
-                and angle < np.pi - 0.05):
+        if (
+            np.min(pmap_p.singularity_distance(chi_p)) > 0.05
+            and np.min(pmap_r.singularity_distance(chi_r)) > 0.05
+            and angle < np.pi - 0.05
+        ):
             found.append(q)
     return found
 
 
 def kinengine_rotvec(C):
     from scipy.spatial.transform import Rotation
+
     return Rotation.from_matrix(C).as_rotvec()
 
 
@@ -64,8 +68,9 @@ def test_analytic_jacobian_matches_finite_differences(robot, position, rotation)
         for k in range(robot.dof):
             dq = np.zeros(robot.dof)
             dq[k] = h
-            d = (robot.pose_parameters(q + dq, position=position, rotation=rotation)
-                 - robot.pose_parameters(q - dq, position=position, rotation=rotation))
+            d = robot.pose_parameters(q + dq, position=position, rotation=rotation) - robot.pose_parameters(
+                q - dq, position=position, rotation=rotation
+            )
             fd[:, k] = ((d + np.pi) % (2 * np.pi) - np.pi) / (2 * h)  # angles unwrapped
         assert_close_relative(JA, fd, 1e-6, f"{position}+{rotation}")
 
@@ -77,8 +82,9 @@ def test_row_counts_and_partial_parameterizations(robot):
         assert robot.pose_parameters(q, position="cartesian", rotation=rotation).shape == (3 + m,)
         assert robot.pose_parameters(q, position=None, rotation=rotation).shape == (m,)
     J = robot.jacobian(q)
-    np.testing.assert_allclose(robot.analytic_jacobian(q, position="cartesian", rotation=None), J[:3],
-                               rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        robot.analytic_jacobian(q, position="cartesian", rotation=None), J[:3], rtol=0, atol=1e-15
+    )
     with pytest.raises(kinengine.KinematicsError, match="both None"):
         robot.analytic_jacobian(q, position=None, rotation=None)
 
@@ -89,10 +95,12 @@ def test_batched_analytic_jacobian_equals_single_calls(robot):
     chi = robot.pose_parameters(qs, position="spherical", rotation="quaternion")
     assert JA.shape == (5, 7, robot.dof) and chi.shape == (5, 7)
     for i, q in enumerate(qs):
-        np.testing.assert_allclose(JA[i], robot.analytic_jacobian(q, position="spherical", rotation="quaternion"),
-                                   rtol=0, atol=1e-14)
-        np.testing.assert_allclose(chi[i], robot.pose_parameters(q, position="spherical", rotation="quaternion"),
-                                   rtol=0, atol=1e-14)
+        np.testing.assert_allclose(
+            JA[i], robot.analytic_jacobian(q, position="spherical", rotation="quaternion"), rtol=0, atol=1e-14
+        )
+        np.testing.assert_allclose(
+            chi[i], robot.pose_parameters(q, position="spherical", rotation="quaternion"), rtol=0, atol=1e-14
+        )
 
 
 def test_unknown_names_list_the_valid_ones():
@@ -147,15 +155,22 @@ def test_planar_arm_operational_space_jacobian_equals_the_closed_form():
         c1, c12, c123 = np.cos(q[0]), np.cos(q[0] + q[1]), np.cos(q.sum())
         chi = robot.pose_parameters(q, "ee", rotation="euler_yxz", rows=rows)
         angle = (q.sum() + np.pi) % (2 * np.pi) - np.pi
-        np.testing.assert_allclose(chi, [l1 * s1 + l2 * s12 + l3 * s123, l0 + l1 * c1 + l2 * c12 + l3 * c123, angle],
-                                   rtol=0, atol=1e-12)
-        expected = np.array([
-            [l1 * c1 + l2 * c12 + l3 * c123, l2 * c12 + l3 * c123, l3 * c123],
-            [-(l1 * s1 + l2 * s12 + l3 * s123), -(l2 * s12 + l3 * s123), -l3 * s123],
-            [1.0, 1.0, 1.0],
-        ])
-        np.testing.assert_allclose(robot.analytic_jacobian(q, "ee", rotation="euler_yxz", rows=rows), expected,
-                                   rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            chi,
+            [l1 * s1 + l2 * s12 + l3 * s123, l0 + l1 * c1 + l2 * c12 + l3 * c123, angle],
+            rtol=0,
+            atol=1e-12,
+        )
+        expected = np.array(
+            [
+                [l1 * c1 + l2 * c12 + l3 * c123, l2 * c12 + l3 * c123, l3 * c123],
+                [-(l1 * s1 + l2 * s12 + l3 * s123), -(l2 * s12 + l3 * s123), -l3 * s123],
+                [1.0, 1.0, 1.0],
+            ]
+        )
+        np.testing.assert_allclose(
+            robot.analytic_jacobian(q, "ee", rotation="euler_yxz", rows=rows), expected, rtol=0, atol=1e-12
+        )
 
 
 def test_scara_four_coordinate_operational_space():
@@ -170,13 +185,18 @@ def test_scara_four_coordinate_operational_space():
         chi = robot.pose_parameters(q, "ee", rotation="euler_zyx", rows=rows)
         phi = (a + b + g + np.pi) % (2 * np.pi) - np.pi
         np.testing.assert_allclose(
-            chi, [l1 * np.cos(a) + l2 * np.cos(a + b), l1 * np.sin(a) + l2 * np.sin(a + b), l0 - zeta + tool, phi],
-            rtol=0, atol=1e-12)
+            chi,
+            [l1 * np.cos(a) + l2 * np.cos(a + b), l1 * np.sin(a) + l2 * np.sin(a + b), l0 - zeta + tool, phi],
+            rtol=0,
+            atol=1e-12,
+        )
         JA = robot.analytic_jacobian(q, "ee", rotation="euler_zyx", rows=rows)
-        expected = np.array([
-            [-l1 * np.sin(a) - l2 * np.sin(a + b), -l2 * np.sin(a + b), 0, 0],
-            [l1 * np.cos(a) + l2 * np.cos(a + b), l2 * np.cos(a + b), 0, 0],
-            [0, 0, 0, -1],
-            [1, 1, 1, 0],
-        ])
+        expected = np.array(
+            [
+                [-l1 * np.sin(a) - l2 * np.sin(a + b), -l2 * np.sin(a + b), 0, 0],
+                [l1 * np.cos(a) + l2 * np.cos(a + b), l2 * np.cos(a + b), 0, 0],
+                [0, 0, 0, -1],
+                [1, 1, 1, 0],
+            ]
+        )
         np.testing.assert_allclose(JA, expected, rtol=0, atol=1e-12)

@@ -44,16 +44,19 @@ def _imports(path: Path) -> list[tuple[str, str | None, int, bool]]:
     for node in ast.walk(tree):
         guarded = id(node) in type_checking
         if isinstance(node, ast.Import):
-            found += [(a.name, None, node.lineno, guarded) for a in node.names if a.name.startswith("kinengine")]
+            found += [
+                (a.name, None, node.lineno, guarded) for a in node.names if a.name.startswith("kinengine")
+            ]
         elif isinstance(node, ast.ImportFrom):
             target = _resolve(module, is_package, node.level, node.module)
             if not target.startswith("kinengine"):
                 continue
             for alias in node.names:
                 submodule = f"{target}.{alias.name}"
-                if (PACKAGE.parent / Path(*submodule.split("."))).with_suffix(".py").exists() or \
-                        (PACKAGE.parent / Path(*submodule.split(".")) / "__init__.py").exists():
-                    found.append((submodule, None, node.lineno, guarded))   # `from . import batch`
+                if (PACKAGE.parent / Path(*submodule.split("."))).with_suffix(".py").exists() or (
+                    PACKAGE.parent / Path(*submodule.split(".")) / "__init__.py"
+                ).exists():
+                    found.append((submodule, None, node.lineno, guarded))  # `from . import batch`
                 else:
                     found.append((target, alias.name, node.lineno, guarded))
     return found
@@ -75,8 +78,9 @@ def test_no_module_imports_a_higher_layer(name):
         if type_only or (target == "kinengine" and name.startswith("kinengine.cli")):
             continue  # an import under TYPE_CHECKING names a type for the checker; nothing runs
         theirs = layer_of(target)
-        assert theirs <= mine, (f"{name}:{line} imports {target} ({LAYERS[theirs][0]}), a higher layer than "
-                                f"{LAYERS[mine][0]}")
+        assert theirs <= mine, (
+            f"{name}:{line} imports {target} ({LAYERS[theirs][0]}), a higher layer than {LAYERS[mine][0]}"
+        )
 
 
 @pytest.mark.parametrize("name", sorted(n for n in MODULES if n.startswith("kinengine.cli")))
@@ -84,16 +88,18 @@ def test_the_command_line_uses_only_the_public_api(name):
     for target, _, line, _ in GRAPH[name]:
         if target.startswith("kinengine.cli"):
             continue
-        assert any(target == p or (p != "kinengine" and target.startswith(p + ".")) for p in PUBLIC_API), \
+        assert any(target == p or (p != "kinengine" and target.startswith(p + ".")) for p in PUBLIC_API), (
             f"{name}:{line} imports {target}, which is not public API"
+        )
 
 
 def test_the_reference_is_independent_of_the_pinocchio_path():
     for name in MODULES:
         if any(name == p or name.startswith(p + ".") for p in INDEPENDENT):
             for target, _, line, _ in GRAPH[name]:
-                assert target == "kinengine.errors" or any(target.startswith(p) for p in INDEPENDENT), \
+                assert target == "kinengine.errors" or any(target.startswith(p) for p in INDEPENDENT), (
                     f"{name}:{line} imports {target}"
+                )
             source = MODULES[name].read_text(encoding="utf-8")
             assert "import pinocchio" not in source
 
@@ -112,14 +118,20 @@ def test_no_private_attribute_reaches_into_a_robot():
             continue
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for node in ast.walk(tree):
-            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) \
-                    and node.value.id in ("robot", "self_robot") and node.attr.startswith("_"):
+            if (
+                isinstance(node, ast.Attribute)
+                and isinstance(node.value, ast.Name)
+                and node.value.id in ("robot", "self_robot")
+                and node.attr.startswith("_")
+            ):
                 pytest.fail(f"{name}:{node.lineno} reads robot.{node.attr}")
 
 
 def test_there_are_no_import_cycles():
-    edges = {name: {t for t, _, _, guarded in GRAPH[name] if not guarded and t in MODULES and t != name}
-             for name in MODULES}
+    edges = {
+        name: {t for t, _, _, guarded in GRAPH[name] if not guarded and t in MODULES and t != name}
+        for name in MODULES
+    }
     state: dict[str, int] = {}
     stack: list[str] = []
 
@@ -128,7 +140,7 @@ def test_there_are_no_import_cycles():
         stack.append(node)
         for nxt in sorted(edges[node]):
             if state.get(nxt) == 1:
-                cycle = stack[stack.index(nxt):] + [nxt]
+                cycle = stack[stack.index(nxt) :] + [nxt]
                 # a package's __init__ importing its own submodules is not a cycle of the design
                 if not all(c.startswith(cycle[0]) for c in cycle):
                     pytest.fail("import cycle: " + " -> ".join(cycle))

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-
-import kinengine
 from custom_robots import mixed_chain_urdf
 from finite_differences import assert_close_relative
+
+import kinengine
 
 REFERENCES = ("local_world_aligned", "local", "world")
 
@@ -37,11 +37,11 @@ CASES = [
     ("abb_irb120", "tool0"),
     ("ur5", "tool0"),
     ("panda", "panda_hand"),
-    ("kinova", None),                       # continuous joints
-    ("baxter", "l_gripper_r_finger"),       # below a prismatic mimic joint
-    ("mixed", "finger_b"),                  # below a revolute mimic joint (multiplier -1.5)
-    ("mixed", "side"),                      # a branch: only two joints move it
-    ("stacked", "tip"),                     # a mimic joint below its own leader
+    ("kinova", None),  # continuous joints
+    ("baxter", "l_gripper_r_finger"),  # below a prismatic mimic joint
+    ("mixed", "finger_b"),  # below a revolute mimic joint (multiplier -1.5)
+    ("mixed", "side"),  # a branch: only two joints move it
+    ("stacked", "tip"),  # a mimic joint below its own leader
 ]
 
 
@@ -73,8 +73,9 @@ def test_time_variation_equals_finite_differences_along_qdot(name, frame, refere
     h = 1e-6
     for _ in range(3):
         q, qdot = robot.random_configuration(rng), rng.normal(size=robot.dof)
-        Jdot_fd = (robot.jacobian(q + h * qdot, frame, reference)
-                   - robot.jacobian(q - h * qdot, frame, reference)) / (2 * h)
+        Jdot_fd = (
+            robot.jacobian(q + h * qdot, frame, reference) - robot.jacobian(q - h * qdot, frame, reference)
+        ) / (2 * h)
         Jdot = robot.jacobian_time_variation(q, qdot, frame, reference)
         assert Jdot.shape == (6, robot.dof)
         assert_close_relative(Jdot, Jdot_fd, 1e-6, f"{name} {frame} {reference}")
@@ -138,7 +139,9 @@ def test_pinocchio_time_variations_of_the_plain_joint_model_fold_to_ours_in_ever
     pin.updateFramePlacements(model, data)
     fid = robot.frame_id("finger_b")
     for reference in REFERENCES:
-        ref = {"world": pin.WORLD, "local": pin.LOCAL, "local_world_aligned": pin.LOCAL_WORLD_ALIGNED}[reference]
+        ref = {"world": pin.WORLD, "local": pin.LOCAL, "local_world_aligned": pin.LOCAL_WORLD_ALIGNED}[
+            reference
+        ]
         theirs = pin.getFrameJacobianTimeVariation(model, data, fid, ref) @ M
         ours = robot.jacobian_time_variation(q, qdot, "finger_b", reference)
         np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12)
@@ -158,8 +161,15 @@ def test_planar_arm_hessian_matches_its_closed_form():
     np.testing.assert_allclose(robot.kinematic_hessian(q, "ee"), expected, rtol=0, atol=1e-14)
 
 
-@pytest.mark.parametrize("position,rotation", [("cartesian", "euler_zyx"), ("spherical", "quaternion"),
-                                               ("cylindrical", "euler_zyz"), (None, "rotation_vector")])
+@pytest.mark.parametrize(
+    "position,rotation",
+    [
+        ("cartesian", "euler_zyx"),
+        ("spherical", "quaternion"),
+        ("cylindrical", "euler_zyz"),
+        (None, "rotation_vector"),
+    ],
+)
 @pytest.mark.parametrize("name,frame", [CASES[0], CASES[3], CASES[5]])
 def test_analytic_hessian_equals_finite_differences_of_the_analytic_jacobian(name, frame, position, rotation):
     robot = _load(name)
@@ -168,9 +178,17 @@ def test_analytic_hessian_equals_finite_differences_of_the_analytic_jacobian(nam
     h = 1e-6
     q = robot.random_configuration(rng)
     HA = robot.analytic_hessian(q, frame, position, rotation)
-    HA_fd = np.stack([(robot.analytic_jacobian(q + h * e, frame, position, rotation)
-                       - robot.analytic_jacobian(q - h * e, frame, position, rotation)) / (2 * h)
-                      for e in np.eye(robot.dof)], axis=-1)
+    HA_fd = np.stack(
+        [
+            (
+                robot.analytic_jacobian(q + h * e, frame, position, rotation)
+                - robot.analytic_jacobian(q - h * e, frame, position, rotation)
+            )
+            / (2 * h)
+            for e in np.eye(robot.dof)
+        ],
+        axis=-1,
+    )
     assert HA.shape == HA_fd.shape
     assert_close_relative(HA, HA_fd, 1e-6, f"{name} {position} {rotation}")
     # J̇_A of the lead's Task (Ė·J + E·J̇, another path) is the contraction with q̇

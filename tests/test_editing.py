@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings, strategies as st
+from custom_robots import mixed_chain_urdf
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 import kinengine
@@ -17,8 +19,6 @@ from kinengine import ConfigurationError, FrameNotFoundError, OptionError, URDFE
 from kinengine.model.editing import matrix_from_rpy, rpy_from_matrix
 from kinengine.reference import ReferenceKinematics
 from kinengine.verify import verify
-
-from custom_robots import mixed_chain_urdf
 
 REFERENCES = ("local_world_aligned", "local", "world")
 
@@ -91,19 +91,23 @@ def test_joint_frame_parent_equals_its_child_link(panda):
     by_link = panda.with_frame("tcp", "panda_link7", placement)
     Q = panda.random_configuration(2, size=10)
     np.testing.assert_allclose(by_joint.frame_pose(Q, "tcp"), by_link.frame_pose(Q, "tcp"), atol=1e-15)
-    np.testing.assert_allclose(by_joint.frame_pose(Q, "tcp"),
-                               panda.frame_pose(Q, "panda_joint7") @ _transform(*placement), atol=1e-14)
+    np.testing.assert_allclose(
+        by_joint.frame_pose(Q, "tcp"),
+        panda.frame_pose(Q, "panda_joint7") @ _transform(*placement),
+        atol=1e-14,
+    )
 
 
 def test_new_frame_is_in_urdf_text_and_checked_by_the_reference(mixed_robot):
     tcp = mixed_robot.with_frame("tcp", "finger_b_joint", ((0.01, 0.0, 0.03), (0.0, 0.5, 0.0)))
-    assert "<link name=\"tcp\"/>" in tcp.urdf_text
+    assert '<link name="tcp"/>' in tcp.urdf_text
     ref = _reference(tcp)
     Q = tcp.random_configuration(4, size=16)
     np.testing.assert_allclose(tcp.frame_pose(Q, "tcp"), ref.frame_pose(Q, "tcp"), atol=1e-12)
     for reference in REFERENCES:
-        np.testing.assert_allclose(tcp.jacobian(Q, "tcp", reference), ref.jacobian(Q, "tcp", reference),
-                                   atol=1e-12)
+        np.testing.assert_allclose(
+            tcp.jacobian(Q, "tcp", reference), ref.jacobian(Q, "tcp", reference), atol=1e-12
+        )
     report = verify(tcp, samples=4)
     assert report.passed and report.frames == len(tcp.frame_names)
 
@@ -178,8 +182,12 @@ def test_panda_finger_locked(panda):
 
 
 @settings(max_examples=15, deadline=None)
-@given(st.integers(0, 2**32 - 1), st.sets(st.sampled_from(["shoulder", "spin", "slide", "wrist",
-                                                          "finger_a_joint", "side_joint"]), max_size=4))
+@given(
+    st.integers(0, 2**32 - 1),
+    st.sets(
+        st.sampled_from(["shoulder", "spin", "slide", "wrist", "finger_a_joint", "side_joint"]), max_size=4
+    ),
+)
 def test_locked_equals_full_robot_with_columns_removed(mixed_robot, seed, names):
     rng = np.random.default_rng(seed)
     sample = mixed_robot.random_configuration(rng)
@@ -204,8 +212,9 @@ def test_locked_prismatic_folds_translation_along_the_axis(mixed_robot):
     locked = mixed_robot.locked({"slide": 0.2})
     joint = next(j for j in locked.description.joints if j.name == "slide")
     C = matrix_from_rpy((0.3, 0.0, 0.0))
-    np.testing.assert_allclose(joint.xyz, np.array([0.1, 0.0, 0.25]) + C @ (0.2 * np.array([0.6, 0.0, 0.8])),
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        joint.xyz, np.array([0.1, 0.0, 0.25]) + C @ (0.2 * np.array([0.6, 0.0, 0.8])), atol=1e-15
+    )
     np.testing.assert_allclose(joint.rpy, (0.3, 0.0, 0.0), atol=1e-15)
 
 
@@ -232,6 +241,7 @@ def test_edits_leave_the_original_robot_alone(panda):
 
 def test_edited_robot_pickles(mixed_robot):
     import pickle
+
     edited = mixed_robot.locked({"wrist": 0.5}).with_frame("tcp", "tip", np.eye(4))
     copy = pickle.loads(pickle.dumps(edited))
     q = edited.random_configuration(0)
@@ -240,6 +250,7 @@ def test_edited_robot_pickles(mixed_robot):
 
 def test_new_frame_is_drawn(abb):
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -248,14 +259,18 @@ def test_new_frame_is_drawn(abb):
     ax = tcp.plot(frames=["tcp"])
     try:
         drawing = ax.kinengine_drawing
-        np.testing.assert_allclose(drawing.frames["tcp"], abb.frame_pose(abb.neutral(), "tool0") @ T, atol=1e-15)
+        np.testing.assert_allclose(
+            drawing.frames["tcp"], abb.frame_pose(abb.neutral(), "tool0") @ T, atol=1e-15
+        )
         assert "tcp_joint" in drawing.skeleton_joints
     finally:
         plt.close(ax.figure)
 
 
 def test_edited_urdf_text_keeps_the_visuals_and_describes_the_edited_robot(panda):
-    arm = panda.locked({"panda_finger_joint1": 0.02}).with_frame("tcp", "panda_hand", ((0, 0, 0.1), (0, 0, 0)))
+    arm = panda.locked({"panda_finger_joint1": 0.02}).with_frame(
+        "tcp", "panda_hand", ((0, 0, 0.1), (0, 0, 0))
+    )
     assert arm.urdf_text.count("<mesh") == panda.urdf_text.count("<mesh") > 0
     again = kinengine.load_urdf_string(arm.urdf_text)
     assert again.joint_names == arm.joint_names and sorted(again.frame_names) == sorted(arm.frame_names)
@@ -272,8 +287,11 @@ def test_any_parent_any_placement_matches_composition_and_reference(mixed_robot,
     rpy = data.draw(st.tuples(*[st.floats(-np.pi, np.pi)] * 3))
     tcp = mixed_robot.with_frame("tcp", parent, (xyz, rpy))
     Q = tcp.random_configuration(data.draw(st.integers(0, 2**32 - 1)), size=3)
-    np.testing.assert_allclose(tcp.frame_pose(Q, "tcp"), mixed_robot.frame_pose(Q, parent) @ _transform(xyz, rpy),
-                               atol=1e-13)
+    np.testing.assert_allclose(
+        tcp.frame_pose(Q, "tcp"), mixed_robot.frame_pose(Q, parent) @ _transform(xyz, rpy), atol=1e-13
+    )
     ref = _reference(tcp)
     for reference in REFERENCES:
-        np.testing.assert_allclose(tcp.jacobian(Q, "tcp", reference), ref.jacobian(Q, "tcp", reference), atol=1e-12)
+        np.testing.assert_allclose(
+            tcp.jacobian(Q, "tcp", reference), ref.jacobian(Q, "tcp", reference), atol=1e-12
+        )

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import importlib.util
-from pathlib import Path
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,7 +18,7 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "resolved_rate_circ
 def example():
     spec = importlib.util.spec_from_file_location("resolved_rate_circle", EXAMPLE)
     module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module   # dataclasses look their module up while the file executes
+    sys.modules[spec.name] = module  # dataclasses look their module up while the file executes
     try:
         spec.loader.exec_module(module)
         yield module
@@ -37,10 +37,10 @@ def test_tool_follows_the_circle_after_half_a_second(example):
     run = example.simulate()
     settled = run.t >= 0.5
     assert run.t[-1] == pytest.approx(5.0) and np.diff(run.t) == pytest.approx(1e-3)
-    assert run.position_error[0] == pytest.approx(0.05)   # starts at the centre: 5 cm off the circle
+    assert run.position_error[0] == pytest.approx(0.05)  # starts at the centre: 5 cm off the circle
     assert run.position_error[settled].max() < 1e-4
     assert run.rotation_error[settled].max() < 1e-4
-    assert run.min_zyx_distance > 0.9 and run.min_sigma > 0.05   # regular all along
+    assert run.min_zyx_distance > 0.9 and run.min_sigma > 0.05  # regular all along
     # independently of the controller's bookkeeping: forward kinematics of the logged q at a quarter turn
     robot = kinengine.load("abb_irb120")
     centre = robot.frame_pose(example.Q_START, "tool0")[:3, 3]

@@ -19,25 +19,76 @@ import inspect
 import math
 import os
 
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import kinengine
-from kinengine import KinematicSingularityError, KinematicsError
+from kinengine import KinematicsError, KinematicSingularityError
 from kinengine.cli import main
 from kinengine.cli.main import build_parser
 
 ROBOT = kinengine.load("abb_irb120")
 Q0 = ROBOT.neutral()
 
-HOSTILE = [None, True, False, 0, -1, 1, 2, 10**400, 1.5, -0.0, math.nan, math.inf, -math.inf, 1e308, -1e308,
-           np.int64(2), np.float32(0.5), np.bool_(True), "", "abc", "tool0", "joint_1", "x", "world", "local",
-           "euler_zyx", "quaternion", "cartesian", "raise", "nan", "all", "\n", "a" * 300, b"tool0", [], [0],
-           ["tool0"], ["x", "x"], [None], [1.5], (0, 1, 2), {}, {"joint_1": 0.5}, {"joint_1": "0.5"}, object(),
-           np.zeros(3), np.zeros(6), np.full(6, np.nan), np.zeros((2, 6)), np.zeros((0, 6)), np.eye(4),
-           np.random.default_rng(0), complex(1, 1), slice(None), Ellipsis]
+HOSTILE = [
+    None,
+    True,
+    False,
+    0,
+    -1,
+    1,
+    2,
+    10**400,
+    1.5,
+    -0.0,
+    math.nan,
+    math.inf,
+    -math.inf,
+    1e308,
+    -1e308,
+    np.int64(2),
+    np.float32(0.5),
+    np.bool_(True),
+    "",
+    "abc",
+    "tool0",
+    "joint_1",
+    "x",
+    "world",
+    "local",
+    "euler_zyx",
+    "quaternion",
+    "cartesian",
+    "raise",
+    "nan",
+    "all",
+    "\n",
+    "a" * 300,
+    b"tool0",
+    [],
+    [0],
+    ["tool0"],
+    ["x", "x"],
+    [None],
+    [1.5],
+    (0, 1, 2),
+    {},
+    {"joint_1": 0.5},
+    {"joint_1": "0.5"},
+    object(),
+    np.zeros(3),
+    np.zeros(6),
+    np.full(6, np.nan),
+    np.zeros((2, 6)),
+    np.zeros((0, 6)),
+    np.eye(4),
+    np.random.default_rng(0),
+    complex(1, 1),
+    slice(None),
+    Ellipsis,
+]
 
 SKIPPED_METHODS = {"inverse_kinematics", "plot", "view"}
 FIXED = {"check_inputs": True}  # check_inputs=False promises valid input: no check by design
@@ -99,28 +150,93 @@ def test_every_public_method_answers_or_raises_a_kinematics_error(name, data):
 
 
 @settings(max_examples=150, deadline=None)
-@given(kwargs=st.dictionaries(st.sampled_from(["end_effector", "limits"]), st.sampled_from(HOSTILE), max_size=2),
-       target=st.sampled_from(["abb_irb120", "panda", "", "a" * 300, "x.urdf", "/", "/dev/null", "\0",
-                               "/nonexistent/arm.urdf", "abb_irb120\n"]))
+@given(
+    kwargs=st.dictionaries(st.sampled_from(["end_effector", "limits"]), st.sampled_from(HOSTILE), max_size=2),
+    target=st.sampled_from(
+        [
+            "abb_irb120",
+            "panda",
+            "",
+            "a" * 300,
+            "x.urdf",
+            "/",
+            "/dev/null",
+            "\0",
+            "/nonexistent/arm.urdf",
+            "abb_irb120\n",
+        ]
+    ),
+)
 def test_load_answers_or_raises_a_kinematics_error(target, kwargs):
     _assert_answer_or_one_line_error(lambda: kinengine.load(target, **kwargs))
 
 
 @settings(max_examples=100, deadline=None)
-@given(field=st.sampled_from(["max_bytes", "max_tags", "max_depth", "max_attribute_length", "max_name_length",
-                              "max_links", "max_joints", "max_movable_joints", "max_tree_depth", "max_offset",
-                              "max_multiplier"]),
-       value=st.sampled_from(HOSTILE[:20]) | st.integers(-10**12, 10**12) | st.floats())
+@given(
+    field=st.sampled_from(
+        [
+            "max_bytes",
+            "max_tags",
+            "max_depth",
+            "max_attribute_length",
+            "max_name_length",
+            "max_links",
+            "max_joints",
+            "max_movable_joints",
+            "max_tree_depth",
+            "max_offset",
+            "max_multiplier",
+        ]
+    ),
+    value=st.sampled_from(HOSTILE[:20]) | st.integers(-(10**12), 10**12) | st.floats(),
+)
 def test_limits_fields_are_checked(field, value):
     _assert_answer_or_one_line_error(lambda: kinengine.urdf.Limits(**{field: value}))
 
 
 # -- the command line -----------------------------------------------------------------------------------
-MALFORMED = ["", " ", "nan", "inf", "-inf", "1e400", "-1", "0", "1_0", "1 5", "\u0661", "\uff11", "0x10", "abc",
-             "\n", "a\nb", "&#10;", "--", "-", "a" * 300, "/dev/full", "/", ".", "/nonexistent/x", "1,,2",
-             "1,2", "0,0,0,0,0,0", "1e3", "5000", "100000000", "tool_0", "tool0", "é"]
+MALFORMED = [
+    "",
+    " ",
+    "nan",
+    "inf",
+    "-inf",
+    "1e400",
+    "-1",
+    "0",
+    "1_0",
+    "1 5",
+    "\u0661",
+    "\uff11",
+    "0x10",
+    "abc",
+    "\n",
+    "a\nb",
+    "&#10;",
+    "--",
+    "-",
+    "a" * 300,
+    "/dev/full",
+    "/",
+    ".",
+    "/nonexistent/x",
+    "1,,2",
+    "1,2",
+    "0,0,0,0,0,0",
+    "1e3",
+    "5000",
+    "100000000",
+    "tool_0",
+    "tool0",
+    "é",
+]
 COMMANDS = ("list", "info", "pose", "verify", "show")
-SKIPPED_OPTIONS = {"-h", "--help", "--xacro-arg", "--package"}  # help exits 0; xacro options: tests/test_xacro.py
+SKIPPED_OPTIONS = {
+    "-h",
+    "--help",
+    "--xacro-arg",
+    "--package",
+}  # help exits 0; xacro options: tests/test_xacro.py
 
 
 def _options() -> dict[str, list[tuple[str, bool]]]:
@@ -129,10 +245,13 @@ def _options() -> dict[str, list[tuple[str, bool]]]:
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
     found = {}
     for command in COMMANDS:
-        found[command] = [(action.option_strings[-1], action.nargs != 0)
-                          for action in sub.choices[command]._actions
-                          if action.option_strings and action.option_strings[-1] not in SKIPPED_OPTIONS
-                          and action.option_strings[0] not in SKIPPED_OPTIONS]
+        found[command] = [
+            (action.option_strings[-1], action.nargs != 0)
+            for action in sub.choices[command]._actions
+            if action.option_strings
+            and action.option_strings[-1] not in SKIPPED_OPTIONS
+            and action.option_strings[0] not in SKIPPED_OPTIONS
+        ]
     return found
 
 

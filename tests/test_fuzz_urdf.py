@@ -16,41 +16,126 @@ from __future__ import annotations
 import copy
 import warnings
 
-from hypothesis import HealthCheck, given, settings, strategies as st
-from lxml import etree
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from lxml import etree
+from urdf_strategies import random_urdfs
 
 import kinengine
 from kinengine.model import catalog_entry, shipped_robots_dir
 from kinengine.reference import ReferenceKinematics
-from urdf_strategies import random_urdfs
 
 SEED_TEXTS = tuple(p.read_text(encoding="utf-8") for p in sorted(shipped_robots_dir().glob("*/*.urdf"))) + (
-    catalog_entry("panda").path.read_text(encoding="utf-8"),)
+    catalog_entry("panda").path.read_text(encoding="utf-8"),
+)
 IGNORED_SUBTREES = ("visual", "collision", "material", "gazebo", "transmission")
-TAGS = ("robot", "link", "joint", "origin", "axis", "limit", "mimic", "parent", "child", "inertial", "mass",
-        "inertia", "calibration", "dynamics", "safety_controller")
+TAGS = (
+    "robot",
+    "link",
+    "joint",
+    "origin",
+    "axis",
+    "limit",
+    "mimic",
+    "parent",
+    "child",
+    "inertial",
+    "mass",
+    "inertia",
+    "calibration",
+    "dynamics",
+    "safety_controller",
+)
 ATTRIBUTES = {  # attributes a corruption may also add where they are absent
-    "robot": ("name",), "link": ("name",), "joint": ("name", "type"), "origin": ("xyz", "rpy"),
-    "axis": ("xyz",), "limit": ("lower", "upper", "effort", "velocity"),
-    "mimic": ("joint", "multiplier", "offset"), "parent": ("link",), "child": ("link",), "mass": ("value",),
+    "robot": ("name",),
+    "link": ("name",),
+    "joint": ("name", "type"),
+    "origin": ("xyz", "rpy"),
+    "axis": ("xyz",),
+    "limit": ("lower", "upper", "effort", "velocity"),
+    "mimic": ("joint", "multiplier", "offset"),
+    "parent": ("link",),
+    "child": ("link",),
+    "mass": ("value",),
     "inertia": ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
 }
-BAD_NUMBERS = ("nan", "NaN", "-nan", "inf", "-Infinity", "1e400", "-1e400", "1e308", "-1e308", "1e300",
-               "1e-320", "5e-324", "0", "-0", "1e-9", "abc", "", "0x1A", "1_0", "\u0661", "1.5.2", "+.5",
-               "5.", "1e", "--1", "3.0e+2", " 7 ", "1,5", "\uff11")
-BAD_VALUES = ("", " ", "1 2", "1 2 3 4", "0 0 0", "nan nan nan", "a b c", "1e308 1e308 1e308",
-              "1e-320 0 0", "0 0 1e-10", "\t1\n2  3 ", "1\u00a02\u00a03", "x" * 5000,
-              "revolute", "continuous", "prismatic", "fixed", "floating", "planar", "spherical", "REVOLUTE")
+BAD_NUMBERS = (
+    "nan",
+    "NaN",
+    "-nan",
+    "inf",
+    "-Infinity",
+    "1e400",
+    "-1e400",
+    "1e308",
+    "-1e308",
+    "1e300",
+    "1e-320",
+    "5e-324",
+    "0",
+    "-0",
+    "1e-9",
+    "abc",
+    "",
+    "0x1A",
+    "1_0",
+    "\u0661",
+    "1.5.2",
+    "+.5",
+    "5.",
+    "1e",
+    "--1",
+    "3.0e+2",
+    " 7 ",
+    "1,5",
+    "\uff11",
+)
+BAD_VALUES = (
+    "",
+    " ",
+    "1 2",
+    "1 2 3 4",
+    "0 0 0",
+    "nan nan nan",
+    "a b c",
+    "1e308 1e308 1e308",
+    "1e-320 0 0",
+    "0 0 1e-10",
+    "\t1\n2  3 ",
+    "1\u00a02\u00a03",
+    "x" * 5000,
+    "revolute",
+    "continuous",
+    "prismatic",
+    "fixed",
+    "floating",
+    "planar",
+    "spherical",
+    "REVOLUTE",
+)
 SPLICES = ("<", "&", "\x00", "\ud800", "</joint>", "<link name='x'/>")  # break the XML wherever they land
-JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar", "spherical", "", "Revolute")
+JOINT_TYPES = (
+    "revolute",
+    "continuous",
+    "prismatic",
+    "fixed",
+    "floating",
+    "planar",
+    "spherical",
+    "",
+    "Revolute",
+)
 
 
 def kinematic_elements(root: etree._Element) -> list[etree._Element]:
     """The elements a mutation may touch: everything outside visual/collision/material subtrees."""
-    return [e for e in root.iter() if isinstance(e.tag, str)
-            and not any(a.tag in IGNORED_SUBTREES for a in (e, *e.iterancestors()))]
+    return [
+        e
+        for e in root.iter()
+        if isinstance(e.tag, str) and not any(a.tag in IGNORED_SUBTREES for a in (e, *e.iterancestors()))
+    ]
 
 
 def names(root: etree._Element) -> list[str]:
@@ -75,16 +160,30 @@ def mutate(draw: st.DrawFn, root: etree._Element) -> None:
     """One mutation of ``root``, in place."""
     elements = kinematic_elements(root)
     target = draw(st.sampled_from(elements))
-    kind = draw(st.sampled_from(("drop", "duplicate", "move", "retag", "drop_attribute", "corrupt",
-                                 "corrupt", "corrupt", "joint_type")))
+    kind = draw(
+        st.sampled_from(
+            (
+                "drop",
+                "duplicate",
+                "move",
+                "retag",
+                "drop_attribute",
+                "corrupt",
+                "corrupt",
+                "corrupt",
+                "joint_type",
+            )
+        )
+    )
     parent = target.getparent()
     if kind == "drop" and parent is not None:
         parent.remove(target)
     elif kind == "duplicate" and parent is not None:
         target.addnext(copy.deepcopy(target))
     elif kind == "move" and parent is not None:
-        destination = draw(st.sampled_from([e for e in elements if e is not target
-                                            and target not in e.iterancestors()]))
+        destination = draw(
+            st.sampled_from([e for e in elements if e is not target and target not in e.iterancestors()])
+        )
         destination.append(target)
     elif kind == "retag":
         target.tag = draw(st.sampled_from(TAGS))
@@ -111,7 +210,7 @@ def mutated_urdfs(draw: st.DrawFn) -> str:
     text = etree.tostring(root, encoding="unicode")
     raw = draw(st.sampled_from(("none", "none", "none", "none", "truncate", "splice")))
     if raw == "truncate":
-        text = text[:draw(st.integers(0, len(text) - 1))]
+        text = text[: draw(st.integers(0, len(text) - 1))]
     elif raw == "splice":
         at = draw(st.integers(0, len(text)))
         text = text[:at] + draw(st.sampled_from(SPLICES)) + text[at:]
@@ -134,8 +233,9 @@ def assert_reference_agrees(robot: kinengine.Robot, text: str, seed: int) -> Non
     assert set(reference.frame_names) == set(robot.frame_names)
     qs = np.random.default_rng(seed).uniform(-np.pi, np.pi, size=(2, robot.dof))
     for frame in robot.frame_names:
-        np.testing.assert_allclose(robot.frame_pose(qs, frame), reference.frame_pose(qs, frame),
-                                   rtol=1e-12, atol=1e-9, err_msg=frame)
+        np.testing.assert_allclose(
+            robot.frame_pose(qs, frame), reference.frame_pose(qs, frame), rtol=1e-12, atol=1e-9, err_msg=frame
+        )
 
 
 @settings(max_examples=1000, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
@@ -146,7 +246,7 @@ def test_mutated_urdf_is_refused_or_agrees_with_the_reference(text, seed):
         assert_reference_agrees(robot, text, seed)
 
 
-@pytest.mark.parametrize("text", SEED_TEXTS, ids=lambda t: t[t.index("<robot name=") + 13:].split('"')[0])
+@pytest.mark.parametrize("text", SEED_TEXTS, ids=lambda t: t[t.index("<robot name=") + 13 :].split('"')[0])
 def test_unmutated_seeds_are_accepted_and_agree(text):
     robot = load_or_refuse(text)
     assert robot is not None
@@ -155,21 +255,29 @@ def test_unmutated_seeds_are_accepted_and_agree(text):
 
 # -- files the fuzzer found kinengine accepting although yourdfpy (and urdfdom) refuse them --------------
 def joint(inner: str, kind: str = "revolute", name: str = "j", parent: str = "a") -> str:
-    return (f'<robot name="r"><link name="a"/><link name="b"/><joint name="{name}" type="{kind}">'
-            f'<parent link="{parent}"/><child link="b"/>{inner}</joint></robot>')
+    return (
+        f'<robot name="r"><link name="a"/><link name="b"/><joint name="{name}" type="{kind}">'
+        f'<parent link="{parent}"/><child link="b"/>{inner}</joint></robot>'
+    )
 
 
 LIMIT = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
 
 
-@pytest.mark.parametrize("text, fragment", [
-    (joint('<limit upper="--1" effort="1" velocity="1"/>', kind="continuous"), "'--1' is not a number"),
-    (joint(LIMIT + '<safety_controller k_velocity="panda_hand_tcp"/>'), "'panda_hand_tcp' is not a number"),
-    (joint(LIMIT + '<calibration rising="0x1A"/>'), "'0x1A' is not a number"),
-    # found by this fuzzer: a fixed joint's <limit>, <axis> and <mimic> are unused but still read by others
-    (joint('<limit lower="0" upper="1" effort="" velocity="2"/>', kind="fixed"), "'' is not a number"),
-    (joint('<mimic joint="j" multiplier="two"/>', kind="fixed"), "'two' is not a number"),
-])
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        (joint('<limit upper="--1" effort="1" velocity="1"/>', kind="continuous"), "'--1' is not a number"),
+        (
+            joint(LIMIT + '<safety_controller k_velocity="panda_hand_tcp"/>'),
+            "'panda_hand_tcp' is not a number",
+        ),
+        (joint(LIMIT + '<calibration rising="0x1A"/>'), "'0x1A' is not a number"),
+        # found by this fuzzer: a fixed joint's <limit>, <axis> and <mimic> are unused but still read by others
+        (joint('<limit lower="0" upper="1" effort="" velocity="2"/>', kind="fixed"), "'' is not a number"),
+        (joint('<mimic joint="j" multiplier="two"/>', kind="fixed"), "'two' is not a number"),
+    ],
+)
 def test_numbers_yourdfpy_cannot_read_are_refused(text, fragment):
     with pytest.raises(kinengine.URDFError) as info:
         kinengine.load_urdf_string(text)
@@ -178,12 +286,17 @@ def test_numbers_yourdfpy_cannot_read_are_refused(text, fragment):
         ReferenceKinematics.from_urdf_string(text)
 
 
-@pytest.mark.parametrize("text, fragment", [
-    (joint(LIMIT).replace('name="a"', 'name="universe"').replace('link="a"', 'link="universe"'),
-     '<link name="universe">: the name is reserved'),
-    (joint(LIMIT, name="universe"), '<joint name="universe">: the name is reserved'),
-    (joint(LIMIT + '<dynamics damping="nan" friction="0"/>'), "'nan' is not finite"),
-])
+@pytest.mark.parametrize(
+    "text, fragment",
+    [
+        (
+            joint(LIMIT).replace('name="a"', 'name="universe"').replace('link="a"', 'link="universe"'),
+            '<link name="universe">: the name is reserved',
+        ),
+        (joint(LIMIT, name="universe"), '<joint name="universe">: the name is reserved'),
+        (joint(LIMIT + '<dynamics damping="nan" friction="0"/>'), "'nan' is not finite"),
+    ],
+)
 def test_names_pinocchio_reserves_and_unused_non_finite_numbers_are_refused(text, fragment):
     # a link or joint named "universe" (found by this fuzzer) lost its frame next to Pinocchio's own
     with pytest.raises(kinengine.URDFError) as info:

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-import kinengine
 from custom_robots import mixed_chain_urdf
 from finite_differences import assert_close_relative, pose_jacobian_fd
+
+import kinengine
 
 REFERENCES = ("local_world_aligned", "local", "world")
 
@@ -63,5 +63,7 @@ def test_mimic_joint_moves_with_its_leader_in_the_leader_column():
     C_tip = robot.frame_pose(q0, "tip")[:3, :3]
     C_b = robot.frame_pose(q0, "finger_b")[:3, :3]
     angle = 0.2  # the offset at q_a = 0: rotation about y by 0.2
-    expected = C_tip @ np.array([[np.cos(angle), 0, np.sin(angle)], [0, 1, 0], [-np.sin(angle), 0, np.cos(angle)]])
+    expected = C_tip @ np.array(
+        [[np.cos(angle), 0, np.sin(angle)], [0, 1, 0], [-np.sin(angle), 0, np.cos(angle)]]
+    )
     np.testing.assert_allclose(C_b, expected, rtol=0, atol=1e-12)

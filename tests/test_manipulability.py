@@ -16,7 +16,7 @@ from kinengine.control.manipulability import (
     velocity_ellipsoid,
 )
 
-L1, L2, L3 = 0.5, 0.35, 0.2   # planar_3dof link lengths [m]
+L1, L2, L3 = 0.5, 0.35, 0.2  # planar_3dof link lengths [m]
 ELBOW_STRETCHED = float(np.arctan2(-0.302, 0.07))  # IRB 120: joint 3 -> wrist centre (0.302, 0.07) in x-z
 
 
@@ -57,10 +57,10 @@ def test_irb120_wrist_singularity_joints_4_and_6_aligned(irb120):
     assert _parallel(moment_at_wrist, np.cross(axes[4], axes[5]), 1e-10)
     n = np.cross(axes[4], axes[5]) / np.linalg.norm(np.cross(axes[4], axes[5]))
     rotate_about_wrist = np.concatenate([np.cross(n, p_tool - p_wrist), n])  # twist at tool0, in I
-    assert abs(u @ rotate_about_wrist) > 0.1                                # not in the range of J
+    assert abs(u @ rotate_about_wrist) > 0.1  # not in the range of J
     along_axis_5 = np.concatenate([np.cross(axes[5], p_tool - p_wrist), axes[5]])
     residual = along_axis_5 - J @ np.linalg.lstsq(J, along_axis_5, rcond=None)[0]
-    assert np.linalg.norm(residual) < 1e-12                                 # this one is reachable
+    assert np.linalg.norm(residual) < 1e-12  # this one is reachable
 
 
 def test_irb120_stretched_arm_loses_the_radial_linear_direction(irb120):
@@ -90,16 +90,20 @@ def test_planar_arm_manipulability_closed_forms(planar):
         w3 = manipulability(planar, q, "ee", ("vx", "vz", "wy"))
         assert w3 == pytest.approx(L1 * L2 * abs(s2), rel=1e-12, abs=1e-15)
         w2 = manipulability(planar, q, "ee", ("vx", "vz"))
-        expected = np.sqrt((L1 * L2 * s2 + L1 * L3 * s23) ** 2 + (L1 * L3 * s23 + L2 * L3 * s3) ** 2
-                           + (L2 * L3 * s3) ** 2)
+        expected = np.sqrt(
+            (L1 * L2 * s2 + L1 * L3 * s23) ** 2 + (L1 * L3 * s23 + L2 * L3 * s3) ** 2 + (L2 * L3 * s3) ** 2
+        )
         assert w2 == pytest.approx(expected, rel=1e-12, abs=1e-15)
 
 
 def test_planar_arm_never_moves_out_of_its_plane(planar):
     report = singularity_report(planar, np.array([0.3, 0.5, -0.2]), "ee")
     assert report.rank == 3 and report.manipulability == 0.0 and report.condition_number == np.inf
-    assert [d.description for d in report.lost_directions] == ["linear along y", "angular about x",
-                                                               "angular about z"]
+    assert [d.description for d in report.lost_directions] == [
+        "linear along y",
+        "angular about x",
+        "angular about z",
+    ]
     stretched = singularity_report(planar, np.array([0.4, 0.0, 0.0]), "ee", ("vx", "vz", "wy"))
     (lost,) = stretched.lost_directions
     np.testing.assert_allclose(lost.twist, [np.sin(0.4), 0, np.cos(0.4), 0, 0, 0], rtol=0, atol=1e-12)
@@ -111,14 +115,15 @@ def test_measures_agree_with_independent_formulas_at_random_configurations(name)
     rng = np.random.default_rng(4)
     qs = robot.random_configuration(rng, size=10)
     batch = manipulability(robot, qs)
-    for q, w in zip(qs, batch):
+    for q, w in zip(qs, batch, strict=False):
         J = robot.jacobian(q)
         report = singularity_report(robot, q)
         assert report.manipulability == pytest.approx(np.sqrt(np.linalg.det(J @ J.T)), rel=1e-9)
         assert w == pytest.approx(report.manipulability, rel=1e-12)
         assert report.condition_number == pytest.approx(np.linalg.cond(J), rel=1e-9)
-        np.testing.assert_allclose(report.singular_values, np.sqrt(np.linalg.eigvalsh(J @ J.T)[::-1]),
-                                   rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(
+            report.singular_values, np.sqrt(np.linalg.eigvalsh(J @ J.T)[::-1]), rtol=1e-9, atol=1e-12
+        )
         for rows in ("linear", "angular"):
             Jr = J[:3] if rows == "linear" else J[3:]
             expected = np.sqrt(np.linalg.det(Jr @ Jr.T))
@@ -131,12 +136,12 @@ def test_velocity_ellipsoid_axes_and_semi_axes(irb120):
     ellipsoid = velocity_ellipsoid(irb120, q, "tool0")
     Jv = irb120.jacobian(q, "tool0")[:3]
     A, s = ellipsoid.axes, ellipsoid.semi_axes
-    np.testing.assert_allclose(A @ np.diag(s ** 2) @ A.T, Jv @ Jv.T, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(A @ np.diag(s**2) @ A.T, Jv @ Jv.T, rtol=0, atol=1e-12)
     np.testing.assert_allclose(A.T @ A, np.eye(3), rtol=0, atol=1e-12)
     np.testing.assert_allclose(ellipsoid.center, irb120.frame_pose(q, "tool0")[:3, 3], rtol=0, atol=0)
     for qdot in rng.normal(size=(200, 6)):
         v = Jv @ (qdot / np.linalg.norm(qdot))
-        assert np.sum((A.T @ v) ** 2 / s ** 2) <= 1.0 + 1e-9   # every unit joint speed lands inside
+        assert np.sum((A.T @ v) ** 2 / s**2) <= 1.0 + 1e-9  # every unit joint speed lands inside
     _, _, Vt = np.linalg.svd(Jv)
     np.testing.assert_allclose(np.linalg.norm(Jv @ Vt[0]), s[0], rtol=1e-12)  # and the longest axis is hit
 

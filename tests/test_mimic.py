@@ -14,11 +14,13 @@ from __future__ import annotations
 
 import warnings
 
-from custom_robots import MIMIC_SHAPES, mimic_chain_urdf, robotiq_like_gripper_urdf
-from finite_differences import assert_close_relative as _assert_close_relative, pose_jacobian_fd
-from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
+from custom_robots import MIMIC_SHAPES, mimic_chain_urdf, robotiq_like_gripper_urdf
+from finite_differences import assert_close_relative as _assert_close_relative
+from finite_differences import pose_jacobian_fd
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from urdf_strategies import random_urdfs
 
 import kinengine
@@ -26,8 +28,8 @@ from kinengine.reference import REFERENCES, ReferenceKinematics
 from kinengine.verify import verify
 
 TEXTS = {**MIMIC_SHAPES, "all_shapes": mimic_chain_urdf()}
-H = 1e-6          # central-difference step [rad | m]
-FD_RTOL = 1e-7    # central differences with h = 1e-6: O(h²) truncation, O(ε/h) rounding
+H = 1e-6  # central-difference step [rad | m]
+FD_RTOL = 1e-7  # central differences with h = 1e-6: O(h²) truncation, O(ε/h) rounding
 
 
 @pytest.fixture(scope="module", params=list(TEXTS))
@@ -65,13 +67,24 @@ def test_mimic_chains_compose_multiplier_and_offset():
     chain = kinengine.load_urdf_string(TEXTS["all_shapes"])
     assert chain.joint_names == ("shoulder", "elbow", "wrist", "z_leader")
     q = np.array([0.1, 0.2, 0.3, 0.4])
-    a = -0.5 * 0.4 + 0.2       # a_mimic follows z_leader
-    b = 1.5 * a - 0.1          # b_mimic follows a_mimic
-    c = 0.1 * b + 0.02         # c_mimic (prismatic) follows b_mimic
-    expected = {"shoulder": 0.1, "elbow": 0.2, "spin_continuous": 2 * 0.2 + 0.5, "follow_wrist": -0.3,
-                "wrist": 0.3, "a_mimic": a, "b_mimic": b, "c_mimic": c, "z_leader": 0.4}
+    a = -0.5 * 0.4 + 0.2  # a_mimic follows z_leader
+    b = 1.5 * a - 0.1  # b_mimic follows a_mimic
+    c = 0.1 * b + 0.02  # c_mimic (prismatic) follows b_mimic
+    expected = {
+        "shoulder": 0.1,
+        "elbow": 0.2,
+        "spin_continuous": 2 * 0.2 + 0.5,
+        "follow_wrist": -0.3,
+        "wrist": 0.3,
+        "a_mimic": a,
+        "b_mimic": b,
+        "c_mimic": c,
+        "z_leader": 0.4,
+    }
     names = [chain.pinocchio_model().names[i] for i in range(1, chain.pinocchio_model().njoints)]
-    np.testing.assert_allclose(chain.pinocchio_configuration(q), [expected[n] for n in names], rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        chain.pinocchio_configuration(q), [expected[n] for n in names], rtol=0, atol=1e-15
+    )
 
 
 def test_the_pinocchio_model_has_one_plain_joint_per_movable_joint(case):
@@ -93,11 +106,17 @@ def test_poses_and_jacobians_match_the_reference(case):
     robot, ref = case
     for q in _configurations(robot):
         for frame in robot.frame_names:
-            np.testing.assert_allclose(robot.frame_pose(q, frame), ref.frame_pose(q, frame), rtol=0, atol=1e-12,
-                                       err_msg=frame)
+            np.testing.assert_allclose(
+                robot.frame_pose(q, frame), ref.frame_pose(q, frame), rtol=0, atol=1e-12, err_msg=frame
+            )
             for reference in REFERENCES:
-                np.testing.assert_allclose(robot.jacobian(q, frame, reference), ref.jacobian(q, frame, reference),
-                                           rtol=0, atol=1e-12, err_msg=f"{frame} {reference}")
+                np.testing.assert_allclose(
+                    robot.jacobian(q, frame, reference),
+                    ref.jacobian(q, frame, reference),
+                    rtol=0,
+                    atol=1e-12,
+                    err_msg=f"{frame} {reference}",
+                )
 
 
 def test_jacobians_match_finite_differences_of_poses(case):
@@ -106,7 +125,9 @@ def test_jacobians_match_finite_differences_of_poses(case):
         for frame in robot.frame_names:
             for reference in REFERENCES:
                 J_fd = pose_jacobian_fd(lambda x: robot.frame_pose(x, frame), q, reference)
-                assert_close_relative(robot.jacobian(q, frame, reference), J_fd, FD_RTOL, f"{frame} {reference}")
+                assert_close_relative(
+                    robot.jacobian(q, frame, reference), J_fd, FD_RTOL, f"{frame} {reference}"
+                )
 
 
 # -- derivatives -----------------------------------------------------------------------------------
@@ -123,8 +144,12 @@ def test_jacobian_time_variation_matches_finite_differences_in_every_reference(c
         for frame in _leaf_frames(robot):
             for reference in REFERENCES:
                 expected = _fd(lambda x: robot.jacobian(x, frame, reference), q, qdot)
-                assert_close_relative(robot.jacobian_time_variation(q, qdot, frame, reference), expected, FD_RTOL,
-                                      f"J̇ {frame} {reference}")
+                assert_close_relative(
+                    robot.jacobian_time_variation(q, qdot, frame, reference),
+                    expected,
+                    FD_RTOL,
+                    f"J̇ {frame} {reference}",
+                )
 
 
 def test_kinematic_hessian_matches_finite_differences_in_every_reference(case):
@@ -132,8 +157,10 @@ def test_kinematic_hessian_matches_finite_differences_in_every_reference(case):
     for q in _configurations(robot, seed=3):
         for frame in _leaf_frames(robot):
             for reference in REFERENCES:
-                H_fd = np.stack([_fd(lambda x: robot.jacobian(x, frame, reference), q, e) for e in np.eye(robot.dof)],
-                                axis=-1)
+                H_fd = np.stack(
+                    [_fd(lambda x: robot.jacobian(x, frame, reference), q, e) for e in np.eye(robot.dof)],
+                    axis=-1,
+                )
                 H_k = robot.kinematic_hessian(q, frame, reference)
                 assert H_k.shape == (6, robot.dof, robot.dof)
                 assert_close_relative(H_k, H_fd, FD_RTOL, f"∂J/∂q {frame} {reference}")
@@ -144,11 +171,17 @@ def test_analytic_hessian_matches_finite_differences(case, rotation):
     robot, _ = case
     for q in _configurations(robot, seed=4):
         for frame in _leaf_frames(robot):
+
             def JA(x):
                 return robot.analytic_jacobian(x, frame, "cartesian", rotation)
+
             H_fd = np.stack([_fd(JA, q, e) for e in np.eye(robot.dof)], axis=-1)
-            assert_close_relative(robot.analytic_hessian(q, frame, "cartesian", rotation), H_fd, 1e-6,
-                                  f"∂J_A/∂q {frame} {rotation}")
+            assert_close_relative(
+                robot.analytic_hessian(q, frame, "cartesian", rotation),
+                H_fd,
+                1e-6,
+                f"∂J_A/∂q {frame} {rotation}",
+            )
 
 
 def test_task_rates_match_finite_differences(case):
@@ -186,9 +219,11 @@ def test_a_gripper_whose_mimic_limits_collapse_its_leader_warns_once_and_keeps_m
         robot = kinengine.load_urdf_string(robotiq_like_gripper_urdf())
     messages = [str(w.message) for w in caught]
     assert len(messages) == 1, messages
-    assert ("only one value of joint 'finger_joint' keeps it within its limits and mimic joint "
-            "'left_inner_finger_joint' = -1·q + 0 within [0, 0.8757]; the mimic joint's limits are not enforced"
-            in messages[0])
+    assert (
+        "only one value of joint 'finger_joint' keeps it within its limits and mimic joint "
+        "'left_inner_finger_joint' = -1·q + 0 within [0, 0.8757]; the mimic joint's limits are not enforced"
+        in messages[0]
+    )
     assert "likewise mimic joint 'right_inner_finger_joint'" in messages[0]
     assert "'finger_joint' keeps [0, 0.8]" in messages[0]
     # the leader keeps its own limits (the inner knuckle, multiplier 1 within [0, 0.8757], narrows nothing)
@@ -198,7 +233,9 @@ def test_a_gripper_whose_mimic_limits_collapse_its_leader_warns_once_and_keeps_m
     assert samples.min() < 0.1 and samples.max() > 0.7
     # it moves: the inner finger turns by −q, the outer knuckle by q
     np.testing.assert_allclose(robot.pinocchio_configuration([0.5]), [0.5, -0.5, 0.5, 0.5, -0.5], atol=1e-15)
-    assert not np.allclose(robot.frame_pose([0.0], "left_inner_finger"), robot.frame_pose([0.5], "left_inner_finger"))
+    assert not np.allclose(
+        robot.frame_pose([0.0], "left_inner_finger"), robot.frame_pose([0.5], "left_inner_finger")
+    )
     target = robot.frame_pose([0.6], "left_inner_finger")[:3, 3]
     result = robot.inverse_kinematics(target, "left_inner_finger", q0=[0.1], position="cartesian")
     assert result.success and abs(result.q[0] - 0.6) < 1e-5
@@ -235,7 +272,10 @@ def test_random_trees_with_mimic_shapes_match_the_reference_and_finite_differenc
     frame = robot.end_effector
     for reference in REFERENCES:
         expected = _fd(lambda x: robot.jacobian(x, frame, reference), q, qdot)
-        assert_close_relative(robot.jacobian_time_variation(q, qdot, frame, reference), expected, FD_RTOL, "J̇")
+        assert_close_relative(
+            robot.jacobian_time_variation(q, qdot, frame, reference), expected, FD_RTOL, "J̇"
+        )
         H_k = robot.kinematic_hessian(q, frame, reference)
-        np.testing.assert_allclose(H_k @ qdot, robot.jacobian_time_variation(q, qdot, frame, reference),
-                                   rtol=0, atol=1e-11)
+        np.testing.assert_allclose(
+            H_k @ qdot, robot.jacobian_time_variation(q, qdot, frame, reference), rtol=0, atol=1e-11
+        )

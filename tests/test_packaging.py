@@ -38,8 +38,15 @@ if importlib.util.find_spec("build") is None or importlib.util.find_spec("twine"
 def _clean_env() -> dict[str, str]:
     """The environment without anything that would point Python at the checkout or another venv."""
     env = dict(os.environ)
-    for name in ("PYTHONPATH", "PYTHONHOME", "PYTHONSTARTUP", "PYTHONSAFEPATH", "VIRTUAL_ENV",
-                 "__PYVENV_LAUNCHER__", "PYTHONUSERBASE"):
+    for name in (
+        "PYTHONPATH",
+        "PYTHONHOME",
+        "PYTHONSTARTUP",
+        "PYTHONSAFEPATH",
+        "VIRTUAL_ENV",
+        "__PYVENV_LAUNCHER__",
+        "PYTHONUSERBASE",
+    ):
         env.pop(name, None)
     env["PYTHONNOUSERSITE"] = "1"
     env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
@@ -48,8 +55,15 @@ def _clean_env() -> dict[str, str]:
 
 
 def _run(cmd: list[str], *, cwd: Path, timeout: float) -> subprocess.CompletedProcess[str]:
-    proc = subprocess.run([str(c) for c in cmd], cwd=cwd, env=_clean_env(), capture_output=True,
-                          text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+    proc = subprocess.run(
+        [str(c) for c in cmd],
+        cwd=cwd,
+        env=_clean_env(),
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        stdin=subprocess.DEVNULL,
+    )
     assert proc.returncode == 0, (
         f"{' '.join(map(str, cmd))} exited {proc.returncode}\n"
         f"--- stdout ---\n{proc.stdout[-4000:]}\n--- stderr ---\n{proc.stderr[-4000:]}"
@@ -61,8 +75,14 @@ def _tracked_files() -> list[str]:
     """Paths git tracks (index), relative to the repository, that exist in the working tree."""
     if shutil.which("git") is None:
         pytest.skip("git is not installed")
-    proc = subprocess.run(["git", "ls-files", "-z", "--cached"], cwd=REPO, capture_output=True,
-                          text=True, timeout=60, stdin=subprocess.DEVNULL)
+    proc = subprocess.run(
+        ["git", "ls-files", "-z", "--cached"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        stdin=subprocess.DEVNULL,
+    )
     if proc.returncode != 0:
         pytest.skip(f"not a git checkout ({proc.stderr.strip()})")
     return sorted(p for p in proc.stdout.split("\0") if p and (REPO / p).is_file())
@@ -108,8 +128,7 @@ def venv(dists: dict[str, Path]) -> Iterator[Path]:
     _run([sys.executable, "-m", "venv", env_dir], cwd=root, timeout=300)
     bin_dir = env_dir / ("Scripts" if os.name == "nt" else "bin")
     # --no-compile: byte-compiling the ~1 GB of dependencies would double the install time.
-    _run([bin_dir / "python", "-m", "pip", "install", "--no-compile", dists["wheel"]],
-         cwd=root, timeout=1500)
+    _run([bin_dir / "python", "-m", "pip", "install", "--no-compile", dists["wheel"]], cwd=root, timeout=1500)
     yield bin_dir
     shutil.rmtree(env_dir, ignore_errors=True)
 
@@ -126,8 +145,12 @@ def _version_literal() -> str:
     """The one version literal: ``__version__ = "..."`` in kinengine/__init__.py."""
     tree = ast.parse((REPO / "kinengine" / "__init__.py").read_text(encoding="utf-8"))
     for node in tree.body:
-        if (isinstance(node, ast.Assign) and len(node.targets) == 1
-                and isinstance(node.targets[0], ast.Name) and node.targets[0].id == "__version__"):
+        if (
+            isinstance(node, ast.Assign)
+            and len(node.targets) == 1
+            and isinstance(node.targets[0], ast.Name)
+            and node.targets[0].id == "__version__"
+        ):
             assert isinstance(node.value, ast.Constant) and isinstance(node.value.value, str)
             return node.value.value
     raise AssertionError("kinengine/__init__.py has no __version__ literal")
@@ -144,8 +167,11 @@ def test_version_has_a_single_source() -> None:
 
 
 def test_twine_check_strict(dists: dict[str, Path]) -> None:
-    _run([sys.executable, "-m", "twine", "check", "--strict", dists["sdist"], dists["wheel"]],
-         cwd=dists["root"], timeout=300)
+    _run(
+        [sys.executable, "-m", "twine", "check", "--strict", dists["sdist"], dists["wheel"]],
+        cwd=dists["root"],
+        timeout=300,
+    )
 
 
 def test_file_names_carry_the_version(dists: dict[str, Path]) -> None:
@@ -159,8 +185,9 @@ def test_wheel_metadata(dists: dict[str, Path], wheel_names: list[str]) -> None:
     with zipfile.ZipFile(dists["wheel"]) as whl:
         metadata = whl.read(f"kinengine-{v}.dist-info/METADATA").decode()
         entry_points = whl.read(f"kinengine-{v}.dist-info/entry_points.txt").decode()
-        licenses = [n for n in wheel_names
-                    if n.startswith(f"kinengine-{v}.dist-info/") and n.endswith("LICENSE")]
+        licenses = [
+            n for n in wheel_names if n.startswith(f"kinengine-{v}.dist-info/") and n.endswith("LICENSE")
+        ]
         assert len(licenses) == 1, wheel_names
         assert whl.read(licenses[0]) == (REPO / "LICENSE").read_bytes()
     assert re.search(rf"^Version: {re.escape(v)}$", metadata, re.MULTILINE)
@@ -171,8 +198,11 @@ def test_wheel_metadata(dists: dict[str, Path], wheel_names: list[str]) -> None:
 
 def test_wheel_contents(wheel_names: list[str], tracked: list[str]) -> None:
     names = set(wheel_names)
-    for required in ("kinengine/__init__.py", "kinengine/py.typed",
-                     "kinengine/robots/abb_irb120/abb_irb120.urdf"):
+    for required in (
+        "kinengine/__init__.py",
+        "kinengine/py.typed",
+        "kinengine/robots/abb_irb120/abb_irb120.urdf",
+    ):
         assert required in names
     assert {"abb_irb120", "planar_3dof", "scara"} <= set(SHIPPED_ROBOTS)
     for robot in SHIPPED_ROBOTS:
@@ -216,8 +246,9 @@ def test_sdist_contents(dists: dict[str, Path], tracked: list[str]) -> None:
 
 
 def test_installed_kinengine_is_the_wheel(venv: Path, elsewhere: Path) -> None:
-    proc = _run([venv / "python", "-c", "import kinengine; print(kinengine.__file__)"],
-                cwd=elsewhere, timeout=120)
+    proc = _run(
+        [venv / "python", "-c", "import kinengine; print(kinengine.__file__)"], cwd=elsewhere, timeout=120
+    )
     installed = Path(proc.stdout.strip()).resolve()
     assert installed.is_relative_to(venv.parent.resolve()), installed
     assert not installed.is_relative_to(REPO), installed
@@ -244,7 +275,7 @@ def _printed_pose(stdout: str) -> list[list[str]]:
     lines = stdout.splitlines()
     start = next(i for i, line in enumerate(lines) if line.startswith("T"))
     rows = []
-    for line in lines[start + 1:]:
+    for line in lines[start + 1 :]:
         if not line.strip():
             break
         rows.append(_NUMBER.findall(line))
@@ -262,6 +293,6 @@ def test_installed_pose_matches_the_library(venv: Path, elsewhere: Path) -> None
     # numpy prints an array with one precision, trailing zeros stripped: the most decimals shown
     # bound the rounding of every entry.
     decimals = max(len(token.split(".")[1]) if "." in token else 0 for row in rows for token in row)
-    tolerance = 0.5 * 10.0 ** -decimals + 1e-12
+    tolerance = 0.5 * 10.0**-decimals + 1e-12
     printed = np.array([[float(token) for token in row] for row in rows])
     assert np.abs(printed - expected).max() <= tolerance, (printed, expected, decimals)

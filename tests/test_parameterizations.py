@@ -34,8 +34,9 @@ POSITIONS = sorted(POSITION_PARAMETERIZATIONS)
 EULERS = [f"euler_{seq}" for seq in EULER_SEQUENCES]
 SWEEP = (0.0, 1e-12, 1e-9, 1e-7, 1e-5, 1e-3, 1.0, np.pi - 1e-6)
 REDUNDANT = {"quaternion", "angle_axis", "rotation_matrix"}
-PROPERTY = settings(max_examples=int(os.environ.get("KINENGINE_PROPERTY_EXAMPLES", "30")), deadline=None,
-                    derandomize=True)
+PROPERTY = settings(
+    max_examples=int(os.environ.get("KINENGINE_PROPERTY_EXAMPLES", "30")), deadline=None, derandomize=True
+)
 seeds = st.integers(0, 2**32 - 1)
 rotation_regimes = st.sampled_from(["random", "near_identity", "near_singular"])
 position_regimes = st.sampled_from(["random", "near_singular"])
@@ -64,7 +65,7 @@ def sample_rotation(name, regime, rng):
         return Rotation.random(rng=rng).as_matrix()
     if regime == "near_identity":
         return exp_so3(SWEEP[rng.integers(len(SWEEP))] * unit(rng))
-    delta = SWEEP[rng.integers(6)] * rng.choice([-1.0, 1.0])          # 0 … 1e-3 from the set
+    delta = SWEEP[rng.integers(6)] * rng.choice([-1.0, 1.0])  # 0 … 1e-3 from the set
     if name.startswith("euler"):
         seq = name[-3:]
         lock = rng.choice([-np.pi / 2, np.pi / 2]) if seq[0] != seq[2] else rng.choice([0.0, np.pi])
@@ -76,7 +77,7 @@ def sample_rotation(name, regime, rng):
 def sample_position(regime, rng):
     if regime == "random":
         return rng.normal(size=3)
-    rho, alpha = SWEEP[rng.integers(6)], rng.uniform(-np.pi, np.pi)   # 0 … 1e-3 from the z axis
+    rho, alpha = SWEEP[rng.integers(6)], rng.uniform(-np.pi, np.pi)  # 0 … 1e-3 from the z axis
     return np.array([rho * np.cos(alpha), rho * np.sin(alpha), rng.normal()])
 
 
@@ -103,11 +104,17 @@ def moving_sample(name, regime, seed, step=1e-3):
     if name in POSITION_PARAMETERIZATIONS:
         regime = "random" if regime == "near_identity" else regime
         param, p0, u = get_position(name), sample_position(regime, rng), rng.normal(size=3)
-        chi_at = lambda t: quiet(param.from_position, p0 + u * t)
+
+        def chi_at(t):
+            return quiet(param.from_position, p0 + u * t)
+
         margin = np.inf
     else:
         param, C0, u = get_rotation(name), sample_rotation(name, regime, rng), rng.normal(size=3)
-        chi_at = lambda t: quiet(param.from_rotation, exp_so3(u * t) @ C0)
+
+        def chi_at(t):
+            return quiet(param.from_rotation, exp_so3(u * t) @ C0)
+
         margin = branch_margin(name, C0)
     distance = param.singularity_distance(chi_at(0.0))
     h = min(1e-6, step * distance, 0.25 * margin) / np.linalg.norm(u)
@@ -148,8 +155,9 @@ def test_wrong_shapes_name_the_argument_and_the_shape():
     zyz = get_rotation("euler_zyz")  # lists and other dtypes take the general path, same values
     np.testing.assert_allclose(zyz.E([0.1, 0.2, 0.3]), zyz.E(np.array([0.1, 0.2, 0.3])), rtol=1e-15, atol=0)
     quarter_turn = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]], dtype=np.float32)
-    np.testing.assert_allclose(zyz.from_rotation(quarter_turn, warn=False), [np.pi / 2, 0, 0],
-                               rtol=0, atol=1e-15)
+    np.testing.assert_allclose(
+        zyz.from_rotation(quarter_turn, warn=False), [np.pi / 2, 0, 0], rtol=0, atol=1e-15
+    )
 
 
 # -- conversions -------------------------------------------------------------------------------------
@@ -182,7 +190,7 @@ def test_from_rotation_matches_scipy_and_round_trips(name, seed, regime):
     np.testing.assert_allclose(param.to_rotation(chi), C, rtol=0, atol=3e-7 if locked else 1e-14)
     expected = scipy_parameters(name, C)
     theta = np.linalg.norm(Rotation.from_matrix(C).as_rotvec())
-    if param.singularity_distance(chi) > 1e-3 and np.pi - theta > 1e-9:      # χ unique and well conditioned
+    if param.singularity_distance(chi) > 1e-3 and np.pi - theta > 1e-9:  # χ unique and well conditioned
         delta = wrap(chi - expected) if name.startswith("euler") else chi - expected
         np.testing.assert_allclose(delta, 0.0, rtol=0, atol=1e-12)
         # χ -> C -> χ
@@ -201,14 +209,20 @@ def test_from_position_matches_the_definition_and_round_trips(name, seed, regime
     param = get_position(name)
     chi = quiet(param.from_position, pos)
     x, y, z = pos
-    expected = {"cartesian": pos,
-                "cylindrical": [np.hypot(x, y), np.arctan2(y, x), z],
-                "spherical": [np.linalg.norm(pos), np.arctan2(y, x), chi[2]]}[name]
+    expected = {
+        "cartesian": pos,
+        "cylindrical": [np.hypot(x, y), np.arctan2(y, x), z],
+        "spherical": [np.linalg.norm(pos), np.arctan2(y, x), chi[2]],
+    }[name]
     np.testing.assert_allclose(chi, expected, rtol=0, atol=1e-13)
     if name == "spherical":  # the polar angle φ ∈ [0, π] from +z: r sin φ = ρ, r cos φ = z
         assert 0 <= chi[2] <= np.pi
-        np.testing.assert_allclose(chi[0] * np.array([np.sin(chi[2]), np.cos(chi[2])]), [np.hypot(x, y), z],
-                                   rtol=0, atol=1e-15 * max(1.0, chi[0]))
+        np.testing.assert_allclose(
+            chi[0] * np.array([np.sin(chi[2]), np.cos(chi[2])]),
+            [np.hypot(x, y), z],
+            rtol=0,
+            atol=1e-15 * max(1.0, chi[0]),
+        )
     np.testing.assert_allclose(param.to_position(chi), pos, rtol=0, atol=1e-14)
 
 
@@ -270,8 +284,16 @@ def left_jacobian_series(phi, terms=40):
     return out
 
 
-@pytest.mark.parametrize("theta", SWEEP + (np.sqrt(SMALL_ANGLE_SQ) * (1 - 1e-12), np.sqrt(SMALL_ANGLE_SQ),
-                                           np.sqrt(SMALL_ANGLE_SQ) * (1 + 1e-12), 2.5))
+@pytest.mark.parametrize(
+    "theta",
+    SWEEP
+    + (
+        np.sqrt(SMALL_ANGLE_SQ) * (1 - 1e-12),
+        np.sqrt(SMALL_ANGLE_SQ),
+        np.sqrt(SMALL_ANGLE_SQ) * (1 + 1e-12),
+        2.5,
+    ),
+)
 def test_rotation_vector_maps_match_the_series_across_the_taylor_branch(theta):
     param, rng = get_rotation("rotation_vector"), np.random.default_rng(3)
     phi, u = theta * unit(rng), rng.normal(size=3)
@@ -281,8 +303,10 @@ def test_rotation_vector_maps_match_the_series_across_the_taylor_branch(theta):
     np.testing.assert_allclose(param.E(phi), np.linalg.inv(J), rtol=0, atol=2e-15)
     np.testing.assert_allclose(param.to_rotation(phi), exp_so3(phi), rtol=0, atol=1e-15)
     h = 1e-6  # E_dot where the closed form would cancel catastrophically: against a difference of the series
-    fd = (np.linalg.inv(left_jacobian_series(phi + h * param.E(phi) @ u))
-          - np.linalg.inv(left_jacobian_series(phi - h * param.E(phi) @ u))) / (2 * h)
+    fd = (
+        np.linalg.inv(left_jacobian_series(phi + h * param.E(phi) @ u))
+        - np.linalg.inv(left_jacobian_series(phi - h * param.E(phi) @ u))
+    ) / (2 * h)
     np.testing.assert_allclose(param.E_dot(phi, u), fd, rtol=0, atol=1e-9)
 
 
@@ -314,7 +338,7 @@ def test_singularity_distance_vanishes_on_the_set_and_E_grows_like_its_inverse(n
     for delta in (1e-2, 1e-4, 1e-6, 1e-8):
         chi = on_and_near_the_singular_set(name, delta, rng)
         distance = param.singularity_distance(chi)
-        assert 0.4 * delta <= distance <= 1.6 * delta          # ~ the vanishing sine / radius / angle
+        assert 0.4 * delta <= distance <= 1.6 * delta  # ~ the vanishing sine / radius / angle
         growth.append(np.linalg.norm(param.E(chi)) * distance)
     assert max(growth) <= 10 * min(growth) and min(growth) > 0.1  # ‖E‖ ~ 1/distance
 
@@ -322,15 +346,21 @@ def test_singularity_distance_vanishes_on_the_set_and_E_grows_like_its_inverse(n
 @pytest.mark.parametrize("name", ["cartesian", "quaternion", "rotation_matrix"])
 def test_never_singular_parameterizations_report_infinite_distance(name):
     param = lookup(name)
-    chi = (param.from_position(np.zeros(3)) if param.kind == "position"
-           else param.from_rotation(np.eye(3)))
+    chi = param.from_position(np.zeros(3)) if param.kind == "position" else param.from_rotation(np.eye(3))
     assert param.singularity_distance(chi) == np.inf
     assert np.all(param.singularity_distance(np.stack([chi, chi])) == np.inf)
     assert np.linalg.norm(param.E(chi)) < 3
 
 
-@pytest.mark.parametrize("name, chi", [("cylindrical", [0.0, 1.0, 2.0]), ("spherical", [0.0, 1.0, 1.0]),
-                                       ("angle_axis", [0.0, 0.0, 0.0, 1.0]), ("euler_zyz", [0.3, 0.0, 0.2])])
+@pytest.mark.parametrize(
+    "name, chi",
+    [
+        ("cylindrical", [0.0, 1.0, 2.0]),
+        ("spherical", [0.0, 1.0, 1.0]),
+        ("angle_axis", [0.0, 0.0, 0.0, 1.0]),
+        ("euler_zyz", [0.3, 0.0, 0.2]),
+    ],
+)
 def test_E_exactly_on_the_singular_set_raises_with_alternatives(name, chi):
     param = lookup(name)
     for batch in (np.array(chi), np.array([chi, chi])):
@@ -381,11 +411,16 @@ def test_batched_calls_equal_per_sample_calls(name, batch):
     param = lookup(name)
     if param.kind == "position":
         convert, back, regimes = param.from_position, param.to_position, ["random", "near_singular"]
-        draw = lambda regime: sample_position(regime, rng)
+
+        def draw(regime):
+            return sample_position(regime, rng)
     else:
         convert, back = (lambda C: quiet(param.from_rotation, C)), param.to_rotation
-        regimes = ["near_identity", "random", "near_singular"]   # Taylor branches and closed forms mixed
-        draw = lambda regime: sample_rotation(name, regime, rng)
+        regimes = ["near_identity", "random", "near_singular"]  # Taylor branches and closed forms mixed
+
+        def draw(regime):
+            return sample_rotation(name, regime, rng)
+
     n, inputs = int(np.prod(batch)), []
     while len(inputs) < n:  # E is finite for every sample (distance > 0), however large
         x = draw(regimes[len(inputs) % len(regimes)])
@@ -394,12 +429,24 @@ def test_batched_calls_equal_per_sample_calls(name, batch):
     inputs = np.array(inputs)
     chi, u = convert(inputs.reshape(batch + inputs.shape[1:])), rng.normal(size=batch + (3,))
     assert chi.shape == batch + (param.size,)
-    batched = {"chi": chi, "back": back(chi), "E": param.E(chi), "E_inverse": param.E_inverse(chi),
-               "E_dot": param.E_dot(chi, u), "distance": param.singularity_distance(chi)}
+    batched = {
+        "chi": chi,
+        "back": back(chi),
+        "E": param.E(chi),
+        "E_inverse": param.E_inverse(chi),
+        "E_dot": param.E_dot(chi, u),
+        "distance": param.singularity_distance(chi),
+    }
     for i, x in enumerate(inputs):  # each method on the same input (near a singular set E amplifies 1 ulp)
         c, ui = chi.reshape(n, -1)[i].copy(), u.reshape(n, 3)[i]
-        single = {"chi": convert(x), "back": back(c), "E": param.E(c), "E_inverse": param.E_inverse(c),
-                  "E_dot": param.E_dot(c, ui), "distance": param.singularity_distance(c)}
+        single = {
+            "chi": convert(x),
+            "back": back(c),
+            "E": param.E(c),
+            "E_inverse": param.E_inverse(c),
+            "E_dot": param.E_dot(c, ui),
+            "distance": param.singularity_distance(c),
+        }
         for key, value in single.items():
             got = batched[key].reshape((n,) + np.shape(value))[i]
             np.testing.assert_allclose(got, value, rtol=1e-13, atol=1e-14, err_msg=f"{name} {key}")
@@ -407,5 +454,6 @@ def test_batched_calls_equal_per_sample_calls(name, batch):
 
 def test_unknown_euler_sequence_is_a_parameterization_error():
     from kinengine.parameterizations.euler import EulerAngles
+
     with pytest.raises(ParameterizationError, match="Expected `seq` to be one of xyz"):
         EulerAngles("xyy")

@@ -10,19 +10,19 @@ import sys
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.image as mpimg  # noqa: E402
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from hypothesis import given, settings, strategies as st  # noqa: E402
+import matplotlib.image as mpimg
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from custom_robots import mixed_chain_urdf
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-import kinengine  # noqa: E402
-from kinengine.model import available_robots, catalog_entry  # noqa: E402
-from kinengine.cli import main  # noqa: E402
-from kinengine.presentation.plotting import drawing, plot_robot  # noqa: E402
-from kinengine.reference import ReferenceKinematics  # noqa: E402
-
-from custom_robots import mixed_chain_urdf  # noqa: E402
+import kinengine
+from kinengine.cli import main
+from kinengine.model import available_robots, catalog_entry
+from kinengine.presentation.plotting import drawing, plot_robot
+from kinengine.reference import ReferenceKinematics
 
 SHIPPED = tuple(n for n in available_robots() if catalog_entry(n).origin == "kinengine")
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -40,8 +40,10 @@ def robots():
 
 @pytest.fixture(scope="module")
 def references(robots):
-    return {name: ReferenceKinematics.from_urdf_string(r.urdf_text, joint_names=r.joint_names)
-            for name, r in robots.items()}
+    return {
+        name: ReferenceKinematics.from_urdf_string(r.urdf_text, joint_names=r.joint_names)
+        for name, r in robots.items()
+    }
 
 
 @pytest.fixture(autouse=True)
@@ -58,18 +60,20 @@ def _show(capsys, *args: str) -> tuple[int, str, str]:
 
 # -- the command line ----------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("name", SHIPPED)
 def test_show_writes_a_png_for_every_shipped_robot(name, tmp_path, capsys, robots):
     path = tmp_path / f"{name}.png"
     q = ",".join(str(v) for v in robots[name].random_configuration(rng=3))
-    code, out, _ = _show(capsys, name, f"--q={q}", "--ellipsoid", robots[name].end_effector, "-o", str(path),
-                         "--dpi", "40")
+    code, out, _ = _show(
+        capsys, name, f"--q={q}", "--ellipsoid", robots[name].end_effector, "-o", str(path), "--dpi", "40"
+    )
     assert code == 0 and out.strip() == str(path)
     data = path.read_bytes()
     assert data[:8] == PNG_SIGNATURE and len(data) > 0
     image = mpimg.imread(path)
-    assert image.shape == (240, 240, 4)                  # 6 x 6 in at 40 dpi, RGBA
-    assert image[..., :3].min() < 0.5                    # something dark (the links) was drawn
+    assert image.shape == (240, 240, 4)  # 6 x 6 in at 40 dpi, RGBA
+    assert image[..., :3].min() < 0.5  # something dark (the links) was drawn
 
 
 def test_every_shipped_robot_is_covered():
@@ -83,14 +87,17 @@ def test_show_defaults_to_robot_name_png_in_cwd(tmp_path, monkeypatch, capsys):
     assert (tmp_path / "planar_3dof.png").read_bytes()[:8] == PNG_SIGNATURE
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--q", "0.1,0.2"], "Expected `q` to have shape (3,), got (2,)"),
-    (["--q", "0.1,nan,0.2"], "every coordinate must be a finite number"),
-    (["--frames", "ee,tool9"], "unknown frame 'tool9'"),
-    (["--ellipsoid", "eee"], "unknown frame 'eee'. Did you mean 'ee'"),
-    (["--view", "10"], "--view takes two angles ELEV,AZIM"),
-    (["-o", "picture.xyz"], "choose another -o PATH"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--q", "0.1,0.2"], "Expected `q` to have shape (3,), got (2,)"),
+        (["--q", "0.1,nan,0.2"], "every coordinate must be a finite number"),
+        (["--frames", "ee,tool9"], "unknown frame 'tool9'"),
+        (["--ellipsoid", "eee"], "unknown frame 'eee'. Did you mean 'ee'"),
+        (["--view", "10"], "--view takes two angles ELEV,AZIM"),
+        (["-o", "picture.xyz"], "choose another -o PATH"),
+    ],
+)
 def test_show_bad_input_exits_2_with_a_message(args, message, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     code, out, err = _show(capsys, "planar_3dof", *args)
@@ -99,11 +106,17 @@ def test_show_bad_input_exits_2_with_a_message(args, message, tmp_path, monkeypa
     assert not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--q", "0.1,a,0.2"], "argument --q: expected comma-separated numbers such as 0.1,-0.3,2e-3; entry 2 is 'a'"),
-    (["--dpi", "0"], "argument --dpi: expected a whole number in [1, 600], got 0"),
-    (["-o", "no/such/dir/x.png"], "folder 'no/such/dir' does not exist"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (
+            ["--q", "0.1,a,0.2"],
+            "argument --q: expected comma-separated numbers such as 0.1,-0.3,2e-3; entry 2 is 'a'",
+        ),
+        (["--dpi", "0"], "argument --dpi: expected a whole number in [1, 600], got 0"),
+        (["-o", "no/such/dir/x.png"], "folder 'no/such/dir' does not exist"),
+    ],
+)
 def test_show_bad_arguments_are_argparse_errors_before_any_work(args, message, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["show", "planar_3dof", *args])
@@ -120,6 +133,7 @@ def test_importing_kinengine_and_its_cli_does_not_import_matplotlib():
 
 # -- the data the picture is built from ------------------------------------------------------------
 
+
 @pytest.mark.parametrize("name", list(LOADERS))
 @settings(max_examples=15, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1))
@@ -133,12 +147,12 @@ def test_skeleton_points_are_the_link_origins(name, seed, robots, references):
     assert d.skeleton.shape == (len(joints), 2, 3) and d.skeleton_joints == tuple(j.name for j in joints)
     origin = {robot.description.root: np.zeros(3)}
     origin.update((j.child, ref.frame_pose(q, j.child)[:3, 3]) for j in joints)
-    for (start, end), joint in zip(d.skeleton, joints):
+    for (start, end), joint in zip(d.skeleton, joints, strict=False):
         np.testing.assert_allclose(start, origin[joint.parent], rtol=0, atol=1e-12)
         np.testing.assert_allclose(end, origin[joint.child], rtol=0, atol=1e-12)
         np.testing.assert_allclose(end, robot.frame_pose(q, joint.child)[:3, 3], rtol=0, atol=1e-12)
     ends = d.skeleton[:, 1]
-    assert np.min(np.linalg.norm(ends - robot.frame_pose(q)[:3, 3], axis=1)) <= 1e-12   # reaches the tool
+    assert np.min(np.linalg.norm(ends - robot.frame_pose(q)[:3, 3], axis=1)) <= 1e-12  # reaches the tool
 
 
 @pytest.mark.parametrize("name", list(LOADERS))
@@ -164,8 +178,16 @@ def test_joint_axes_are_the_jacobian_columns(name, seed, robots):
         assert abs(np.linalg.norm(direction) - 1.0) <= 1e-12
 
 
-@pytest.mark.parametrize("name, frame", [("abb_irb120", "tool0"), ("scara", "ee"), ("planar_3dof", "ee"),
-                                         ("ur5", "tool0"), ("mixed", "finger_b")])
+@pytest.mark.parametrize(
+    "name, frame",
+    [
+        ("abb_irb120", "tool0"),
+        ("scara", "ee"),
+        ("planar_3dof", "ee"),
+        ("ur5", "tool0"),
+        ("mixed", "finger_b"),
+    ],
+)
 def test_ellipsoid_is_the_svd_of_the_translational_jacobian(name, frame, robots):
     robot = robots[name]
     for seed in range(5):
@@ -175,8 +197,8 @@ def test_ellipsoid_is_the_svd_of_the_translational_jacobian(name, frame, robots)
         Jv = robot.jacobian(q, frame)[:3]
         s = np.linalg.svd(Jv, compute_uv=False)
         np.testing.assert_allclose(e.center, robot.frame_pose(q, frame)[:3, 3], rtol=0, atol=1e-12)
-        np.testing.assert_allclose(e.semi_axes[:s.size], s, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(e.semi_axes[s.size:], 0.0, rtol=0, atol=0)
+        np.testing.assert_allclose(e.semi_axes[: s.size], s, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(e.semi_axes[s.size :], 0.0, rtol=0, atol=0)
         np.testing.assert_allclose(e.axes.T @ e.axes, np.eye(3), rtol=0, atol=1e-12)
         np.testing.assert_allclose(e.axes @ np.diag(e.semi_axes**2) @ e.axes.T, Jv @ Jv.T, rtol=0, atol=1e-12)
         assert d.ellipsoid_frame == frame and d.ellipsoid_scale > 0
@@ -189,17 +211,29 @@ def test_planar_arm_ellipse_closed_form(robots):
     e = drawing(robot, q, ellipsoid="ee").ellipsoid
     l1, l2, l3 = 0.5, 0.35, 0.2
     c = np.cumsum(q)
-    x_row = np.array([l1 * np.cos(c[0]) + l2 * np.cos(c[1]) + l3 * np.cos(c[2]),
-                      l2 * np.cos(c[1]) + l3 * np.cos(c[2]), l3 * np.cos(c[2])])
-    z_row = -np.array([l1 * np.sin(c[0]) + l2 * np.sin(c[1]) + l3 * np.sin(c[2]),
-                       l2 * np.sin(c[1]) + l3 * np.sin(c[2]), l3 * np.sin(c[2])])
-    np.testing.assert_allclose(e.semi_axes[:2], np.linalg.svd(np.stack([x_row, z_row]), compute_uv=False),
-                               rtol=0, atol=1e-12)
+    x_row = np.array(
+        [
+            l1 * np.cos(c[0]) + l2 * np.cos(c[1]) + l3 * np.cos(c[2]),
+            l2 * np.cos(c[1]) + l3 * np.cos(c[2]),
+            l3 * np.cos(c[2]),
+        ]
+    )
+    z_row = -np.array(
+        [
+            l1 * np.sin(c[0]) + l2 * np.sin(c[1]) + l3 * np.sin(c[2]),
+            l2 * np.sin(c[1]) + l3 * np.sin(c[2]),
+            l3 * np.sin(c[2]),
+        ]
+    )
+    np.testing.assert_allclose(
+        e.semi_axes[:2], np.linalg.svd(np.stack([x_row, z_row]), compute_uv=False), rtol=0, atol=1e-12
+    )
     assert e.semi_axes[2] == 0.0
     np.testing.assert_allclose(np.abs(e.axes[:, 2]), [0.0, 1.0, 0.0], rtol=0, atol=1e-12)
 
 
 # -- the picture ---------------------------------------------------------------------------------
+
 
 def test_plot_robot_draws_its_drawing_with_equal_scales_and_a_title(robots):
     robot = robots["abb_irb120"]
@@ -210,17 +244,21 @@ def test_plot_robot_draws_its_drawing_with_equal_scales_and_a_title(robots):
     assert list(d.frames) == ["tool0", "base"]
     np.testing.assert_array_equal(d.frames["tool0"], robot.frame_pose(robot.neutral(), "tool0"))
     # tool0 at home: p = (0.374, 0, 0.630) m, pitched by π/2 about y
-    assert ax.get_title() == ("abb_irb120 at q = (0, 0, 0, 0, 0, 0) [rad]\n"
-                              "tool0 in base_link: p = (0.374, 0.000, 0.630) m, rotation vector "
-                              "(0.000, 1.571, 0.000) rad")
+    assert ax.get_title() == (
+        "abb_irb120 at q = (0, 0, 0, 0, 0, 0) [rad]\n"
+        "tool0 in base_link: p = (0.374, 0.000, 0.630) m, rotation vector "
+        "(0.000, 1.571, 0.000) rad"
+    )
     limits = np.array([ax.get_xlim(), ax.get_ylim(), ax.get_zlim()])
     np.testing.assert_allclose(np.diff(limits, axis=1), np.diff(limits[0])[0], rtol=1e-12)
     np.testing.assert_allclose(ax.get_box_aspect() / ax.get_box_aspect()[0], 1.0, rtol=1e-12)
     points = d.skeleton.reshape(-1, 3)
     assert np.all((points >= limits[:, 0]) & (points <= limits[:, 1]))
     labels = ax.get_legend_handles_labels()[1]
-    assert f"velocity ellipsoid of tool0, ×{d.ellipsoid_scale:g} (1 m/s per unit $|\\dot{{q}}|$ drawn as " \
-           f"{d.ellipsoid_scale:g} m)" in labels
+    assert (
+        f"velocity ellipsoid of tool0, ×{d.ellipsoid_scale:g} (1 m/s per unit $|\\dot{{q}}|$ drawn as "
+        f"{d.ellipsoid_scale:g} m)" in labels
+    )
     assert "revolute joint axes" in labels and "prismatic joint axes" not in labels
     assert {t.get_text() for t in ax.texts} == {"tool0", "base"}
 
@@ -241,14 +279,21 @@ def test_plot_robot_title_of_scara_names_both_units(robots):
     assert title.startswith("scara at q = (0.4, 0.8, -0.5, 0.1) [rad, m]\nee in base_link: p = ")
 
 
-@pytest.mark.parametrize("call, error, message", [
-    (lambda r: plot_robot(r, np.zeros((2, 6))), kinengine.ConfigurationError, r"shape \(6,\), got \(2, 6\); this function takes one configuration"),
-    (lambda r: plot_robot(r, [0.1] * 5), kinengine.ConfigurationError, r"shape \(6,\)"),
-    (lambda r: plot_robot(r, frames=["tool00"]), kinengine.FrameNotFoundError, "Did you mean 'tool0'"),
-    (lambda r: plot_robot(r, ellipsoid="flang"), kinengine.FrameNotFoundError, "Did you mean 'flange'"),
-    (lambda r: plot_robot(r, axis_length=-1.0), kinengine.KinematicsError, "positive length"),
-    (lambda r: plot_robot(r, ax=plt.figure().add_subplot()), kinengine.KinematicsError, "3D axes"),
-])
+@pytest.mark.parametrize(
+    "call, error, message",
+    [
+        (
+            lambda r: plot_robot(r, np.zeros((2, 6))),
+            kinengine.ConfigurationError,
+            r"shape \(6,\), got \(2, 6\); this function takes one configuration",
+        ),
+        (lambda r: plot_robot(r, [0.1] * 5), kinengine.ConfigurationError, r"shape \(6,\)"),
+        (lambda r: plot_robot(r, frames=["tool00"]), kinengine.FrameNotFoundError, "Did you mean 'tool0'"),
+        (lambda r: plot_robot(r, ellipsoid="flang"), kinengine.FrameNotFoundError, "Did you mean 'flange'"),
+        (lambda r: plot_robot(r, axis_length=-1.0), kinengine.KinematicsError, "positive length"),
+        (lambda r: plot_robot(r, ax=plt.figure().add_subplot()), kinengine.KinematicsError, "3D axes"),
+    ],
+)
 def test_plot_robot_bad_input(call, error, message, robots):
     with pytest.raises(error, match=message):
         call(robots["abb_irb120"])

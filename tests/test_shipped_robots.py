@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
 import yourdfpy
+from scipy.spatial.transform import Rotation
 
 import kinengine
 
@@ -33,7 +33,7 @@ REFERENCES = ("local_world_aligned", "local", "world")
 N_SAMPLES = 128
 
 # Design values, stated in robots/planar_3dof/README.md and robots/scara/README.md [m].
-L0, L1, L2, L3 = 0.4, 0.5, 0.35, 0.2     # planar_3dof: base height, link lengths
+L0, L1, L2, L3 = 0.4, 0.5, 0.35, 0.2  # planar_3dof: base height, link lengths
 H0, A1, A2, D = 0.45, 0.325, 0.275, 0.1  # scara: arm plane height, inner/outer arm, quill to tip
 
 
@@ -79,17 +79,23 @@ def planar_jacobians(q: np.ndarray) -> dict[str, np.ndarray]:
     s3, c3, s23, c23 = np.sin(q[:, 2]), np.cos(q[:, 2]), np.sin(q[:, 1] + q[:, 2]), np.cos(q[:, 1] + q[:, 2])
     ey = [0, 1, 0]
     # Rows x, z: eq. 2.138 and 2.175 (corrected); angular rows: eq. 2.177.
-    lwa = _columns([L1 * c1 + L2 * c12 + L3 * c123, 0, -(L1 * s1 + L2 * s12 + L3 * s123), *ey],
-                   [L2 * c12 + L3 * c123, 0, -(L2 * s12 + L3 * s123), *ey],
-                   [L3 * c123, 0, -L3 * s123, *ey])
+    lwa = _columns(
+        [L1 * c1 + L2 * c12 + L3 * c123, 0, -(L1 * s1 + L2 * s12 + L3 * s123), *ey],
+        [L2 * c12 + L3 * c123, 0, -(L2 * s12 + L3 * s123), *ey],
+        [L3 * c123, 0, -L3 * s123, *ey],
+    )
     # In E, r_kE = sum_{j>=k} l_j (sin(t_j - t123), 0, cos(t_j - t123)) and v = e_y x r_kE.
-    local = _columns([L1 * c23 + L2 * c3 + L3, 0, L1 * s23 + L2 * s3, *ey],
-                     [L2 * c3 + L3, 0, L2 * s3, *ey],
-                     [L3, 0, 0, *ey])
+    local = _columns(
+        [L1 * c23 + L2 * c3 + L3, 0, L1 * s23 + L2 * s3, *ey],
+        [L2 * c3 + L3, 0, L2 * s3, *ey],
+        [L3, 0, 0, *ey],
+    )
     # p_k x e_y = (-z_k, 0, x_k) for the joint positions p_k = (x_k, 0, z_k).
-    world = _columns([-L0, 0, 0, *ey],
-                     [-(L0 + L1 * c1), 0, L1 * s1, *ey],
-                     [-(L0 + L1 * c1 + L2 * c12), 0, L1 * s1 + L2 * s12, *ey])
+    world = _columns(
+        [-L0, 0, 0, *ey],
+        [-(L0 + L1 * c1), 0, L1 * s1, *ey],
+        [-(L0 + L1 * c1 + L2 * c12), 0, L1 * s1 + L2 * s12, *ey],
+    )
     return {"local_world_aligned": lwa, "local": local, "world": world}
 
 
@@ -109,8 +115,12 @@ def scara_jacobians(q: np.ndarray) -> dict[str, np.ndarray]:
     ez, zeta_col = [0, 0, 1], [0, 0, -1, 0, 0, 0]
     lwa = _columns([-y, x, 0, *ez], [-A2 * sab, A2 * cab, 0, *ez], [0, 0, 0, *ez], zeta_col)
     # C^T = rotation about z by -phi; the planar vectors turn by -(alpha + beta + gamma).
-    local = _columns([A1 * np.sin(b + g) + A2 * np.sin(g), A1 * np.cos(b + g) + A2 * np.cos(g), 0, *ez],
-                     [A2 * np.sin(g), A2 * np.cos(g), 0, *ez], [0, 0, 0, *ez], zeta_col)
+    local = _columns(
+        [A1 * np.sin(b + g) + A2 * np.sin(g), A1 * np.cos(b + g) + A2 * np.cos(g), 0, *ez],
+        [A2 * np.sin(g), A2 * np.cos(g), 0, *ez],
+        [0, 0, 0, *ez],
+        zeta_col,
+    )
     # p_k x e_z = (y_k, -x_k, 0); joint alpha's axis passes through the origin.
     world = _columns([0, 0, 0, *ez], [A1 * sa, -A1 * ca, 0, *ez], [y, -x, 0, *ez], zeta_col)
     return {"local_world_aligned": lwa, "local": local, "world": world}
@@ -146,8 +156,9 @@ def test_closed_form_references_follow_from_their_definitions(name):
     q = _samples(kinengine.load(name), seed=3)
     T, J = CLOSED_FORMS[name][0](q), CLOSED_FORMS[name][1](q)
     Ct, p, lwa = np.swapaxes(T[:, :3, :3], 1, 2), T[:, :3, 3], J["local_world_aligned"]
-    np.testing.assert_allclose(J["local"], np.concatenate([Ct @ lwa[:, :3], Ct @ lwa[:, 3:]], 1), rtol=0,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        J["local"], np.concatenate([Ct @ lwa[:, :3], Ct @ lwa[:, 3:]], 1), rtol=0, atol=1e-12
+    )
     world_lin = lwa[:, :3] + np.cross(p[:, :, None], lwa[:, 3:], axis=1)
     np.testing.assert_allclose(J["world"], np.concatenate([world_lin, lwa[:, 3:]], 1), rtol=0, atol=1e-12)
 
@@ -156,14 +167,18 @@ def test_scara_operational_space_and_singularity():
     """chi_o = (x, y, z, phi) of example 2.8.4; its analytic Jacobian has det = l1 l2 sin(beta)."""
     robot = kinengine.load("scara")
     q = np.vstack([_samples(robot, seed=4), [[0.3, 0.0, -1.0, 0.05]]])  # last: stretched arm, beta = 0
-    a, b, g, z = q.T
+    a, b, g, _z = q.T
     T = robot.frame_pose(q, "ee")
     np.testing.assert_allclose(T[:, 2, :3], np.broadcast_to([0, 0, 1], (len(q), 3)), rtol=0, atol=1e-12)
     phi = np.arctan2(T[:, 1, 0], T[:, 0, 0])
     np.testing.assert_allclose(np.angle(np.exp(1j * (phi - (a + b + g)))), 0, rtol=0, atol=1e-12)
     J_A = robot.jacobian(q, "ee")[:, [0, 1, 2, 5]]  # E = identity for (x, y, z, phi)
-    expected = _columns([-A1 * np.sin(a) - A2 * np.sin(a + b), A1 * np.cos(a) + A2 * np.cos(a + b), 0, 1],
-                        [-A2 * np.sin(a + b), A2 * np.cos(a + b), 0, 1], [0, 0, 0, 1], [0, 0, -1, 0])
+    expected = _columns(
+        [-A1 * np.sin(a) - A2 * np.sin(a + b), A1 * np.cos(a) + A2 * np.cos(a + b), 0, 1],
+        [-A2 * np.sin(a + b), A2 * np.cos(a + b), 0, 1],
+        [0, 0, 0, 1],
+        [0, 0, -1, 0],
+    )
     np.testing.assert_allclose(J_A, expected, rtol=0, atol=1e-12)
     np.testing.assert_allclose(np.linalg.det(J_A), A1 * A2 * np.sin(b), rtol=0, atol=1e-12)
     assert np.linalg.matrix_rank(J_A[-1]) == 3
@@ -180,10 +195,19 @@ ABB_JOINTS = {
     "joint_5": ((0.302, 0, 0), (0, 1, 0), -2.094395, 2.094395, 5.58505, (-120, 120), 320),
     "joint_6": ((0.072, 0, 0), (1, 0, 0), -6.98132, 6.98132, 7.33038, (-400, 400), 420),
 }
-ABB_MASSES = {"base_link": 6.215, "link_1": 3.067, "link_2": 3.909, "link_3": 2.944, "link_4": 1.328,
-              "link_5": 0.546, "link_6": 0.137}
-ABB_LINK_4 = ((0.2247, 0.00015, 0.00041), (0.00284661, -2.12765e-05, -1.6435e-05, 0.00401346, 1.31336e-05,
-                                           0.0052535))
+ABB_MASSES = {
+    "base_link": 6.215,
+    "link_1": 3.067,
+    "link_2": 3.909,
+    "link_3": 2.944,
+    "link_4": 1.328,
+    "link_5": 0.546,
+    "link_6": 0.137,
+}
+ABB_LINK_4 = (
+    (0.2247, 0.00015, 0.00041),
+    (0.00284661, -2.12765e-05, -1.6435e-05, 0.00401346, 1.31336e-05, 0.0052535),
+)
 
 
 def abb_chain(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -196,7 +220,10 @@ def abb_chain(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         points.append(T[:, :3, 3].copy())
         T[:, :3, :3] = T[:, :3, :3] @ Rotation.from_rotvec(np.outer(q[:, k], axis)).as_matrix()
     T[:, :3, :3] = T[:, :3, :3] @ _rot("y", np.full(len(q), np.pi / 2))  # flange -> tool0
-    J = np.stack([np.concatenate([np.cross(n, T[:, :3, 3] - p), n], -1) for n, p in zip(axes, points)], -1)
+    J = np.stack(
+        [np.concatenate([np.cross(n, T[:, :3, 3] - p), n], -1) for n, p in zip(axes, points, strict=False)],
+        -1,
+    )
     return T, J
 
 
@@ -206,8 +233,9 @@ def test_abb_check_figure_at_zero(abb):
     np.testing.assert_allclose(T[:3, 2], [1.0, 0.0, 0.0], rtol=0, atol=1e-12)  # tool0 z along base +x
     np.testing.assert_allclose(T[:3, :3], [[0, 0, 1], [0, 1, 0], [-1, 0, 0]], rtol=0, atol=1e-12)
     flange = abb.frame_pose(abb.neutral(), "flange")
-    np.testing.assert_allclose(flange, [[1, 0, 0, 0.374], [0, 1, 0, 0], [0, 0, 1, 0.63], [0, 0, 0, 1]],
-                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        flange, [[1, 0, 0, 0.374], [0, 1, 0, 0], [0, 0, 1, 0.63], [0, 0, 0, 1]], rtol=0, atol=1e-12
+    )
     np.testing.assert_allclose(abb.frame_pose(abb.neutral(), "base"), np.eye(4), rtol=0, atol=0)
 
 
@@ -252,9 +280,11 @@ def test_abb_pose_and_jacobian_equal_an_independent_chain(abb):
 
 
 # -- every shipped robot (menagerie style: a new folder is a new test case) ---------------------
-README_MUST_NAME = {"abb_irb120": ("ABB", "product specification", "abb_irb120_support"),
-                    "planar_3dof": ("Robot Dynamics", "2.8.5", "2.8.7"),
-                    "scara": ("Robot Dynamics", "2.8.1", "2.8.4")}
+README_MUST_NAME = {
+    "abb_irb120": ("ABB", "product specification", "abb_irb120_support"),
+    "planar_3dof": ("Robot Dynamics", "2.8.5", "2.8.7"),
+    "scara": ("Robot Dynamics", "2.8.1", "2.8.4"),
+}
 
 
 @pytest.mark.parametrize("name", SHIPPED)
@@ -290,5 +320,6 @@ def test_every_link_pose_equals_yourdfpy(shipped):
     for q in _samples(shipped, seed=6)[:20]:
         urdf.update_cfg(q[order])
         for link in urdf.link_map:
-            np.testing.assert_allclose(shipped.frame_pose(q, link), urdf.get_transform(link), rtol=0,
-                                       atol=1e-12, err_msg=link)
+            np.testing.assert_allclose(
+                shipped.frame_pose(q, link), urdf.get_transform(link), rtol=0, atol=1e-12, err_msg=link
+            )

@@ -18,9 +18,9 @@ CASES = [
     ("abb_irb120", "tool0", "spherical", "quaternion"),
     ("ur5", "tool0", "cylindrical", "rotation_vector"),
     ("panda", "panda_hand", "cartesian", "angle_axis"),
-    ("kinova", None, "cartesian", "rotation_matrix"),   # continuous joints
+    ("kinova", None, "cartesian", "rotation_matrix"),  # continuous joints
     ("baxter", "l_gripper_r_finger", "cartesian", "euler_xyz"),  # below a mimic joint
-    ("mixed", "side", "spherical", "euler_zyx"),   # a branch: only some joints move it
+    ("mixed", "side", "spherical", "euler_zyx"),  # a branch: only some joints move it
     ("mixed", "finger_b", "cartesian", "quaternion"),  # mimic with multiplier and offset
 ]
 
@@ -54,7 +54,9 @@ def test_update_equals_single_calls_and_rates_equal_finite_differences(name, fra
         J = robot.jacobian(q, frame)
         np.testing.assert_allclose(task.pose, robot.frame_pose(q, frame), rtol=0, atol=1e-14)
         np.testing.assert_allclose(task.jacobian, J, rtol=0, atol=1e-13)
-        np.testing.assert_allclose(task.chi, robot.pose_parameters(q, frame, position, rotation), rtol=0, atol=1e-13)
+        np.testing.assert_allclose(
+            task.chi, robot.pose_parameters(q, frame, position, rotation), rtol=0, atol=1e-13
+        )
         JA = robot.analytic_jacobian(q, frame, position, rotation)
         np.testing.assert_allclose(task.analytic_jacobian, JA, rtol=0, atol=1e-12)
         np.testing.assert_allclose(task.twist, J @ qdot, rtol=0, atol=1e-13)
@@ -62,8 +64,10 @@ def test_update_equals_single_calls_and_rates_equal_finite_differences(name, fra
         h = 1e-6
         Jdot_fd = (robot.jacobian(q + h * qdot, frame) - robot.jacobian(q - h * qdot, frame)) / (2 * h)
         assert_close_relative(task.jacobian_dot, Jdot_fd, 1e-6, "J_e0 dot")
-        JAdot_fd = (robot.analytic_jacobian(q + h * qdot, frame, position, rotation)
-                    - robot.analytic_jacobian(q - h * qdot, frame, position, rotation)) / (2 * h)
+        JAdot_fd = (
+            robot.analytic_jacobian(q + h * qdot, frame, position, rotation)
+            - robot.analytic_jacobian(q - h * qdot, frame, position, rotation)
+        ) / (2 * h)
         assert_close_relative(task.analytic_jacobian_dot, JAdot_fd, 1e-6, "J_A dot")
 
 
@@ -77,9 +81,15 @@ def test_several_frames_are_stacked():
     assert task.chi.shape == (14,) and task.analytic_jacobian.shape == (14, robot.dof)
     assert task.jacobian.shape == (12, robot.dof)
     for i, frame in enumerate(frames):
-        np.testing.assert_allclose(task.jacobian[6 * i:6 * i + 6], robot.jacobian(q, frame), rtol=0, atol=1e-13)
-        np.testing.assert_allclose(task.analytic_jacobian[7 * i:7 * i + 7],
-                                   robot.analytic_jacobian(q, frame, "cartesian", "quaternion"), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            task.jacobian[6 * i : 6 * i + 6], robot.jacobian(q, frame), rtol=0, atol=1e-13
+        )
+        np.testing.assert_allclose(
+            task.analytic_jacobian[7 * i : 7 * i + 7],
+            robot.analytic_jacobian(q, frame, "cartesian", "quaternion"),
+            rtol=0,
+            atol=1e-12,
+        )
 
 
 def test_rows_select_operational_space_coordinates():
@@ -87,17 +97,22 @@ def test_rows_select_operational_space_coordinates():
     task = robot.task("ee", rotation="euler_zyx", rows=("x", "y", "z", "chi1_z"))
     q = robot.random_configuration(1)
     task.update(q, np.ones(4))
-    np.testing.assert_allclose(task.analytic_jacobian,
-                               robot.analytic_jacobian(q, "ee", rotation="euler_zyx", rows=("x", "y", "z", "chi1_z")),
-                               rtol=0, atol=1e-13)
+    np.testing.assert_allclose(
+        task.analytic_jacobian,
+        robot.analytic_jacobian(q, "ee", rotation="euler_zyx", rows=("x", "y", "z", "chi1_z")),
+        rtol=0,
+        atol=1e-13,
+    )
     assert task.chi.shape == (4,) and task.labels == ("x", "y", "z", "chi1_z")
 
 
 def test_attributes_are_read_only_and_preallocated():
     robot = kinengine.load("abb_irb120")
     task = robot.task("tool0", rotation="euler_zyz")
-    buffers = {name: getattr(task, name).__array_interface__["data"][0]
-               for name in ("pose", "chi", "jacobian", "analytic_jacobian", "jacobian_dot", "twist")}
+    buffers = {
+        name: getattr(task, name).__array_interface__["data"][0]
+        for name in ("pose", "chi", "jacobian", "analytic_jacobian", "jacobian_dot", "twist")
+    }
     task.update(robot.random_configuration(0), np.ones(6))
     task.update(robot.random_configuration(1), np.ones(6))
     for name, address in buffers.items():
@@ -152,7 +167,9 @@ def test_task_raises_at_representation_singularity():
         task.update(robot.neutral())
 
 
-@pytest.mark.parametrize("rotation", ["euler_zyx", "euler_zyz", "quaternion", "rotation_vector", "angle_axis"])
+@pytest.mark.parametrize(
+    "rotation", ["euler_zyx", "euler_zyz", "quaternion", "rotation_vector", "angle_axis"]
+)
 def test_chi_stays_continuous_along_a_trajectory_and_reset_returns_to_canonical(rotation):
     """Spin joint 6 through several turns: canonical χ jumps (2π, sign, branch cut), the task's does not."""
     robot = kinengine.load("abb_irb120")
@@ -171,7 +188,9 @@ def test_chi_stays_continuous_along_a_trajectory_and_reset_returns_to_canonical(
         np.testing.assert_allclose(R.to_rotation(task.chi), R.to_rotation(C), rtol=0, atol=1e-9)
     task.reset()
     task.update(q)
-    np.testing.assert_allclose(task.chi, robot.pose_parameters(q, "tool0", None, rotation), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        task.chi, robot.pose_parameters(q, "tool0", None, rotation), rtol=0, atol=1e-12
+    )
 
 
 def test_a_task_without_frames_is_an_option_error():

@@ -20,10 +20,10 @@ import sys
 import textwrap
 import warnings
 
-from custom_robots import mixed_chain_urdf, single_joint_gripper_urdf, single_revolute_urdf, suction_cup_urdf
-from finite_differences import assert_close_relative, pose_jacobian_fd
 import numpy as np
 import pytest
+from custom_robots import mixed_chain_urdf, single_joint_gripper_urdf, single_revolute_urdf, suction_cup_urdf
+from finite_differences import assert_close_relative, pose_jacobian_fd
 
 import kinengine
 from kinengine.errors import KinematicsError, URDFError
@@ -50,7 +50,8 @@ EXTRAS = """
 
 def _decorated(text: str, extras: str = EXTRAS, robot_attributes: str = "") -> str:
     return text.replace('<robot name="mixed">', f'<robot name="mixed"{robot_attributes}>').replace(
-        "</robot>", extras + "</robot>")
+        "</robot>", extras + "</robot>"
+    )
 
 
 def _assert_matches_reference(robot, reference_text: str, seed: int = 0) -> None:
@@ -59,7 +60,9 @@ def _assert_matches_reference(robot, reference_text: str, seed: int = 0) -> None
     rng = np.random.default_rng(seed)
     for q in (robot.neutral(), rng.uniform(-1, 1, robot.dof)):
         for frame in robot.frame_names:
-            np.testing.assert_allclose(robot.frame_pose(q, frame), ref.frame_pose(q, frame), rtol=0, atol=1e-12)
+            np.testing.assert_allclose(
+                robot.frame_pose(q, frame), ref.frame_pose(q, frame), rtol=0, atol=1e-12
+            )
             for reference in REFERENCES:
                 J = robot.jacobian(q, frame, reference)
                 np.testing.assert_allclose(J, ref.jacobian(q, frame, reference), rtol=0, atol=1e-12)
@@ -83,7 +86,9 @@ def test_blocks_with_undeclared_prefixes_are_ignored_like_urdfdom_does():
 
 def test_a_default_xmlns_on_robot_is_read_as_plain_urdf():
     plain = mixed_chain_urdf()
-    text = _decorated(plain, robot_attributes=' xmlns="http://www.ros.org" xmlns:xacro="http://www.ros.org/wiki/xacro"')
+    text = _decorated(
+        plain, robot_attributes=' xmlns="http://www.ros.org" xmlns:xacro="http://www.ros.org/wiki/xacro"'
+    )
     robot = kinengine.load_urdf_string(text)
     assert robot.description.to_xml() == parse_urdf(plain).to_xml()
     _assert_matches_reference(robot, plain, seed=1)
@@ -91,32 +96,39 @@ def test_a_default_xmlns_on_robot_is_read_as_plain_urdf():
 
 
 def test_declared_prefixes_keep_their_declarations_and_a_scoped_one_works_outside_its_scope():
-    extras = ('<gazebo xmlns:sensor="http://gazebosim.org/sensor"><sensor:camera/></gazebo>\n'
-              '<gazebo><sensor:ray/></gazebo>\n')  # urdfdom reads the second block although 'sensor' is out of scope
+    extras = (
+        '<gazebo xmlns:sensor="http://gazebosim.org/sensor"><sensor:camera/></gazebo>\n'
+        "<gazebo><sensor:ray/></gazebo>\n"
+    )  # urdfdom reads the second block although 'sensor' is out of scope
     robot = kinengine.load_urdf_string(_decorated(mixed_chain_urdf(), extras))
     assert robot.dof == 6
 
 
 def test_utf16_documents_with_undeclared_prefixes_load():
-    text = _decorated(mixed_chain_urdf()).replace('<?xml version="1.0"?>', '<?xml version="1.0" encoding="UTF-16"?>')
+    text = _decorated(mixed_chain_urdf()).replace(
+        '<?xml version="1.0"?>', '<?xml version="1.0" encoding="UTF-16"?>'
+    )
     robot = kinengine.load_urdf_string(text.encode("utf-16"))
     assert robot.description.to_xml() == parse_urdf(mixed_chain_urdf()).to_xml()
 
 
 def test_line_numbers_stay_those_of_the_file():
     text = _decorated(mixed_chain_urdf()).replace('<axis xyz="0 1 0"/>', '<axis xyz="0 0 0"/>', 1)
-    line = text[:text.index('<axis xyz="0 0 0"/>')].count("\n") + 1
+    line = text[: text.index('<axis xyz="0 0 0"/>')].count("\n") + 1
     with pytest.raises(URDFError, match="is zero") as info:
         kinengine.load_urdf_string(text)
     assert info.value.line == line
 
 
-@pytest.mark.parametrize("prolog, body, message", [
-    ('<!DOCTYPE robot [<!ENTITY x "0 0 1">]>\n', '<sensor:camera/>', "<!DOCTYPE> is not allowed"),
-    ('<!DOCTYPE robot SYSTEM "file:///etc/passwd">\n', '<gz:x/>', "<!DOCTYPE> is not allowed"),
-    ("", '<gazebo><sensor:camera name="&x;"/></gazebo>', "not well-formed XML"),  # an undeclared entity
-    ("", '<gazebo><sensor:camera></gazebo>', "not well-formed XML"),  # malformed, never recovered
-])
+@pytest.mark.parametrize(
+    "prolog, body, message",
+    [
+        ('<!DOCTYPE robot [<!ENTITY x "0 0 1">]>\n', "<sensor:camera/>", "<!DOCTYPE> is not allowed"),
+        ('<!DOCTYPE robot SYSTEM "file:///etc/passwd">\n', "<gz:x/>", "<!DOCTYPE> is not allowed"),
+        ("", '<gazebo><sensor:camera name="&x;"/></gazebo>', "not well-formed XML"),  # an undeclared entity
+        ("", "<gazebo><sensor:camera></gazebo>", "not well-formed XML"),  # malformed, never recovered
+    ],
+)
 def test_dtds_entities_and_malformed_documents_are_still_refused(prolog, body, message):
     text = prolog + '<robot name="r">\n<link name="a"/>\n' + body + "\n</robot>"
     with pytest.raises(URDFError, match=message):
@@ -125,13 +137,17 @@ def test_dtds_entities_and_malformed_documents_are_still_refused(prolog, body, m
 
 def test_hundreds_of_undeclared_prefixes_are_refused_with_the_fix():
     body = "<gazebo>" + "".join(f"<p{i}:x/>" for i in range(257)) + "</gazebo>"
-    with pytest.raises(URDFError, match="257 namespace prefixes that <robot> does not declare .* declare them"):
+    with pytest.raises(
+        URDFError, match="257 namespace prefixes that <robot> does not declare .* declare them"
+    ):
         kinengine.load_urdf_string(f'<robot name="r">\n<link name="a"/>\n{body}\n</robot>')
 
 
 def test_an_undeclared_xacro_prefix_is_still_a_xacro_macro():
     with pytest.raises(URDFError, match="<xacro:include> is a xacro macro"):
-        kinengine.load_urdf_string('<robot name="r">\n<link name="a"/>\n<xacro:include filename="x.xacro"/>\n</robot>')
+        kinengine.load_urdf_string(
+            '<robot name="r">\n<link name="a"/>\n<xacro:include filename="x.xacro"/>\n</robot>'
+        )
 
 
 # -- dynamics numbers kinematics never needs --------------------------------------------------------
@@ -168,7 +184,9 @@ def test_odd_dynamics_numbers_load_and_never_reach_pinocchio():
     assert robot.description.joint("no_velocity").velocity is None
     model = robot.pinocchio_model()
     assert (model.effortLimit >= 0).all() and (model.velocityLimit >= 0).all()
-    np.testing.assert_array_equal([robot.lower_limits, robot.upper_limits], [[-2, 0, -np.inf], [2, 0.3, np.inf]])
+    np.testing.assert_array_equal(
+        [robot.lower_limits, robot.upper_limits], [[-2, 0, -np.inf], [2, 0.3, np.inf]]
+    )
     _assert_matches_reference(robot, ODD_DYNAMICS)
     assert verify(robot, samples=4).passed
 
@@ -186,14 +204,18 @@ def test_an_error_from_pinocchio_names_the_joint_and_line(monkeypatch):
 # -- repeated elements -----------------------------------------------------------------------------
 def test_the_first_of_two_origins_wins_with_a_one_line_warning():
     one = mixed_chain_urdf()
-    two = one.replace('<origin xyz="0.1 0 0.25" rpy="0.3 0 0"/>',
-                      '<origin xyz="0.1 0 0.25" rpy="0.3 0 0"/>\n    <origin xyz="9 9 9" rpy="1 1 1"/>')
-    line = two[:two.index('<joint name="slide"')].count("\n") + 1
+    two = one.replace(
+        '<origin xyz="0.1 0 0.25" rpy="0.3 0 0"/>',
+        '<origin xyz="0.1 0 0.25" rpy="0.3 0 0"/>\n    <origin xyz="9 9 9" rpy="1 1 1"/>',
+    )
+    line = two[: two.index('<joint name="slide"')].count("\n") + 1
     with pytest.warns(UserWarning) as caught:
         robot = kinengine.load_urdf_string(two)
     messages = [str(w.message) for w in caught]
-    assert messages == [f"<string>: joint 'slide' (line {line}) has 2 <origin> elements (lines {line + 2}, {line + 3}); "
-                        "the first one is used, as urdfdom does"]
+    assert messages == [
+        f"<string>: joint 'slide' (line {line}) has 2 <origin> elements (lines {line + 2}, {line + 3}); "
+        "the first one is used, as urdfdom does"
+    ]
     assert "\n" not in messages[0]
     assert robot.description.to_xml() == parse_urdf(one).to_xml()
     _assert_matches_reference(robot, two)  # yourdfpy reads the first one too
@@ -201,9 +223,12 @@ def test_the_first_of_two_origins_wins_with_a_one_line_warning():
 
 
 # -- 0-dof and 1-dof robots on every entry point -----------------------------------------------------
-SMALL = {"suction_cup": suction_cup_urdf(), "single_revolute": single_revolute_urdf(),
-         "single_joint_gripper": single_joint_gripper_urdf(),
-         "lone_link": '<robot name="lone"><link name="only"/></robot>'}
+SMALL = {
+    "suction_cup": suction_cup_urdf(),
+    "single_revolute": single_revolute_urdf(),
+    "single_joint_gripper": single_joint_gripper_urdf(),
+    "lone_link": '<robot name="lone"><link name="only"/></robot>',
+}
 
 
 def _entry_points(robot):
@@ -215,7 +240,11 @@ def _entry_points(robot):
     yield "frame_pose batch", lambda: robot.frame_pose(Q), (3, 4, 4)
     for ref in REFERENCES:
         yield f"jacobian {ref}", lambda ref=ref: robot.jacobian(q, reference=ref), (6, n)
-        yield f"jacobian_time_variation {ref}", lambda ref=ref: robot.jacobian_time_variation(q, qdot, reference=ref), (6, n)
+        yield (
+            f"jacobian_time_variation {ref}",
+            lambda ref=ref: robot.jacobian_time_variation(q, qdot, reference=ref),
+            (6, n),
+        )
         yield f"kinematic_hessian {ref}", lambda ref=ref: robot.kinematic_hessian(q, reference=ref), (6, n, n)
     yield "jacobian batch", lambda: robot.jacobian(Q), (3, 6, n)
     yield "kinematics", lambda: robot.kinematics(q)[1], (6, n)
@@ -256,13 +285,21 @@ def test_one_dof_derivatives_match_finite_differences(name):
     q, qdot, h = np.array([0.02]), np.array([0.7]), 1e-6
     for frame in robot.frame_names:
         for ref in REFERENCES:
-            dJ = (robot.jacobian(q + h * qdot, frame, ref) - robot.jacobian(q - h * qdot, frame, ref)) / (2 * h)
-            assert_close_relative(robot.jacobian_time_variation(q, qdot, frame, ref), dJ, 1e-7, f"J̇ {frame} {ref}")
+            dJ = (robot.jacobian(q + h * qdot, frame, ref) - robot.jacobian(q - h * qdot, frame, ref)) / (
+                2 * h
+            )
+            assert_close_relative(
+                robot.jacobian_time_variation(q, qdot, frame, ref), dJ, 1e-7, f"J̇ {frame} {ref}"
+            )
             H = robot.kinematic_hessian(q, frame, ref)
             assert_close_relative(H[:, :, 0] * qdot[0], dJ, 1e-7, f"∂J/∂q {frame} {ref}")
         JA = lambda x: robot.analytic_jacobian(x, frame)  # noqa: E731
-        assert_close_relative(robot.analytic_hessian(q, frame)[:, :, 0], (JA(q + h) - JA(q - h)) / (2 * h), 1e-6,
-                              f"∂J_A/∂q {frame}")
+        assert_close_relative(
+            robot.analytic_hessian(q, frame)[:, :, 0],
+            (JA(q + h) - JA(q - h)) / (2 * h),
+            1e-6,
+            f"∂J_A/∂q {frame}",
+        )
         task = robot.task(frame)
         task.update(q, qdot)
         dJ = (robot.jacobian(q + h * qdot, frame) - robot.jacobian(q - h * qdot, frame)) / (2 * h)

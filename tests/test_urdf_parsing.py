@@ -12,36 +12,41 @@ import dataclasses
 import importlib.metadata
 import math
 import os
-from pathlib import Path
 import threading
 import warnings
+from pathlib import Path
 
-from hypothesis import HealthCheck, given, settings
 import numpy as np
 import pinocchio as pin
 import pytest
-from scipy.spatial.transform import Rotation
 import yourdfpy
+from hypothesis import HealthCheck, given, settings
+from scipy.spatial.transform import Rotation
+from urdf_strategies import random_urdfs
 
 from kinengine.errors import KinematicsError, URDFError
 from kinengine.model import build_pinocchio_model, check_pinocchio_model
-from kinengine.urdf import (LIMITS, Limits, RobotDescription, parse_urdf, read_urdf_file)
-from urdf_strategies import random_urdfs
+from kinengine.urdf import LIMITS, Limits, RobotDescription, parse_urdf, read_urdf_file
 
 LIMIT = '<limit lower="-1" upper="1" effort="2" velocity="3"/>'
 AXIS_Z = '<axis xyz="0 0 1"/>'
 _ERD = importlib.metadata.distribution("example-robot-data")
 ERD_FILES = sorted((Path(f.locate()) for f in _ERD.files if str(f).endswith(".urdf")), key=lambda p: p.name)
 ERD_ROOT = Path(_ERD.locate_file("cmeel.prefix/share/example-robot-data/robots"))
-AGREEMENT_ROBOTS = ("ur_description/urdf/ur5_robot.urdf", "panda_description/urdf/panda.urdf",
-                    "baxter_description/urdf/baxter.urdf", "kinova_description/robots/kinova.urdf",
-                    "talos_data/robots/talos_left_arm.urdf")
+AGREEMENT_ROBOTS = (
+    "ur_description/urdf/ur5_robot.urdf",
+    "panda_description/urdf/panda.urdf",
+    "baxter_description/urdf/baxter.urdf",
+    "kinova_description/robots/kinova.urdf",
+    "talos_data/robots/talos_left_arm.urdf",
+)
 
 
 # -- URDF builders -----------------------------------------------------------------------------------
 def joint_xml(name: str, parent: str, child: str, kind: str = "revolute", body: str = LIMIT + AXIS_Z) -> str:
-    return (f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
-            f"{body}</joint>")
+    return (
+        f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>{body}</joint>'
+    )
 
 
 def robot_xml(links: list[str], joints: list[str], name: str = "test") -> str:
@@ -52,8 +57,10 @@ def robot_xml(links: list[str], joints: list[str], name: str = "test") -> str:
 
 def chain_urdf(n: int, kind: str = "revolute", body: str = '<origin xyz="0 0 0.1"/>' + AXIS_Z + LIMIT) -> str:
     """Links l0..ln, joints j1..jn (j_i: l_{i-1} -> l_i)."""
-    return robot_xml([f"l{i}" for i in range(n + 1)],
-                     [joint_xml(f"j{i}", f"l{i - 1}", f"l{i}", kind, body) for i in range(1, n + 1)])
+    return robot_xml(
+        [f"l{i}" for i in range(n + 1)],
+        [joint_xml(f"j{i}", f"l{i - 1}", f"l{i}", kind, body) for i in range(1, n + 1)],
+    )
 
 
 def one_joint(body: str, kind: str = "revolute") -> str:
@@ -61,8 +68,9 @@ def one_joint(body: str, kind: str = "revolute") -> str:
     return robot_xml(["base", "tip"], [joint_xml("j", "base", "tip", kind, body)])
 
 
-def refused(document: str | bytes, match: str, *, line: int | None = None,
-            limits: Limits = LIMITS) -> URDFError:
+def refused(
+    document: str | bytes, match: str, *, line: int | None = None, limits: Limits = LIMITS
+) -> URDFError:
     with pytest.raises(URDFError, match=match) as info:
         parse_urdf(document, limits=limits)
     assert type(info.value) is URDFError
@@ -77,8 +85,10 @@ def without_lines(d: RobotDescription) -> tuple:
     to_xml() writes None velocity and effort as 0.0, because urdfdom (inside
     Pinocchio) requires both attributes on every <limit>.
     """
-    joints = tuple(dataclasses.replace(j, line=None, velocity=j.velocity or 0.0, effort=j.effort or 0.0)
-                   for j in d.joints)
+    joints = tuple(
+        dataclasses.replace(j, line=None, velocity=j.velocity or 0.0, effort=j.effort or 0.0)
+        for j in d.joints
+    )
     return d.name, d.root, tuple(dataclasses.replace(x, line=None) for x in d.links), joints
 
 
@@ -89,7 +99,7 @@ def in_thread(function, timeout: float = 60.0):
     def run() -> None:
         try:
             box.append(function())
-        except BaseException as exc:  # noqa: BLE001 - handed back to the test
+        except BaseException as exc:
             box.append(exc)
 
     thread = threading.Thread(target=run, daemon=True)
@@ -106,8 +116,10 @@ def test_str_and_bytes_give_the_same_description():
 
 def test_str_with_an_encoding_declaration_is_read_as_the_text_it_is():
     body = robot_xml(["bäse", "tip"], [joint_xml("jé", "bäse", "tip")], name="robøt")
-    for declaration in ('<?xml version="1.0" encoding="ISO-8859-1"?>\n',
-                        "<?xml version='1.0' encoding='UTF-16'?>\n"):
+    for declaration in (
+        '<?xml version="1.0" encoding="ISO-8859-1"?>\n',
+        "<?xml version='1.0' encoding='UTF-16'?>\n",
+    ):
         d = parse_urdf(declaration + body)
         assert (d.name, d.root, d.joints[0].name) == ("robøt", "bäse", "jé")
     latin = parse_urdf(('<?xml version="1.0" encoding="ISO-8859-1"?>\n' + body).encode("latin-1"))
@@ -130,12 +142,13 @@ def test_truncated_file_is_refused_not_read_as_a_smaller_robot():
     text = chain_urdf(5)
     cut = text.index("</joint>", text.index('name="j3"')) + len("</joint>")
     refused(text[:cut], "Premature end of data in tag robot", line=10)
-    refused(text[:cut - 3], "not well-formed XML", line=10)
+    refused(text[: cut - 3], "not well-formed XML", line=10)
 
 
 def test_root_must_be_robot():
-    refused('<model name="m">\n<link name="a"/>\n</model>', r"root element is <model>, expected <robot>",
-            line=1)
+    refused(
+        '<model name="m">\n<link name="a"/>\n</model>', r"root element is <model>, expected <robot>", line=1
+    )
     # a default namespace on <robot> is accepted, as urdfdom does (tests/test_urdf_features.py)
     assert parse_urdf('<robot xmlns="http://example.com/urdf" name="r"><link name="a"/></robot>').root == "a"
 
@@ -148,13 +161,16 @@ def test_robot_needs_a_name():
 def test_external_entity_is_refused_without_opening_the_file(tmp_path, prefix):
     fifo = tmp_path / "secret"  # opening a FIFO for reading blocks until a writer comes: a read would hang
     os.mkfifo(fifo)
-    text = (f'{prefix}<!DOCTYPE robot [<!ENTITY x SYSTEM "file://{fifo}">]>\n'
-            '<robot name="&x;"><link name="a">&x;</link></robot>')
+    text = (
+        f'{prefix}<!DOCTYPE robot [<!ENTITY x SYSTEM "file://{fifo}">]>\n'
+        '<robot name="&x;"><link name="a">&x;</link></robot>'
+    )
     outcome = in_thread(lambda: parse_urdf(text), timeout=30)
     assert type(outcome) is URDFError, outcome
     assert "DOCTYPE" in str(outcome) or "external entity 'x'" in str(outcome)
-    passwd = ('<!DOCTYPE r [<!ENTITY x SYSTEM "file:///etc/passwd">]>\n'
-              '<robot name="r"><link name="&x;"/></robot>')
+    passwd = (
+        '<!DOCTYPE r [<!ENTITY x SYSTEM "file:///etc/passwd">]>\n<robot name="r"><link name="&x;"/></robot>'
+    )
     error = refused(passwd, r"<!DOCTYPE> is not allowed", line=1)
     assert "root:" not in str(error)
 
@@ -175,18 +191,23 @@ def test_the_reference_reads_yourdfpy_strictly_without_meshes_or_entities(tmp_pa
     from lxml import etree
 
     from kinengine.reference import ReferenceKinematics
+
     assert etree.LXML_VERSION >= (6, 1)
     secret = tmp_path / "secret.txt"
     secret.write_text("SECRET-CONTENT")
-    xxe = (f'<?xml version="1.0"?>\n<!DOCTYPE robot [<!ENTITY s SYSTEM "file://{secret}">]>\n'
-           '<robot name="&s;"><link name="a"/></robot>')
+    xxe = (
+        f'<?xml version="1.0"?>\n<!DOCTYPE robot [<!ENTITY s SYSTEM "file://{secret}">]>\n'
+        '<robot name="&s;"><link name="a"/></robot>'
+    )
     outcome = in_thread(lambda: ReferenceKinematics.from_urdf_string(xxe))
     assert type(outcome) is URDFError and "SECRET" not in str(outcome), outcome
     fifo = tmp_path / "mesh.stl"
     os.mkfifo(fifo)  # opening it for reading would block forever
     mesh = f'<visual><geometry><mesh filename="{fifo}"/></geometry></visual>'
     relative = '<collision><geometry><mesh filename="../../mesh.stl"/></geometry></collision>'
-    text = one_joint(LIMIT + AXIS_Z).replace('<link name="tip"/>', f'<link name="tip">{mesh}{relative}</link>')
+    text = one_joint(LIMIT + AXIS_Z).replace(
+        '<link name="tip"/>', f'<link name="tip">{mesh}{relative}</link>'
+    )
     reference = in_thread(lambda: ReferenceKinematics.from_urdf_string(text, joint_names=("j",)))
     assert isinstance(reference, ReferenceKinematics), reference
     assert isinstance(in_thread(lambda: parse_urdf(text)), RobotDescription)
@@ -229,8 +250,11 @@ def test_ten_thousand_joint_chain_is_refused_in_the_main_thread_and_in_a_worker(
 def test_tree_depth_is_bounded_even_for_fixed_joints():
     # Pinocchio's recursive C++ parser crashes the process on deep chains (see Limits.max_tree_depth)
     text = chain_urdf(LIMITS.max_tree_depth + 1, kind="fixed", body="")
-    refused(text, "link 'l129' is more than Limits.max_tree_depth = 128 joints below the root 'l0'",
-            line=2 + 130 + 128)
+    refused(
+        text,
+        "link 'l129' is more than Limits.max_tree_depth = 128 joints below the root 'l0'",
+        line=2 + 130 + 128,
+    )
     assert len(parse_urdf(chain_urdf(LIMITS.max_tree_depth, kind="fixed", body="")).joints) == 128
 
 
@@ -250,8 +274,10 @@ def test_ten_thousand_joint_chain_with_raised_limits_needs_no_recursion():
 def test_movable_joints_are_counted_separately_from_fixed_ones():
     n = LIMITS.max_movable_joints
     refused(chain_urdf(n + 1), f"{n + 1} movable joints, more than Limits.max_movable_joints = {n}")
-    star = robot_xml(["base"] + [f"l{i}" for i in range(300)],
-                     [joint_xml(f"j{i}", "base", f"l{i}", "fixed", "") for i in range(300)])
+    star = robot_xml(
+        ["base"] + [f"l{i}" for i in range(300)],
+        [joint_xml(f"j{i}", "base", f"l{i}", "fixed", "") for i in range(300)],
+    )
     fixed = parse_urdf(star)
     assert len(fixed.joints) == 300 and fixed.movable_joints == ()
     refused(chain_urdf(5), "6 links, more than Limits.max_links = 5", limits=Limits(max_links=5))
@@ -260,9 +286,13 @@ def test_movable_joints_are_counted_separately_from_fixed_ones():
 
 def test_load_takes_raised_limits_and_refuses_anything_but_a_limits_object(tmp_path):
     import kinengine
+
     text = chain_urdf(LIMITS.max_movable_joints + 1)
-    with pytest.raises(URDFError, match="129 movable joints, more than Limits.max_movable_joints = 128; pass "
-                                        r"parse_urdf\(..., limits=Limits\(max_movable_joints=...\)\)"):
+    with pytest.raises(
+        URDFError,
+        match="129 movable joints, more than Limits.max_movable_joints = 128; pass "
+        r"parse_urdf\(..., limits=Limits\(max_movable_joints=...\)\)",
+    ):
         kinengine.load_urdf_string(text)
     bigger = Limits(max_movable_joints=129, max_tree_depth=129)
     assert kinengine.load_urdf_string(text, limits=bigger).dof == 129
@@ -273,7 +303,9 @@ def test_load_takes_raised_limits_and_refuses_anything_but_a_limits_object(tmp_p
         kinengine.load(path)
     with pytest.raises(URDFError, match="more than Limits.max_links = 5"):
         kinengine.load("abb_irb120", limits=Limits(max_links=5))
-    with pytest.raises(kinengine.OptionError, match=r"limits= takes a kinengine.urdf.Limits \(.*\), got dict"):
+    with pytest.raises(
+        kinengine.OptionError, match=r"limits= takes a kinengine.urdf.Limits \(.*\), got dict"
+    ):
         kinengine.load_urdf_string(chain_urdf(2), limits={"max_links": 10})
 
 
@@ -307,10 +339,14 @@ def test_names_must_be_present_and_non_empty():
 
 
 def test_joint_links_must_exist():
-    refused(robot_xml(["base", "tip"], [joint_xml("j", "bsae", "tip")]),
-            r"joint 'j': its parent link 'bsae' is not defined \(did you mean 'base'\?\)", line=4)
-    refused(robot_xml(["base", "tip"], [joint_xml("j", "base", "nowhere")]),
-            "child link 'nowhere' is not defined")
+    refused(
+        robot_xml(["base", "tip"], [joint_xml("j", "bsae", "tip")]),
+        r"joint 'j': its parent link 'bsae' is not defined \(did you mean 'base'\?\)",
+        line=4,
+    )
+    refused(
+        robot_xml(["base", "tip"], [joint_xml("j", "base", "nowhere")]), "child link 'nowhere' is not defined"
+    )
 
 
 def test_a_link_cannot_have_two_parents():
@@ -320,18 +356,27 @@ def test_a_link_cannot_have_two_parents():
 
 def test_several_roots_are_named():
     joints = [joint_xml("j1", "a", "b")]
-    refused(robot_xml(["a", "b", "c", "d"], joints),
-            "the links form 3 separate trees, with roots 'a', 'c', 'd'")
+    refused(
+        robot_xml(["a", "b", "c", "d"], joints), "the links form 3 separate trees, with roots 'a', 'c', 'd'"
+    )
 
 
 def test_cycles_are_refused():
-    refused(robot_xml(["a", "b"], [joint_xml("j1", "a", "b"), joint_xml("j2", "b", "a")]),
-            r"there is no root link: joints 'j\d', 'j\d' form a cycle")
-    joints = [joint_xml("j0", "root", "a"), joint_xml("j1", "b", "c"), joint_xml("j2", "c", "d"),
-              joint_xml("j3", "d", "b")]
-    refused(robot_xml(["root", "a", "b", "c", "d"], joints),
-            r"not every link hangs from root 'root': "
-            r"joints 'j1', 'j2', 'j3' form a cycle 'b' -> 'c' -> 'd' -> 'b'")
+    refused(
+        robot_xml(["a", "b"], [joint_xml("j1", "a", "b"), joint_xml("j2", "b", "a")]),
+        r"there is no root link: joints 'j\d', 'j\d' form a cycle",
+    )
+    joints = [
+        joint_xml("j0", "root", "a"),
+        joint_xml("j1", "b", "c"),
+        joint_xml("j2", "c", "d"),
+        joint_xml("j3", "d", "b"),
+    ]
+    refused(
+        robot_xml(["root", "a", "b", "c", "d"], joints),
+        r"not every link hangs from root 'root': "
+        r"joints 'j1', 'j2', 'j3' form a cycle 'b' -> 'c' -> 'd' -> 'b'",
+    )
     refused(robot_xml(["a", "b"], [joint_xml("j", "a", "a")]), "connects link 'a' to itself", line=4)
 
 
@@ -342,8 +387,10 @@ def test_a_robot_needs_a_link_and_may_have_no_joint():
 
 
 def test_xacro_macros_are_refused():
-    text = ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">\n<link name="a"/>\n'
-            '<xacro:include filename="arm.xacro"/>\n</robot>')
+    text = (
+        '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">\n<link name="a"/>\n'
+        '<xacro:include filename="arm.xacro"/>\n</robot>'
+    )
     refused(text, "<xacro:include> is a xacro macro: expand the file first", line=3)
 
 
@@ -354,13 +401,23 @@ def test_a_repeated_singular_element_takes_the_first_one_with_a_warning():
 
 
 # -- numbers ---------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("value, reason", [
-    ("nan 0 0", "'nan' is not finite"), ("0 -inf 0", "'-inf' is not finite"),
-    ("0 0 Infinity", "is not finite"),
-    ("a b c", "'a' is not a number"), ("1 2", "expected three numbers separated by spaces, got 2"),
-    ("1 2 3 4", "got 4"), ("1,2,3", "got 1"), ("", "got 0"), ("1_0 0 0", "'1_0' is not a number"),
-    ("1e400 0 0", "'1e400' overflows a double"), ("0x1 0 0", "is not a number"),
-    ("\u0663 0 0", "is not a number")])
+@pytest.mark.parametrize(
+    "value, reason",
+    [
+        ("nan 0 0", "'nan' is not finite"),
+        ("0 -inf 0", "'-inf' is not finite"),
+        ("0 0 Infinity", "is not finite"),
+        ("a b c", "'a' is not a number"),
+        ("1 2", "expected three numbers separated by spaces, got 2"),
+        ("1 2 3 4", "got 4"),
+        ("1,2,3", "got 1"),
+        ("", "got 0"),
+        ("1_0 0 0", "'1_0' is not a number"),
+        ("1e400 0 0", "'1e400' overflows a double"),
+        ("0x1 0 0", "is not a number"),
+        ("\u0663 0 0", "is not a number"),
+    ],
+)
 @pytest.mark.parametrize("element, attribute", [("origin", "xyz"), ("origin", "rpy"), ("axis", "xyz")])
 def test_vectors_need_three_finite_numbers(element, attribute, value, reason):
     body = f'<{element} {attribute}="{value}"/>' + LIMIT
@@ -380,8 +437,9 @@ def test_spec_defaults_for_origin_axis_and_limits():
 
 
 def test_zero_axis_is_refused():
-    refused(one_joint('<axis xyz="0 0 0"/>' + LIMIT), r"<axis xyz=\"0 0 0\"> is zero; give a unit axis",
-            line=4)
+    refused(
+        one_joint('<axis xyz="0 0 0"/>' + LIMIT), r"<axis xyz=\"0 0 0\"> is zero; give a unit axis", line=4
+    )
     refused(one_joint('<axis xyz="0 1e-12 0"/>', kind="continuous"), "give a unit axis")
     d = parse_urdf(one_joint('<axis xyz="0 0 0"/>', kind="fixed"))  # fixed joints have no axis
     assert d.joints[0].axis == (1.0, 0.0, 0.0)
@@ -403,8 +461,9 @@ def test_non_unit_axis_is_normalized_with_a_warning():
 def test_revolute_and_prismatic_joints_need_ordered_finite_limits():
     for kind in ("revolute", "prismatic"):
         refused(one_joint(AXIS_Z, kind=kind), f"a {kind} joint needs a <limit lower=... upper=...>", line=4)
-    refused(one_joint('<limit lower="1" upper="-1"/>'), "lower limit 1.0 is greater than upper limit -1.0",
-            line=4)
+    refused(
+        one_joint('<limit lower="1" upper="-1"/>'), "lower limit 1.0 is greater than upper limit -1.0", line=4
+    )
     refused(one_joint('<limit lower="nan" upper="1"/>'), r"<limit lower=\"nan\">: 'nan' is not finite")
     refused(one_joint('<limit lower="0" upper="1" velocity="fast"/>'), "'fast' is not a number")
     limit = '<limit lower="-0.5" upper="0.25" velocity="2" effort="30"/>'
@@ -419,12 +478,21 @@ def test_continuous_joints_ignore_lower_and_upper():
 
 
 # -- mimic joints -----------------------------------------------------------------------------------------
-def mimic_robot(mimic: str, leader_kind: str = "revolute", follower_kind: str = "revolute",
-                leader: str = "a_leader", follower: str = "b_follower") -> str:
+def mimic_robot(
+    mimic: str,
+    leader_kind: str = "revolute",
+    follower_kind: str = "revolute",
+    leader: str = "a_leader",
+    follower: str = "b_follower",
+) -> str:
     """Links on lines 2-4, the leader joint on line 5, the follower (with ``mimic``) on line 6."""
-    return robot_xml(["base", "l1", "l2"], [
-        joint_xml(leader, "base", "l1", leader_kind),
-        joint_xml(follower, "base", "l2", follower_kind, LIMIT + AXIS_Z + mimic)])
+    return robot_xml(
+        ["base", "l1", "l2"],
+        [
+            joint_xml(leader, "base", "l1", leader_kind),
+            joint_xml(follower, "base", "l2", follower_kind, LIMIT + AXIS_Z + mimic),
+        ],
+    )
 
 
 def test_mimic_defaults_and_values():
@@ -438,21 +506,36 @@ def test_mimic_defaults_and_values():
 
 
 def test_mimic_rules():
-    refused(mimic_robot('<mimic joint="a_ledaer"/>'),
-            r"joint 'b_follower': mimics joint 'a_ledaer', which is not defined "
-            r"\(did you mean 'a_leader'\?\)", line=6)
+    refused(
+        mimic_robot('<mimic joint="a_ledaer"/>'),
+        r"joint 'b_follower': mimics joint 'a_ledaer', which is not defined "
+        r"\(did you mean 'a_leader'\?\)",
+        line=6,
+    )
     refused(mimic_robot('<mimic joint="b_follower"/>'), "mimics itself", line=6)
-    refused(mimic_robot('<mimic joint="a_leader"/>', leader_kind="fixed"),
-            "mimics joint 'a_leader', which is fixed")
+    refused(
+        mimic_robot('<mimic joint="a_leader"/>', leader_kind="fixed"),
+        "mimics joint 'a_leader', which is fixed",
+    )
     refused(mimic_robot('<mimic joint="a_leader" multiplier="inf"/>'), "'inf' is not finite")
-    refused(mimic_robot('<mimic/>'), "<mimic> has no 'joint' attribute")
-    chained = robot_xml(["base", "l1", "l2", "l3"], [
-        joint_xml("a", "base", "l1"), joint_xml("b", "base", "l2", body=LIMIT + '<mimic joint="a"/>'),
-        joint_xml("c", "base", "l3", body=LIMIT + '<mimic joint="b"/>')])
+    refused(mimic_robot("<mimic/>"), "<mimic> has no 'joint' attribute")
+    chained = robot_xml(
+        ["base", "l1", "l2", "l3"],
+        [
+            joint_xml("a", "base", "l1"),
+            joint_xml("b", "base", "l2", body=LIMIT + '<mimic joint="a"/>'),
+            joint_xml("c", "base", "l3", body=LIMIT + '<mimic joint="b"/>'),
+        ],
+    )
     assert parse_urdf(chained).joint("c").mimic.joint == "b"  # a mimic of a mimic: composed by the model
-    cycle = robot_xml(["base", "l1", "l2", "l3"], [
-        joint_xml("a", "base", "l1"), joint_xml("b", "base", "l2", body=LIMIT + '<mimic joint="c"/>'),
-        joint_xml("c", "base", "l3", body=LIMIT + '<mimic joint="b"/>')])
+    cycle = robot_xml(
+        ["base", "l1", "l2", "l3"],
+        [
+            joint_xml("a", "base", "l1"),
+            joint_xml("b", "base", "l2", body=LIMIT + '<mimic joint="c"/>'),
+            joint_xml("c", "base", "l3", body=LIMIT + '<mimic joint="b"/>'),
+        ],
+    )
     refused(cycle, r"joint 'b': is part of a cycle of mimic joints 'b' -> 'c' -> 'b'")
 
 
@@ -462,8 +545,9 @@ def test_mimic_on_a_fixed_joint_is_ignored_with_a_warning():
     assert d.joint("b_follower").mimic is None and len(d.warnings) == 1
 
 
-@pytest.mark.parametrize("leader_kind, follower_kind",
-                         [("continuous", "revolute"), ("revolute", "continuous")])
+@pytest.mark.parametrize(
+    "leader_kind, follower_kind", [("continuous", "revolute"), ("revolute", "continuous")]
+)
 def test_mimic_pairs_of_any_revolute_kind_build_as_plain_joints(leader_kind, follower_kind):
     """Pinocchio 4.1's own mimic joints cannot pair continuous with revolute; kinengine's plain joints can."""
     text = mimic_robot('<mimic joint="a_leader" multiplier="2" offset="0.1"/>', leader_kind, follower_kind)
@@ -499,10 +583,13 @@ def test_inertial_values_and_absence():
 
 
 def test_inertial_numbers_must_be_finite_and_complete():
-    refused(link_with(f'<inertial><mass value="nan"/>{INERTIA}</inertial>'),
-            r"link 'a': <mass value=\"nan\">", line=2)
+    refused(
+        link_with(f'<inertial><mass value="nan"/>{INERTIA}</inertial>'),
+        r"link 'a': <mass value=\"nan\">",
+        line=2,
+    )
     refused(link_with(f'<inertial><mass value="-1"/>{INERTIA}</inertial>'), "mass -1.0 kg is negative")
-    refused(link_with(f'<inertial>{INERTIA}</inertial>'), r"<inertial> needs <mass value=...>")
+    refused(link_with(f"<inertial>{INERTIA}</inertial>"), r"<inertial> needs <mass value=...>")
     refused(link_with('<inertial><mass value="1"/></inertial>'), "<inertial> needs <inertia ixx=...")
     no_iyz = INERTIA.replace(' iyz="0.03"', "")
     refused(link_with(f'<inertial><mass value="1"/>{no_iyz}</inertial>'), "<inertia> lacks iyz")
@@ -511,9 +598,14 @@ def test_inertial_numbers_must_be_finite_and_complete():
 
 # -- order, round trip, Pinocchio ------------------------------------------------------------------------
 def test_joints_are_depth_first_with_siblings_sorted_by_name_like_pinocchio():
-    joints = [joint_xml("z_first_in_file", "base", "z1"), joint_xml("m_child", "z1", "z2"),
-              joint_xml("B_upper", "base", "b1"), joint_xml("a_lower", "base", "a1"),
-              joint_xml("fixed_mid", "a1", "a2", "fixed", ""), joint_xml("c_under_fixed", "a2", "a3")]
+    joints = [
+        joint_xml("z_first_in_file", "base", "z1"),
+        joint_xml("m_child", "z1", "z2"),
+        joint_xml("B_upper", "base", "b1"),
+        joint_xml("a_lower", "base", "a1"),
+        joint_xml("fixed_mid", "a1", "a2", "fixed", ""),
+        joint_xml("c_under_fixed", "a2", "a3"),
+    ]
     text = robot_xml(["base", "z1", "z2", "b1", "a1", "a2", "a3"], joints)
     d = parse_urdf(text)
     expected = ["B_upper", "a_lower", "fixed_mid", "c_under_fixed", "z_first_in_file", "m_child"]
@@ -531,15 +623,23 @@ def test_pinocchio_builds_the_description_exactly_as_it_builds_the_original(rela
     theirs = pin.buildModelFromUrdf(str(path))  # mimic joints as plain joints, continuous as (cos, sin)
     assert list(ours.names) == list(theirs.names)
     assert ours.nq == ours.nv == theirs.nv == len([j for j in description.joints if j.movable])
-    for a, b in zip(ours.jointPlacements, theirs.jointPlacements):
+    for a, b in zip(ours.jointPlacements, theirs.jointPlacements, strict=False):
         np.testing.assert_allclose(a.homogeneous, b.homogeneous, rtol=0, atol=1e-12)
     q = np.random.default_rng(0).uniform(-1, 1, ours.nq)
-    q_theirs = np.concatenate([[q[i - 1]] if theirs.joints[i].nq == 1 else [np.cos(q[i - 1]), np.sin(q[i - 1])]
-                               for i in range(1, theirs.njoints)]) if ours.nq else np.zeros(0)
+    q_theirs = (
+        np.concatenate(
+            [
+                [q[i - 1]] if theirs.joints[i].nq == 1 else [np.cos(q[i - 1]), np.sin(q[i - 1])]
+                for i in range(1, theirs.njoints)
+            ]
+        )
+        if ours.nq
+        else np.zeros(0)
+    )
     data_ours, data_theirs = ours.createData(), theirs.createData()
     pin.forwardKinematics(ours, data_ours, q)
     pin.forwardKinematics(theirs, data_theirs, q_theirs)
-    for a, b in zip(data_ours.oMi, data_theirs.oMi):
+    for a, b in zip(data_ours.oMi, data_theirs.oMi, strict=False):
         np.testing.assert_allclose(a.homogeneous, b.homogeneous, rtol=0, atol=1e-12)
 
 
@@ -571,15 +671,18 @@ def test_every_example_robot_data_urdf_parses_or_is_refused_like_pinocchio_refus
     assert without_lines(parse_urdf(description.to_xml())) == without_lines(description)
 
 
-@pytest.mark.parametrize("relative", AGREEMENT_ROBOTS + ("romeo_description/urdf/romeo_laas_small.urdf",
-                                                      "pr2_description/urdf/pr2.urdf"))
+@pytest.mark.parametrize(
+    "relative",
+    AGREEMENT_ROBOTS + ("romeo_description/urdf/romeo_laas_small.urdf", "pr2_description/urdf/pr2.urdf"),
+)
 def test_values_agree_with_yourdfpy(relative):
     path = ERD_ROOT / relative
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         description = read_urdf_file(path)
-    other = yourdfpy.URDF.load(str(path), build_scene_graph=False, load_meshes=False,
-                               load_collision_meshes=False)
+    other = yourdfpy.URDF.load(
+        str(path), build_scene_graph=False, load_meshes=False, load_collision_meshes=False
+    )
     assert {j.name for j in description.joints} == set(other.joint_map)
     for joint in description.joints:
         theirs = other.joint_map[joint.name]
@@ -587,8 +690,9 @@ def test_values_agree_with_yourdfpy(relative):
         origin = np.eye(4)
         origin[:3, :3] = Rotation.from_euler("xyz", joint.rpy).as_matrix()  # URDF rpy: fixed-axis X, Y, Z
         origin[:3, 3] = joint.xyz
-        np.testing.assert_allclose(origin, theirs.origin if theirs.origin is not None else np.eye(4),
-                                   rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            origin, theirs.origin if theirs.origin is not None else np.eye(4), rtol=0, atol=1e-12
+        )
         if not joint.movable:
             continue
         axis = np.asarray(theirs.axis if theirs.axis is not None else (1.0, 0.0, 0.0))
@@ -597,7 +701,10 @@ def test_values_agree_with_yourdfpy(relative):
             assert (joint.lower, joint.upper) == (theirs.limit.lower or 0.0, theirs.limit.upper or 0.0)
         if joint.mimic is not None:
             assert (joint.mimic.joint, joint.mimic.multiplier, joint.mimic.offset) == (
-                theirs.mimic.joint, theirs.mimic.multiplier or 1.0, theirs.mimic.offset or 0.0)
+                theirs.mimic.joint,
+                theirs.mimic.multiplier or 1.0,
+                theirs.mimic.offset or 0.0,
+            )
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -609,7 +716,7 @@ def test_random_trees_round_trip_and_agree_with_pinocchio(text):
     check_pinocchio_model(description, ours)
     theirs = pin.buildModelFromXML(text)  # the original text: same joints, same placements
     assert list(theirs.names) == list(ours.names)
-    for a, b in zip(ours.jointPlacements, theirs.jointPlacements):
+    for a, b in zip(ours.jointPlacements, theirs.jointPlacements, strict=False):
         np.testing.assert_allclose(a.homogeneous, b.homogeneous, rtol=0, atol=1e-12)
 
 
@@ -617,8 +724,10 @@ def test_parsing_in_worker_threads_gives_the_same_descriptions():
     texts = [chain_urdf(n) for n in range(1, 9)]
     expected = [parse_urdf(t) for t in texts]
     results: dict[int, object] = {}
-    threads = [threading.Thread(target=lambda i=i: results.__setitem__(i, parse_urdf(texts[i % 8])))
-               for i in range(32)]
+    threads = [
+        threading.Thread(target=lambda i=i: results.__setitem__(i, parse_urdf(texts[i % 8])))
+        for i in range(32)
+    ]
     for t in threads:
         t.start()
     for t in threads:
@@ -639,8 +748,11 @@ def test_read_urdf_file_matches_parse_urdf_and_names_the_file(tmp_path):
 
 
 def test_read_urdf_file_refuses_what_is_not_a_readable_regular_file(tmp_path):
-    cases = [(tmp_path / "missing.urdf", "no such file"), (tmp_path, r"not a regular file \(a directory\)"),
-             (Path("/dev/zero"), r"not a regular file \(a device, FIFO or socket\)")]
+    cases = [
+        (tmp_path / "missing.urdf", "no such file"),
+        (tmp_path, r"not a regular file \(a directory\)"),
+        (Path("/dev/zero"), r"not a regular file \(a device, FIFO or socket\)"),
+    ]
     for path, message in cases:
         with pytest.raises(URDFError, match=message) as info:
             read_urdf_file(path)

@@ -6,17 +6,22 @@ import argparse
 import json
 import warnings
 
-from hypothesis import given, settings
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from urdf_strategies import random_urdfs
 
 import kinengine
 from kinengine.cli.verify import add_parser
 from kinengine.verify import VerifyReport, verify
-from urdf_strategies import random_urdfs
 
-REFERENCE_ROWS = ("pose vs reference", "jacobian local_world_aligned vs reference",
-                  "jacobian local vs reference", "jacobian world vs reference", "link poses vs yourdfpy")
+REFERENCE_ROWS = (
+    "pose vs reference",
+    "jacobian local_world_aligned vs reference",
+    "jacobian local vs reference",
+    "jacobian world vs reference",
+    "link poses vs yourdfpy",
+)
 
 
 def _load(name: str) -> kinengine.Robot:
@@ -44,7 +49,7 @@ def test_verify_passes_on_every_available_robot(name):
     rows = {c.check: c for c in report.checks}
     for row in REFERENCE_ROWS:
         assert rows[row].compared > 0, row
-    corners = 2 ** robot.dof if robot.dof <= 8 else 64
+    corners = 2**robot.dof if robot.dof <= 8 else 64
     assert report.configurations == 1 + 4 + corners
 
 
@@ -71,8 +76,10 @@ def _world_linear_rows_wrong(original):
         J = original(self, q, frame, reference, **kw)
         if reference != "world":
             return J
-        return np.concatenate([original(self, q, frame, "local_world_aligned", **kw)[..., :3, :],
-                               J[..., 3:, :]], axis=-2)  # forgot v_O = v − ω × p
+        return np.concatenate(
+            [original(self, q, frame, "local_world_aligned", **kw)[..., :3, :], J[..., 3:, :]], axis=-2
+        )  # forgot v_O = v − ω × p
+
     return jacobian
 
 
@@ -81,6 +88,7 @@ def _pose_off_by_10_nm(original):
         T = np.array(original(self, q, frame, **kw))
         T[..., 0, 3] += 1e-8
         return T
+
     return frame_pose
 
 
@@ -89,6 +97,7 @@ def _mimic_column_dropped(original):
         J = np.array(original(self, q, frame, reference, **kw))
         J[..., self.joint_names.index("panda_finger_joint1")] *= 0.5  # only the leader's own motion
         return J
+
     return jacobian
 
 
@@ -96,18 +105,30 @@ def _analytic_scaled(original):
     def analytic_jacobian(self, q, frame=None, position="cartesian", rotation="euler_zyx", **kw):
         J = original(self, q, frame, position, rotation, **kw)
         return J * (1 + 1e-4) if rotation == "euler_zyx" else J
+
     return analytic_jacobian
 
 
-@pytest.mark.parametrize("robot_name, method, breakage, expected", [
-    ("ur5", "jacobian", _world_linear_rows_wrong,
-     {"jacobian world vs reference", "jacobian world vs finite differences"}),
-    ("ur5", "frame_pose", _pose_off_by_10_nm, {"pose vs reference", "link poses vs yourdfpy"}),
-    ("panda", "jacobian", _mimic_column_dropped,
-     {f"jacobian {r} vs reference" for r in ("local_world_aligned", "local", "world")}
-     | {f"jacobian {r} vs finite differences" for r in ("local_world_aligned", "local", "world")}),
-    ("ur5", "analytic_jacobian", _analytic_scaled, {"analytic euler_zyx vs finite differences"}),
-])
+@pytest.mark.parametrize(
+    "robot_name, method, breakage, expected",
+    [
+        (
+            "ur5",
+            "jacobian",
+            _world_linear_rows_wrong,
+            {"jacobian world vs reference", "jacobian world vs finite differences"},
+        ),
+        ("ur5", "frame_pose", _pose_off_by_10_nm, {"pose vs reference", "link poses vs yourdfpy"}),
+        (
+            "panda",
+            "jacobian",
+            _mimic_column_dropped,
+            {f"jacobian {r} vs reference" for r in ("local_world_aligned", "local", "world")}
+            | {f"jacobian {r} vs finite differences" for r in ("local_world_aligned", "local", "world")},
+        ),
+        ("ur5", "analytic_jacobian", _analytic_scaled, {"analytic euler_zyx vs finite differences"}),
+    ],
+)
 def test_verify_fails_on_a_broken_engine(monkeypatch, capsys, robot_name, method, breakage, expected):
     monkeypatch.setattr(kinengine.Robot, method, breakage(getattr(kinengine.Robot, method)))
     report = verify(_load(robot_name), samples=3)
@@ -129,4 +150,5 @@ def test_analytic_rows_are_skipped_when_the_robot_has_none():
     report = verify(WithoutAnalytic(_load("ur5")), samples=2)
     assert report.passed
     assert [c.note for c in report.checks if c.check.startswith("analytic")] == [
-        "skipped: robot has no analytic_jacobian"]
+        "skipped: robot has no analytic_jacobian"
+    ]

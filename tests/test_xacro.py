@@ -21,7 +21,7 @@ from kinengine.urdf.xacro import expand_xacro
 
 DATA = Path(__file__).parent / "data" / "xacro"
 ARM = DATA / "ws" / "src" / "kin_arm" / "urdf" / "arm.urdf.xacro"
-PARTS = DATA / "elsewhere" / "parts_pkg"                  # package kin_parts, in a folder of another name
+PARTS = DATA / "elsewhere" / "parts_pkg"  # package kin_parts, in a folder of another name
 IRB = DATA / "irb_like_support" / "robots" / "irb_like.xacro"
 ERRORS = DATA / "errors"
 
@@ -37,15 +37,18 @@ def assert_same_model(text: str, expected: Path, rename=lambda name: name, sampl
     reference = kinengine.load_urdf_string(expected.read_text())
     assert robot.joint_names == tuple(rename(n) for n in reference.joint_names)
     frames = [f for f in reference.frame_names if f != "universe"]
-    assert sorted(robot.frame_names) == sorted(rename(f) if f != "universe" else f
-                                               for f in reference.frame_names)
+    assert sorted(robot.frame_names) == sorted(
+        rename(f) if f != "universe" else f for f in reference.frame_names
+    )
     rng = np.random.default_rng(13)
     for q in [reference.neutral()] + [reference.random_configuration(rng) for _ in range(samples)]:
         for frame in frames:
-            np.testing.assert_allclose(robot.frame_pose(q, rename(frame)), reference.frame_pose(q, frame),
-                                       rtol=0, atol=1e-15)
-            np.testing.assert_allclose(robot.jacobian(q, rename(frame)), reference.jacobian(q, frame),
-                                       rtol=0, atol=1e-15)
+            np.testing.assert_allclose(
+                robot.frame_pose(q, rename(frame)), reference.frame_pose(q, frame), rtol=0, atol=1e-15
+            )
+            np.testing.assert_allclose(
+                robot.jacobian(q, rename(frame)), reference.jacobian(q, frame), rtol=0, atol=1e-15
+            )
 
 
 def assert_one_line(exc: pytest.ExceptionInfo, *fragments: str) -> str:
@@ -78,15 +81,19 @@ def test_own_tree_resolves_find_by_package_xml_and_by_folder_name():
 
 
 def test_arguments_conditionals_and_math():
-    text = expand_xacro(ARM, args={"upper_length": 0.6, "with_tool": "false", "prismatic_wrist": "true"},
-                        packages={"kin_parts": str(PARTS)})
+    text = expand_xacro(
+        ARM,
+        args={"upper_length": 0.6, "with_tool": "false", "prismatic_wrist": "true"},
+        packages={"kin_parts": str(PARTS)},
+    )
     assert_same_model(text, DATA / "expected" / "arm_prismatic_no_tool.urdf")
 
 
 def test_rosindustrial_wrapper_with_a_prefix():
     text = expand_xacro(IRB, args={"prefix": "left_"})
-    assert_same_model(text, DATA / "expected" / "irb_like.urdf", rename=lambda name: "left_" + name,
-                      samples=2)
+    assert_same_model(
+        text, DATA / "expected" / "irb_like.urdf", rename=lambda name: "left_" + name, samples=2
+    )
 
 
 def test_packages_argument_wins_over_the_environment_and_the_tree(monkeypatch, tmp_path):
@@ -126,14 +133,17 @@ def test_xacro_warnings_become_user_warnings(capsys):
 # --- errors: one line each, nothing printed ------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name, fragments", [
-    ("needs_arg.xacro", ["missing xacro argument 'ur_type'", "args="]),
-    ("unknown_macro.xacro", ["unknown xacro macro <xacro:no_such_arm>"]),
-    ("undefined_property.xacro", ["undefined xacro property", "lower_length"]),
-    ("malformed.xacro", ["malformed.xacro:4", "not well-formed XML"]),
-    ("includes_doctype.xacro", ["doctype_part.xacro:2", "<!DOCTYPE> is not allowed"]),
-    ("calls_fatal.xacro", ["unsupported robot variant"]),
-])
+@pytest.mark.parametrize(
+    "name, fragments",
+    [
+        ("needs_arg.xacro", ["missing xacro argument 'ur_type'", "args="]),
+        ("unknown_macro.xacro", ["unknown xacro macro <xacro:no_such_arm>"]),
+        ("undefined_property.xacro", ["undefined xacro property", "lower_length"]),
+        ("malformed.xacro", ["malformed.xacro:4", "not well-formed XML"]),
+        ("includes_doctype.xacro", ["doctype_part.xacro:2", "<!DOCTYPE> is not allowed"]),
+        ("calls_fatal.xacro", ["unsupported robot variant"]),
+    ],
+)
 def test_xacro_errors_are_one_line(name, fragments, capsys):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -153,9 +163,15 @@ def test_unresolved_package_names_it_and_the_places_searched(monkeypatch, capsys
     monkeypatch.setenv("ROS_PACKAGE_PATH", str(DATA / "elsewhere"))
     with pytest.raises(URDFError) as exc:
         expand_xacro(ERRORS / "finds_missing_package.xacro", packages={"kin_parts": PARTS})
-    assert_one_line(exc, "'kin_no_such_package' not found", "packages= ('kin_parts')",
-                    f"ROS_PACKAGE_PATH ({DATA / 'elsewhere'})", f"the folders above '{ERRORS}'",
-                    "--package kin_no_such_package=", "ROS_PACKAGE_PATH")
+    assert_one_line(
+        exc,
+        "'kin_no_such_package' not found",
+        "packages= ('kin_parts')",
+        f"ROS_PACKAGE_PATH ({DATA / 'elsewhere'})",
+        f"the folders above '{ERRORS}'",
+        "--package kin_no_such_package=",
+        "ROS_PACKAGE_PATH",
+    )
     assert capsys.readouterr() == ("", "")
 
 
@@ -166,10 +182,13 @@ def test_a_package_missing_from_every_source_is_refused():
     assert_one_line(exc, "'kin_parts' not found", "ROS_PACKAGE_PATH (unset)")
 
 
-@pytest.mark.parametrize("path, fragment", [
-    (DATA / "no_such_file.xacro", "cannot open the file"),
-    (DATA, "not a regular file"),
-])
+@pytest.mark.parametrize(
+    "path, fragment",
+    [
+        (DATA / "no_such_file.xacro", "cannot open the file"),
+        (DATA, "not a regular file"),
+    ],
+)
 def test_unreadable_input_is_refused(path, fragment):
     with pytest.raises(URDFError) as exc:
         expand_xacro(path)
@@ -187,11 +206,13 @@ def test_exponential_macro_is_stopped_by_the_element_budget(tmp_path, monkeypatc
     import kinengine.urdf.xacro
 
     monkeypatch.setattr(kinengine.urdf.xacro, "LIMITS", kinengine.urdf.Limits(max_tags=2000))
-    levels = "\n".join(f'<xacro:macro name="m{i}"><xacro:m{i - 1}/><xacro:m{i - 1}/></xacro:macro>'
-                       for i in range(1, 40))
+    levels = "\n".join(
+        f'<xacro:macro name="m{i}"><xacro:m{i - 1}/><xacro:m{i - 1}/></xacro:macro>' for i in range(1, 40)
+    )
     (tmp_path / "bomb.xacro").write_text(
         '<robot name="bomb" xmlns:xacro="http://www.ros.org/wiki/xacro">'
-        f'<xacro:macro name="m0"><link name="l"/></xacro:macro>{levels}<xacro:m39/></robot>')
+        f'<xacro:macro name="m0"><link name="l"/></xacro:macro>{levels}<xacro:m39/></robot>'
+    )
     with pytest.raises(URDFError) as exc:
         expand_xacro(tmp_path / "bomb.xacro")
     assert_one_line(exc, "more than Limits.max_tags = 2000 elements")

@@ -39,8 +39,11 @@ def unit_axes(draw: st.DrawFn) -> tuple[float, float, float]:
     """A unit 3-vector: one of a few cardinal axes, or a random direction."""
     if draw(st.booleans()):
         return draw(st.sampled_from(CARDINAL_AXES))
-    v = draw(st.tuples(_floats(-1, 1), _floats(-1, 1), _floats(-1, 1)).filter(
-        lambda v: math.fsum(x * x for x in v) > 0.01))
+    v = draw(
+        st.tuples(_floats(-1, 1), _floats(-1, 1), _floats(-1, 1)).filter(
+            lambda v: math.fsum(x * x for x in v) > 0.01
+        )
+    )
     norm = math.sqrt(math.fsum(x * x for x in v))
     return (v[0] / norm, v[1] / norm, v[2] / norm)
 
@@ -78,13 +81,18 @@ def random_urdfs(draw: st.DrawFn, max_links: int = 8) -> str:
             mimic[i] = f'<mimic joint="{leader}" multiplier="{multiplier!r}" offset="{offset!r}"/>'
         seen.append(i)
 
-    elements = [f'<joint name="{names[i]}" type="{types[i]}">'
-                f'<parent link="{links[parents[i]]}"/><child link="{links[i + 1]}"/>{_origin(draw)}'
-                + _motion_elements(draw, types[i]) + mimic.get(i, "") + "</joint>"
-                for i in range(n - 1)]
+    elements = [
+        f'<joint name="{names[i]}" type="{types[i]}">'
+        f'<parent link="{links[parents[i]]}"/><child link="{links[i + 1]}"/>{_origin(draw)}'
+        + _motion_elements(draw, types[i])
+        + mimic.get(i, "")
+        + "</joint>"
+        for i in range(n - 1)
+    ]
     order = draw(st.permutations(range(n - 1)))
-    body = "\n  ".join([f'<link name="{name}"/>' for name in draw(st.permutations(links))]
-                       + [elements[i] for i in order])
+    body = "\n  ".join(
+        [f'<link name="{name}"/>' for name in draw(st.permutations(links))] + [elements[i] for i in order]
+    )
     return f'<?xml version="1.0"?>\n<robot name="random">\n  {body}\n</robot>\n'
 
 

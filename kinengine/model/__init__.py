@@ -2,7 +2,8 @@
 Pinocchio's model of a validated description (one plain joint per movable URDF joint)."""
 
 from .catalog import CatalogEntry, available_robots, catalog_entry, shipped_robots_dir
-from .coordinates import CoordinateMap, mimic_roots
+from .coordinates import CoordinateMap
+from .mimics import mimic_roots
 from .pinocchio_model import build_pinocchio_model, check_pinocchio_model, pinocchio_xml
 
 __all__ = [

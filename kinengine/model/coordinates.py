@@ -14,13 +14,13 @@ from __future__ import annotations
 
 import math
 import numbers
-import warnings
 from collections.abc import Mapping
 
 import numpy as np
 
 from ..errors import ConfigurationError, FrameNotFoundError, OptionError
 from ..urdf import RobotDescription
+from .mimics import mimic_roots, narrow_by_mimics
 
 _F64 = np.dtype(np.float64)
 MAX_MAGNITUDE = 1e9
@@ -29,24 +29,6 @@ one) could overflow a pose; an angle of 1e9 rad is 1.6e8 turns. Limits beyond it
 MAX_SAMPLES = 2**28
 """The most numbers one random_configuration call makes (2 GiB of float64)."""
 _STRIDES = (_F64.itemsize,)  # a C-contiguous float64 vector
-
-
-def mimic_roots(description: RobotDescription) -> dict[str, tuple[str, float, float]]:
-    """Mimic joint name -> (root leader, multiplier, offset), chains of mimics composed:
-    θ_a = m₁θ_b + o₁ and θ_b = m₂θ_c + o₂ give θ_a = (m₁m₂)θ_c + (m₁o₂ + o₁)."""
-    direct = {j.name: j.mimic for j in description.joints if j.movable and j.mimic is not None}
-    roots: dict[str, tuple[str, float, float]] = {}
-    for name in direct:
-        multiplier, offset, leader, seen = 1.0, 0.0, name, {name}
-        while leader in direct:  # the parser has refused cycles
-            m = direct[leader]
-            multiplier, offset = multiplier * m.multiplier, multiplier * m.offset + offset
-            leader = m.joint
-            if leader in seen:
-                raise AssertionError(f"mimic cycle through {leader!r}")
-            seen.add(leader)
-        roots[name] = (leader, multiplier, offset)
-    return roots
 
 
 class CoordinateMap:
@@ -75,54 +57,13 @@ class CoordinateMap:
         joints = {j.name: j for j in movable}
         lower = np.array([_or(joints[n].lower, -np.inf) for n in names])
         upper = np.array([_or(joints[n].upper, np.inf) for n in names])
-        self._narrowed_by: dict[int, list[str]] = {}
-        self._narrow_by_mimics(description, roots, index, lower, upper)
+        self._narrowed_by = narrow_by_mimics(description, roots, index, self.names, lower, upper)
         lower.flags.writeable = upper.flags.writeable = False
         self.lower, self.upper = lower, upper
         self.continuous = np.array([joints[n].type == "continuous" for n in names], dtype=bool)
         self._index = index
         self._shape = (self.dof,)
         self._mimics = {name: root[0] for name, root in roots.items()}
-
-    def _narrow_by_mimics(
-        self,
-        description: RobotDescription,
-        roots: dict[str, tuple[str, float, float]],
-        index: dict[str, int],
-        lower: np.ndarray,
-        upper: np.ndarray,
-    ) -> None:
-        """A coordinate's limits also keep each mimic joint that follows it within that joint's own limits:
-        lower ≤ m·q + o ≤ upper of the follower, i.e. q within [(lower − o)/m, (upper − o)/m]
-        (swapped if m < 0).
-        A follower whose limits would leave the leader an empty or zero-width range (sloppy gripper URDFs,
-        e.g. a vendor's Robotiq 2F-85) is not enforced; one warning per leader names every such follower,
-        and the leader keeps its own limits (narrowed by its other followers only)."""
-        ignored: dict[int, list[tuple[str, str]]] = {}
-        for joint in description.joints:
-            if joint.name not in roots or joint.lower is None or joint.upper is None:
-                continue
-            root, m, o = roots[joint.name]
-            if m == 0.0:
-                continue
-            i = index[root]
-            a, b = (joint.lower - o) / m, (joint.upper - o) / m
-            lo, hi = max(lower[i], min(a, b)), min(upper[i], max(a, b))
-            follows = f"{joint.name!r} = {m:g}·q + {o:g} within [{joint.lower:g}, {joint.upper:g}]"
-            if not lo < hi:
-                ignored.setdefault(i, []).append(("no value" if lo > hi else "only one value", follows))
-            elif lo > lower[i] or hi < upper[i]:
-                lower[i], upper[i] = lo, hi
-                self._narrowed_by.setdefault(i, []).append(follows)
-        for i, ((what, follows), *more) in ignored.items():
-            likewise = "".join(f"; likewise mimic joint {f} ({w})" for w, f in more)
-            warnings.warn(
-                f"{description.source}: {what} of joint {self.names[i]!r} keeps it within its limits and "
-                f"mimic joint {follows}; the mimic joint's limits are not enforced{likewise}; "
-                f"{self.names[i]!r} keeps [{lower[i]:g}, {upper[i]:g}]",
-                UserWarning,
-                stacklevel=3,
-            )
 
     # -- the map ------------------------------------------------------------------------------
     def to_pinocchio(self, q: np.ndarray) -> np.ndarray:
@@ -350,4 +291,4 @@ def _or(value: float | None, default: float) -> float:
     return default if value is None else value
 
 
-__all__ = ["CoordinateMap", "mimic_roots"]
+__all__ = ["CoordinateMap"]
