@@ -32,7 +32,9 @@ def main(runs: int = 21) -> dict[str, float]:
             best[name] = min(best[name], time.perf_counter() - start)
     for name, seconds in best.items():
         print(f"{name:10s} {seconds * 1e3:7.1f} ms  ({COMMANDS[name]})")
-    print(f"kinengine − pinocchio: {(best['kinengine'] - best['pinocchio']) * 1e3:.1f} ms (target: within 40 ms)")
+    print(
+        f"kinengine − pinocchio: {(best['kinengine'] - best['pinocchio']) * 1e3:.1f} ms (target: within 40 ms)"
+    )
     return best
 
 

@@ -43,8 +43,12 @@ def calls(robot, frame: str, q: np.ndarray) -> dict:
     data = model.createData()
     fid = robot.frame_id(frame)
     qp = robot.pinocchio_configuration(q)
-    fk, place, frame_jacobian, LWA = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian, \
-        pin.LOCAL_WORLD_ALIGNED
+    fk, place, frame_jacobian, LWA = (
+        pin.forwardKinematics,
+        pin.updateFramePlacement,
+        pin.computeFrameJacobian,
+        pin.LOCAL_WORLD_ALIGNED,
+    )
     fold = robot.engine.coordinates.fold
     checked, unchecked = robot.frame(frame), robot.frame(frame, check_inputs=False)
 
@@ -60,12 +64,17 @@ def calls(robot, frame: str, q: np.ndarray) -> dict:
         return place(model, data, fid).homogeneous, J
 
     return {
-        "floor pose": floor_pose, "floor jacobian": floor_jacobian, "floor kinematics": floor_kinematics,
-        "frame_pose": lambda: robot.frame_pose(q, frame), "jacobian": lambda: robot.jacobian(q, frame),
+        "floor pose": floor_pose,
+        "floor jacobian": floor_jacobian,
+        "floor kinematics": floor_kinematics,
+        "frame_pose": lambda: robot.frame_pose(q, frame),
+        "jacobian": lambda: robot.jacobian(q, frame),
         "kinematics": lambda: robot.kinematics(q, frame),
-        "fk.pose": lambda: checked.pose(q), "fk.jacobian": lambda: checked.jacobian(q),
+        "fk.pose": lambda: checked.pose(q),
+        "fk.jacobian": lambda: checked.jacobian(q),
         "fk.kinematics": lambda: checked.kinematics(q),
-        "fk.pose unchecked": lambda: unchecked.pose(q), "fk.jacobian unchecked": lambda: unchecked.jacobian(q),
+        "fk.pose unchecked": lambda: unchecked.pose(q),
+        "fk.jacobian unchecked": lambda: unchecked.jacobian(q),
         "fk.kinematics unchecked": lambda: unchecked.kinematics(q),
     }
 
@@ -74,8 +83,10 @@ def ratios(name: str) -> None:
     robot = kinengine.load(name)
     frame = robot.end_effector
     best = best_times(calls(robot, frame, robot.random_configuration(0)))
-    print(f"{name} ({frame}): floors pose {best['floor pose']:.2f} µs, jacobian {best['floor jacobian']:.2f} µs, "
-          f"kinematics {best['floor kinematics']:.2f} µs")
+    print(
+        f"{name} ({frame}): floors pose {best['floor pose']:.2f} µs, jacobian {best['floor jacobian']:.2f} µs, "
+        f"kinematics {best['floor kinematics']:.2f} µs"
+    )
     for key, value in best.items():
         if key.startswith("floor"):
             continue
@@ -92,15 +103,24 @@ def mimic_overhead() -> None:
     qp = plain.random_configuration(0)
     hm, hp = panda.frame(frame), plain.frame(frame)
     um, up = panda.frame(frame, check_inputs=False), plain.frame(frame, check_inputs=False)
-    best = best_times({"mimic pose": lambda: hm.pose(qm), "plain pose": lambda: hp.pose(qp),
-                       "mimic jacobian": lambda: hm.jacobian(qm), "plain jacobian": lambda: hp.jacobian(qp),
-                       "mimic pose unchecked": lambda: um.pose(qm), "plain pose unchecked": lambda: up.pose(qp),
-                       "mimic frame_pose": lambda: panda.frame_pose(qm, frame),
-                       "plain frame_pose": lambda: plain.frame_pose(qp, frame)})
+    best = best_times(
+        {
+            "mimic pose": lambda: hm.pose(qm),
+            "plain pose": lambda: hp.pose(qp),
+            "mimic jacobian": lambda: hm.jacobian(qm),
+            "plain jacobian": lambda: hp.jacobian(qp),
+            "mimic pose unchecked": lambda: um.pose(qm),
+            "plain pose unchecked": lambda: up.pose(qp),
+            "mimic frame_pose": lambda: panda.frame_pose(qm, frame),
+            "plain frame_pose": lambda: plain.frame_pose(qp, frame),
+        }
+    )
     print(f"mimic map (Panda, {frame}: {panda.dof} coordinates with the mimic, {plain.dof} without):")
     for what in ("pose", "jacobian", "pose unchecked", "frame_pose"):
-        print(f"  {what:16s} +{best['mimic ' + what] - best['plain ' + what]:.2f} µs "
-              f"({best['mimic ' + what]:.2f} against {best['plain ' + what]:.2f})")
+        print(
+            f"  {what:16s} +{best['mimic ' + what] - best['plain ' + what]:.2f} µs "
+            f"({best['mimic ' + what]:.2f} against {best['plain ' + what]:.2f})"
+        )
 
 
 if __name__ == "__main__":

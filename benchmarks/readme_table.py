@@ -19,16 +19,26 @@ HERE = Path(__file__).resolve().parent
 
 def markdown(report: dict, robot: str) -> str:
     rows = [row for row in report["rows"] if row["robot"] == robot]
-    peers = [name for name in (rows[0].get("peers", {}) if rows else {})
-             if any(r["peers"][name]["status"] != "unsupported" for r in rows)]
+    peers = [
+        name
+        for name in (rows[0].get("peers", {}) if rows else {})
+        if any(r["peers"][name]["status"] != "unsupported" for r in rows)
+    ]
     head = ["case", "N", "kinengine min µs", "median µs", "per s", "floor min µs", "ratio", *peers]
     lines = ["| " + " | ".join(head) + " |", "|---|" + "--:|" * (len(head) - 1)]
     for row in rows:
         k, p = row["kinengine"], row["pinocchio"]
         ratio = f"{row['ratio']:.2f}" if "ratio" in row else ("–" if p["status"] == "none" else "")
         label = case_label(row) + (f" ({row['success']:.1%} reached)" if "success" in row else "")
-        cells = [label, f"{row['n']:,}", _us(k["min_us"]), _us(k["median_us"]), f"{k['per_second']:,.0f}",
-                 _us(p["min_us"]) if "min_us" in p else "–", ratio]
+        cells = [
+            label,
+            f"{row['n']:,}",
+            _us(k["min_us"]),
+            _us(k["median_us"]),
+            f"{k['per_second']:,.0f}",
+            _us(p["min_us"]) if "min_us" in p else "–",
+            ratio,
+        ]
         cells += [_peer_cell(row["peers"][name], k["min_us"]).replace("unsupported", "–") for name in peers]
         lines.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
     return "\n".join(lines)
@@ -46,11 +56,17 @@ def floors(report: dict) -> str:
 
 def machine(report: dict) -> str:
     v = report["versions"]
-    peers = ", ".join(f"{name} {v[name]}" for name in ("roboticstoolbox-python", "pytorch-kinematics", "ikpy",
-                                                        "mujoco", "drake") if v.get(name))
-    return (f"{report['cpu']}, {report['cores']} cores, Python {report['python']}, kinengine {v['kinengine']}, "
-            f"Pinocchio {v['pin']}, numpy {v['numpy']}" + (f"; peers: {peers}" if peers else "")
-            + f"; run {report['timestamp']}")
+    peers = ", ".join(
+        f"{name} {v[name]}"
+        for name in ("roboticstoolbox-python", "pytorch-kinematics", "ikpy", "mujoco", "drake")
+        if v.get(name)
+    )
+    return (
+        f"{report['cpu']}, {report['cores']} cores, Python {report['python']}, kinengine {v['kinengine']}, "
+        f"Pinocchio {v['pin']}, numpy {v['numpy']}"
+        + (f"; peers: {peers}" if peers else "")
+        + f"; run {report['timestamp']}"
+    )
 
 
 if __name__ == "__main__":

@@ -9,8 +9,8 @@ records the CPU model, core count and library versions next to every figure.
 
 from __future__ import annotations
 
-from pathlib import Path
 import sys
+from pathlib import Path
 
 from kinengine.cli import main
 

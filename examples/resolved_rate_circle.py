@@ -23,7 +23,7 @@ import numpy as np
 
 import kinengine
 
-Q_START = np.array([0.0, 0.3, 0.2, 0.0, -0.5, np.pi / 2])   # [rad]; q2 + q3 + q5 = 0: tool0 z along x
+Q_START = np.array([0.0, 0.3, 0.2, 0.0, -0.5, np.pi / 2])  # [rad]; q2 + q3 + q5 = 0: tool0 z along x
 FRAME = "tool0"
 
 
@@ -35,20 +35,20 @@ class Run:
     q: np.ndarray
     position_error: np.ndarray
     rotation_error: np.ndarray
-    min_sigma: float           # smallest singular value of J_e0 met [1]
-    min_zyx_distance: float    # smallest |cos χ2| met (0 at the ZYX singularity)
+    min_sigma: float  # smallest singular value of J_e0 met [1]
+    min_zyx_distance: float  # smallest |cos χ2| met (0 at the ZYX singularity)
 
 
 def desired(t: float, center: np.ndarray, radius: float, period: float) -> tuple[np.ndarray, np.ndarray]:
     """Position p_d(t) [m] and velocity ṗ_d(t) [m/s] on the circle in base_link's y-z plane."""
     w = 2 * np.pi / period
     c, s = np.cos(w * t), np.sin(w * t)
-    return (center + radius * np.array([0.0, c, s]),
-            radius * w * np.array([0.0, -s, c]))
+    return (center + radius * np.array([0.0, c, s]), radius * w * np.array([0.0, -s, c]))
 
 
-def simulate(duration: float = 5.0, dt: float = 1e-3, radius: float = 0.05, gain: float = 20.0,
-             period: float = 5.0) -> Run:
+def simulate(
+    duration: float = 5.0, dt: float = 1e-3, radius: float = 0.05, gain: float = 20.0, period: float = 5.0
+) -> Run:
     """Run the controller; the circle (one turn per ``period`` [s]) is centred on the start position."""
     robot = kinengine.load("abb_irb120")
     q = Q_START.copy()
@@ -76,6 +76,7 @@ def simulate(duration: float = 5.0, dt: float = 1e-3, radius: float = 0.05, gain
 def plot(run: Run, path: str) -> None:
     """Position and orientation error over time, log scale, written to ``path`` (PNG)."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -89,8 +90,10 @@ def plot(run: Run, path: str) -> None:
         axis.set_ylim(bottom=1e-9)
         axis.axvline(0.5, color="grey", linestyle=":")
         axis.grid(True, which="both", alpha=0.3)
-    top.set_title("IRB 120 tool0 on a 10 cm circle\n"
-                  "resolved rate, ZYX analytic Jacobian, explicit Euler at 1 kHz", fontsize=10)
+    top.set_title(
+        "IRB 120 tool0 on a 10 cm circle\nresolved rate, ZYX analytic Jacobian, explicit Euler at 1 kHz",
+        fontsize=10,
+    )
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
@@ -105,8 +108,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     settled = run.t >= 0.5
     print(f"max position error after 0.5 s: {run.position_error[settled].max():.3e} m")
     print(f"max rotation error after 0.5 s: {run.rotation_error[settled].max():.3e} rad")
-    print(f"smallest singular value of J_e0: {run.min_sigma:.3f}; "
-          f"smallest |cos χ2| (ZYX): {run.min_zyx_distance:.3f}")
+    print(
+        f"smallest singular value of J_e0: {run.min_sigma:.3f}; "
+        f"smallest |cos χ2| (ZYX): {run.min_zyx_distance:.3f}"
+    )
     print(f"plot written to {args.output}")
     return 0
 

@@ -11,15 +11,15 @@ for a floating-base robot, that its root link is held fixed
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
 import os
-from pathlib import Path
 import threading
 import warnings
+from collections.abc import Callable, Mapping
+from pathlib import Path
 
+from .errors import OptionError, URDFError
 from .model import available_robots, catalog_entry
 from .model.floating_base import floating_base_note
-from .errors import OptionError, URDFError
 from .robot import Robot
 from .urdf import LIMITS, Limits, RobotDescription, parse_urdf
 from .urdf.source import decode_xml, read_bytes_once
@@ -28,9 +28,14 @@ from .urdf.xacro import expand_xacro
 _WARNINGS_LOCK = threading.Lock()  # catch_warnings swaps process-wide state: two loads must not interleave it
 
 
-def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
-         limits: Limits = LIMITS, xacro_args: Mapping[str, str | float | int] | None = None,
-         packages: Mapping[str, str | os.PathLike[str]] | None = None) -> Robot:
+def load(
+    target: str | os.PathLike[str],
+    *,
+    end_effector: str | None = None,
+    limits: Limits = LIMITS,
+    xacro_args: Mapping[str, str | float | int] | None = None,
+    packages: Mapping[str, str | os.PathLike[str]] | None = None,
+) -> Robot:
     """A robot by short name (see :func:`available_robots`) or by path to a .urdf or .xacro file.
 
     ``limits``: the size limits the file must respect (:class:`kinengine.urdf.Limits`; pass a bigger
@@ -52,12 +57,20 @@ def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
     if isinstance(target, str) and text_target in available_robots():
         entry = catalog_entry(text_target)
         description, text = _warn_once(lambda: _read(entry.path, limits))
-        robot = Robot(description, text, name=entry.name, end_effector=entry.end_effector if end_effector is None else end_effector,
-                      packages=packages)
+        robot = Robot(
+            description,
+            text,
+            name=entry.name,
+            end_effector=entry.end_effector if end_effector is None else end_effector,
+            packages=packages,
+        )
         return robot.locked(dict(entry.locked)) if entry.locked else robot
     path = Path(text_target)
-    if not isinstance(target, os.PathLike) and path.suffix.lower() not in (".urdf", ".xacro") and \
-            not _exists(path):
+    if (
+        not isinstance(target, os.PathLike)
+        and path.suffix.lower() not in (".urdf", ".xacro")
+        and not _exists(path)
+    ):
         catalog_entry(text_target)  # raises: unknown robot, listing the names
     if is_xacro:
         text = expand_xacro(path, args=xacro_args, packages=packages)
@@ -67,9 +80,14 @@ def load(target: str | os.PathLike[str], *, end_effector: str | None = None,
     return Robot(description, text, end_effector=end_effector, packages=packages)
 
 
-def load_urdf_string(text: str | bytes, *, end_effector: str | None = None, source: str = "<string>",
-                     limits: Limits = LIMITS,
-                     packages: Mapping[str, str | os.PathLike[str]] | None = None) -> Robot:
+def load_urdf_string(
+    text: str | bytes,
+    *,
+    end_effector: str | None = None,
+    source: str = "<string>",
+    limits: Limits = LIMITS,
+    packages: Mapping[str, str | os.PathLike[str]] | None = None,
+) -> Robot:
     """A robot from URDF XML held in memory (e.g. a ROS robot_description); ``limits`` and ``packages``
     as in :func:`load`."""
     if not isinstance(text, (str, bytes)):
@@ -92,11 +110,14 @@ def _packages(packages: object, source: str) -> dict[str, str]:
     """``packages=`` checked: a mapping of package name (str) to folder (str or path), as plain strings."""
     if packages is None:
         return {}
-    if not isinstance(packages, Mapping) or not all(isinstance(k, str) and k and isinstance(v, (str, os.PathLike))
-                                                    for k, v in packages.items()):
-        raise URDFError(f"packages= takes a mapping of ROS package name to folder, e.g. "
-                        f"{{'my_robot_description': '/path/to/my_robot_description'}}, got {packages!r:.80}",
-                        source=source)
+    if not isinstance(packages, Mapping) or not all(
+        isinstance(k, str) and k and isinstance(v, (str, os.PathLike)) for k, v in packages.items()
+    ):
+        raise URDFError(
+            f"packages= takes a mapping of ROS package name to folder, e.g. "
+            f"{{'my_robot_description': '/path/to/my_robot_description'}}, got {packages!r:.80}",
+            source=source,
+        )
     return {k: os.fspath(v) for k, v in packages.items()}
 
 
@@ -112,15 +133,18 @@ def _warn_once(read: Callable[[], tuple[RobotDescription, object]]) -> tuple[Rob
             warnings.warn(w.message, w.category, stacklevel=3)
     parts = [floating_base_note(description)]
     if notes:
-        parts.append(notes[0] if len(notes) == 1 else
-                     f"{len(notes)} notes on the description, e.g. {notes[0]} (robot.description.warnings "
-                     f"lists them all)")
+        parts.append(
+            notes[0]
+            if len(notes) == 1
+            else f"{len(notes)} notes on the description, e.g. {notes[0]} (robot.description.warnings "
+            f"lists them all)"
+        )
     if any(parts):
         warnings.warn(f"{description.source}: " + "; ".join(p for p in parts if p), UserWarning, stacklevel=3)
     return description, other
 
 
-def _read(path: Path, limits: Limits) -> tuple["RobotDescription", str]:
+def _read(path: Path, limits: Limits) -> tuple[RobotDescription, str]:
     """The description and the text of one read of the file: ``urdf_text`` is exactly what was parsed,
     decoded as its XML declares (see :mod:`kinengine.urdf.source`)."""
     source, data = read_bytes_once(path, limits)
@@ -129,8 +153,10 @@ def _read(path: Path, limits: Limits) -> tuple["RobotDescription", str]:
 
 def _check_limits(limits: object) -> None:
     if not isinstance(limits, Limits):
-        raise OptionError(f"limits= takes a kinengine.urdf.Limits (e.g. Limits(max_movable_joints=256)), got "
-                          f"{type(limits).__name__}")
+        raise OptionError(
+            f"limits= takes a kinengine.urdf.Limits (e.g. Limits(max_movable_joints=256)), got "
+            f"{type(limits).__name__}"
+        )
 
 
 def _exists(path: Path) -> bool:

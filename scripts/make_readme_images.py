@@ -1,6 +1,6 @@
 """Regenerate the README's robot pictures in docs/images with ``kinengine show``.
 
-    python scripts/make_readme_images.py
+python scripts/make_readme_images.py
 """
 
 from __future__ import annotations

@@ -14,18 +14,18 @@ from __future__ import annotations
 
 import argparse
 import os
-from pathlib import Path
 import re
 import stat
 import sys
+from pathlib import Path
 from typing import NoReturn
 
 from ..loading import load
 from ..robot import Robot
 
-
-_FLOAT = re.compile(r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf|infinity|nan)",
-                    re.ASCII | re.IGNORECASE)
+_FLOAT = re.compile(
+    r"[+-]?(?:(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?|inf|infinity|nan)", re.ASCII | re.IGNORECASE
+)
 _WHOLE = re.compile(r"[+-]?[0-9]+", re.ASCII)
 _SPACE = " \t"
 
@@ -46,8 +46,9 @@ def parse_vector(text: str) -> list[float]:
         stripped = entry.strip(_SPACE)
         if not _FLOAT.fullmatch(stripped):
             what = "an empty entry" if not stripped else f"{printable(stripped)!r}"
-            raise argparse.ArgumentTypeError("expected comma-separated numbers such as 0.1,-0.3,2e-3; "
-                                             f"entry {i + 1} is {what}")
+            raise argparse.ArgumentTypeError(
+                f"expected comma-separated numbers such as 0.1,-0.3,2e-3; entry {i + 1} is {what}"
+            )
         values.append(float(stripped))
     return values
 
@@ -70,8 +71,10 @@ def positive_int(text: str) -> int:
 
 def bounded_int(low: int, high: int):
     """An argparse type for a whole number in [low, high]."""
+
     def parse(text: str) -> int:
         return whole_number(text, low, high)
+
     parse.__name__ = "whole number"
     return parse
 
@@ -96,19 +99,23 @@ def output_path(text: str) -> Path:
         if path.is_symlink() and not path.exists():
             raise argparse.ArgumentTypeError(f"{shown!r} is a link to a missing file; give a plain file name")
         if path.is_dir():
-            raise argparse.ArgumentTypeError(f"{shown!r} is a folder; give a file name, e.g. "
-                                             f"{shown.rstrip('/')}/out")
+            raise argparse.ArgumentTypeError(
+                f"{shown!r} is a folder; give a file name, e.g. {shown.rstrip('/')}/out"
+            )
         if not folder.is_dir():
-            raise argparse.ArgumentTypeError(f"cannot write {shown!r}: folder {printable(str(folder))!r} "
-                                             "does not exist")
+            raise argparse.ArgumentTypeError(
+                f"cannot write {shown!r}: folder {printable(str(folder))!r} does not exist"
+            )
         if not os.access(folder, os.W_OK | os.X_OK):
-            raise argparse.ArgumentTypeError(f"cannot write {shown!r}: folder {printable(str(folder))!r} "
-                                             "is not writable")
+            raise argparse.ArgumentTypeError(
+                f"cannot write {shown!r}: folder {printable(str(folder))!r} is not writable"
+            )
         if path.exists():
             mode = path.stat().st_mode
             if not stat.S_ISREG(mode) and os.path.realpath(path) != os.devnull:
-                raise argparse.ArgumentTypeError(f"cannot write {shown!r}: not a regular file "
-                                                 "(a device, FIFO or socket)")
+                raise argparse.ArgumentTypeError(
+                    f"cannot write {shown!r}: not a regular file (a device, FIFO or socket)"
+                )
             if not os.access(path, os.W_OK) or not mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH):
                 # the mode bits too: root could write a file marked read-only, but should not overwrite it
                 raise argparse.ArgumentTypeError(f"cannot write {shown!r}: the file is read-only")
@@ -123,8 +130,9 @@ _CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 def printable(text: str) -> str:
     """``text`` with control characters (newlines, tabs, escapes) as \\xNN / \\uNNNN: a name from a file
     can never break a line of output or move the terminal's cursor."""
-    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100
-                        else f"\\u{ord(m.group()):04x}", text)
+    return _CONTROL.sub(
+        lambda m: f"\\x{ord(m.group()):02x}" if ord(m.group()) < 0x100 else f"\\u{ord(m.group()):04x}", text
+    )
 
 
 def one_line(message: object) -> str:
@@ -153,19 +161,34 @@ def name_value(text: str) -> tuple[str, str]:
 
 def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of a robot given as a .xacro file or with package:// paths (repeatable)."""
-    parser.add_argument("--xacro-arg", dest="xacro_args", type=name_value, action="append", default=None,
-                        metavar="NAME=VALUE", help="argument of a .xacro robot file, e.g. ur_type=ur5e "
-                        "(repeatable)")
-    parser.add_argument("--package", dest="packages", type=name_value, action="append", default=None,
-                        metavar="NAME=PATH", help="folder of ROS package NAME for $(find NAME) and "
-                        "package://NAME/... (repeatable; default: ROS_PACKAGE_PATH, then the file's folders)")
+    parser.add_argument(
+        "--xacro-arg",
+        dest="xacro_args",
+        type=name_value,
+        action="append",
+        default=None,
+        metavar="NAME=VALUE",
+        help="argument of a .xacro robot file, e.g. ur_type=ur5e (repeatable)",
+    )
+    parser.add_argument(
+        "--package",
+        dest="packages",
+        type=name_value,
+        action="append",
+        default=None,
+        metavar="NAME=PATH",
+        help="folder of ROS package NAME for $(find NAME) and "
+        "package://NAME/... (repeatable; default: ROS_PACKAGE_PATH, then the file's folders)",
+    )
 
 
 def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
     """The Robot named by ``target`` (default ``args.robot``) with the options of :func:`add_robot_arguments`."""
-    return load(args.robot if target is None else target,
-                xacro_args=None if args.xacro_args is None else dict(args.xacro_args),
-                packages=None if args.packages is None else dict(args.packages))
+    return load(
+        args.robot if target is None else target,
+        xacro_args=None if args.xacro_args is None else dict(args.xacro_args),
+        packages=None if args.packages is None else dict(args.packages),
+    )
 
 
 def summary(doc: str | None) -> str:

@@ -20,14 +20,18 @@ def _run(args: argparse.Namespace) -> int:
     for joint in robot.description.joints:
         if joint.mimic is not None:
             m = joint.mimic
-            print(f"  - {printable(joint.name)} (mimic, {joint.type}) = {m.multiplier:g}·{printable(m.joint)} + "
-                  f"{m.offset:g}")
+            print(
+                f"  - {printable(joint.name)} (mimic, {joint.type}) = {m.multiplier:g}·{printable(m.joint)} + "
+                f"{m.offset:g}"
+            )
     print("frames: " + ", ".join(printable(f) for f in robot.frame_names))
     extra = [name for name in extra_coordinates(args.robot) if name in robot.joint_names]
     if extra:
         values = ", ".join(f"{name!r}: {robot.neutral()[robot.joint_names.index(name)]:g}" for name in extra)
-        print(f"gripper coordinates: {', '.join(extra)}; an arm without them: robot.locked({{{values}}})"
-              + (" or kinengine.load('panda_arm')" if args.robot == "panda" else ""))
+        print(
+            f"gripper coordinates: {', '.join(extra)}; an arm without them: robot.locked({{{values}}})"
+            + (" or kinengine.load('panda_arm')" if args.robot == "panda" else "")
+        )
     return 0
 
 

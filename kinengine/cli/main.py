@@ -11,12 +11,11 @@ control characters escaped; stdout and stderr escape what their encoding cannot 
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
 import os
 import re
 import sys
 import warnings
-
+from collections.abc import Sequence
 
 from .. import KinematicsError, __version__
 from . import bench, catalog, info, pose, show, verify, view

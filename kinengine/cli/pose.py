@@ -13,7 +13,11 @@ from .arguments import add_robot_arguments, load_robot, name_argument, parse_vec
 def _run(args: argparse.Namespace) -> int:
     """Compute everything first, then print: an error leaves nothing half-printed."""
     robot = load_robot(args)
-    q = robot.neutral() if args.q is None else robot.check_configuration(args.q, check_limits=False, batch=False)
+    q = (
+        robot.neutral()
+        if args.q is None
+        else robot.check_configuration(args.q, check_limits=False, batch=False)
+    )
     frame = args.frame or robot.end_effector
     T, J = robot.frame_pose(q, frame), robot.jacobian(q, frame, args.reference)
     analytic = args.rotation is not None or args.position != "cartesian"
@@ -40,11 +44,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("pose", help="frame pose and geometric Jacobian at a configuration")
     p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
     add_robot_arguments(p)
-    p.add_argument("--q", type=parse_vector, default=None,
-                   help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
+    p.add_argument(
+        "--q",
+        type=parse_vector,
+        default=None,
+        help="comma-separated joint values [rad | m] (default: zero clipped into the limits)",
+    )
     p.add_argument("--frame", type=name_argument, default=None, help="frame name (default: the end effector)")
-    p.add_argument("--reference", default="local_world_aligned",
-                   choices=["local_world_aligned", "world", "local"])
+    p.add_argument(
+        "--reference", default="local_world_aligned", choices=["local_world_aligned", "world", "local"]
+    )
     p.add_argument("--position", default="cartesian", help="position parameterization for chi and J_A")
-    p.add_argument("--rotation", default=None, help="rotation parameterization for chi and J_A, e.g. euler_zyz")
+    p.add_argument(
+        "--rotation", default=None, help="rotation parameterization for chi and J_A, e.g. euler_zyz"
+    )
     p.set_defaults(handler=_run)

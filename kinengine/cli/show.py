@@ -9,14 +9,20 @@ Drawn by :func:`kinengine.presentation.plotting.plot_robot` in the root link fra
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 import re
+from pathlib import Path
 
-from .arguments import (add_robot_arguments, bounded_int, load_robot, name_argument, output_path,
-                        parse_vector, summary)
 from ..errors import KinematicsError
 from ..presentation.plotting import plot_robot
-
+from .arguments import (
+    add_robot_arguments,
+    bounded_int,
+    load_robot,
+    name_argument,
+    output_path,
+    parse_vector,
+    summary,
+)
 
 MAX_DPI = 600
 """The finest --dpi: the 6.4 x 4.8 inch figure is then 3840 x 2880 pixels (~44 MB in memory)."""
@@ -29,23 +35,49 @@ def _names(text: str) -> list[str]:
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``show`` on the kinengine command line."""
-    p = subparsers.add_parser("show", help="draw the robot at q into a PNG",
-                              description=summary(__doc__))
+    p = subparsers.add_parser("show", help="draw the robot at q into a PNG", description=summary(__doc__))
     p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf or .xacro file")
     add_robot_arguments(p)
-    p.add_argument("--q", type=parse_vector, default=None,
-                   help="comma-separated joint values [rad | m] (default: zero clipped into the limits)")
-    p.add_argument("--frames", type=_names, default=None,
-                   help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)")
-    p.add_argument("--ellipsoid", type=name_argument, default=None, metavar="FRAME",
-                   help="draw the velocity manipulability ellipsoid of FRAME")
-    p.add_argument("-o", "--output", type=output_path, default=None, metavar="PATH",
-                   help="image to write, format from the extension (default: <robot>.png in the current "
-                   "directory)")
-    p.add_argument("--view", type=parse_vector, default=None, metavar="ELEV,AZIM",
-                   help="camera elevation and azimuth [deg] (default: matplotlib's 30,-60)")
-    p.add_argument("--dpi", type=bounded_int(1, MAX_DPI), default=100,
-                   help=f"resolution of the PNG, 1 to {MAX_DPI} (default 100)")
+    p.add_argument(
+        "--q",
+        type=parse_vector,
+        default=None,
+        help="comma-separated joint values [rad | m] (default: zero clipped into the limits)",
+    )
+    p.add_argument(
+        "--frames",
+        type=_names,
+        default=None,
+        help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)",
+    )
+    p.add_argument(
+        "--ellipsoid",
+        type=name_argument,
+        default=None,
+        metavar="FRAME",
+        help="draw the velocity manipulability ellipsoid of FRAME",
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        type=output_path,
+        default=None,
+        metavar="PATH",
+        help="image to write, format from the extension (default: <robot>.png in the current directory)",
+    )
+    p.add_argument(
+        "--view",
+        type=parse_vector,
+        default=None,
+        metavar="ELEV,AZIM",
+        help="camera elevation and azimuth [deg] (default: matplotlib's 30,-60)",
+    )
+    p.add_argument(
+        "--dpi",
+        type=bounded_int(1, MAX_DPI),
+        default=100,
+        help=f"resolution of the PNG, 1 to {MAX_DPI} (default 100)",
+    )
     p.set_defaults(handler=handle)
     return p
 
@@ -53,15 +85,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 def handle(args: argparse.Namespace) -> int:
     """Write the PNG and print its path."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     if args.view is not None and len(args.view) != 2:
-        raise KinematicsError(f"--view takes two angles ELEV,AZIM in degrees, e.g. --view 20,-75; "
-                              f"got {args.view}")
+        raise KinematicsError(
+            f"--view takes two angles ELEV,AZIM in degrees, e.g. --view 20,-75; got {args.view}"
+        )
     if args.dpi <= 0:
-        raise KinematicsError(f"--dpi must be a positive number of dots per inch, e.g. --dpi 100; "
-                              f"got {args.dpi}")
+        raise KinematicsError(
+            f"--dpi must be a positive number of dots per inch, e.g. --dpi 100; got {args.dpi}"
+        )
     robot = load_robot(args)
     frames = [robot.end_effector] if args.frames is None else args.frames
     output = args.output or Path(re.sub(r"[^\w.-]", "_", robot.name) + ".png")
@@ -71,8 +106,9 @@ def handle(args: argparse.Namespace) -> int:
     try:
         ax.figure.savefig(output, dpi=args.dpi)
     except (OSError, ValueError) as exc:
-        raise KinematicsError(f"cannot write {str(output)!r}: {exc}; "
-                              "choose another -o PATH (e.g. robot.png)") from None
+        raise KinematicsError(
+            f"cannot write {str(output)!r}: {exc}; choose another -o PATH (e.g. robot.png)"
+        ) from None
     finally:
         plt.close(ax.figure)
     print(output)

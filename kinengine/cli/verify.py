@@ -14,11 +14,21 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p = subparsers.add_parser("verify", help="cross-check poses and Jacobians against independent references")
     p.add_argument("target", metavar="TARGET", help="robot name or path to a .urdf or .xacro file")
     add_robot_arguments(p)
-    p.add_argument("--samples", type=bounded_int(1, MAX_SAMPLES), default=20,
-                   help=f"random configurations, 1 to {MAX_SAMPLES} (default 20)")
-    p.add_argument("--seed", type=bounded_int(0, 2**63 - 1), default=0, help="seed of the random configurations (default 0)")
-    p.add_argument("--json", type=output_path, metavar="PATH", default=None,
-                   help="also write the report as JSON to PATH")
+    p.add_argument(
+        "--samples",
+        type=bounded_int(1, MAX_SAMPLES),
+        default=20,
+        help=f"random configurations, 1 to {MAX_SAMPLES} (default 20)",
+    )
+    p.add_argument(
+        "--seed",
+        type=bounded_int(0, 2**63 - 1),
+        default=0,
+        help="seed of the random configurations (default 0)",
+    )
+    p.add_argument(
+        "--json", type=output_path, metavar="PATH", default=None, help="also write the report as JSON to PATH"
+    )
     p.set_defaults(handler=_cmd_verify)
     return p
 

@@ -23,10 +23,10 @@ The same algorithm runs vectorized over a batch of targets (N, 4, 4): :mod:`kine
 
 from __future__ import annotations
 
-from collections import OrderedDict
-from dataclasses import dataclass
 import math
 import threading
+from collections import OrderedDict
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -60,15 +60,17 @@ class IKResult:
 
     q: np.ndarray
     success: bool
-    iterations: int        # total over every attempt
+    iterations: int  # total over every attempt
     position_error: float  # |p_d − p| [m] over the kept position rows (0 if the position is free)
     rotation_error: float  # angle of C_d Cᵀ [rad] over the kept rotation rows (0 if the rotation is free)
-    restarts: int          # attempts after the first one
+    restarts: int  # attempts after the first one
 
     def __str__(self) -> str:
         state = "converged" if self.success else "did not converge"
-        return (f"IK {state} after {self.iterations} iterations ({self.restarts} restarts): "
-                f"position error {self.position_error:.3g} m, rotation error {self.rotation_error:.3g} rad")
+        return (
+            f"IK {state} after {self.iterations} iterations ({self.restarts} restarts): "
+            f"position error {self.position_error:.3g} m, rotation error {self.rotation_error:.3g} rad"
+        )
 
 
 @dataclass(frozen=True)
@@ -77,9 +79,9 @@ class Problem:
 
     fid: int
     frame: str
-    rows: np.ndarray | None      # kept rows of e_D (None: all six rows of e in I, unweighted)
+    rows: np.ndarray | None  # kept rows of e_D (None: all six rows of e in I, unweighted)
     sqrt_weights: np.ndarray | None
-    position_rows: np.ndarray    # which kept rows are position rows
+    position_rows: np.ndarray  # which kept rows are position rows
     tol_position: float
     tol_rotation: float
     max_iterations: int
@@ -87,16 +89,28 @@ class Problem:
     damping_sq: float
     q_ns: np.ndarray | None
     gain: float
-    patient_first: bool          # the first attempt (from the caller's q0) never gives up early
+    patient_first: bool  # the first attempt (from the caller's q0) never gives up early
 
 
-def inverse_kinematics(robot, target: object, frame: str | None = None, q0: object = None, *,
-                       position: str | None = None, rotation: str | None = None,
-                       rows: object = None, weights: object = None,
-                       tol_position: float = 1e-6, tol_rotation: float = 1e-6, max_iterations: int = 100,
-                       restarts: int = 3, rng: np.random.Generator | int | None = None,
-                       nullspace_target: object = None, nullspace_gain: float = 0.1,
-                       min_damping: float = 1e-6):
+def inverse_kinematics(
+    robot,
+    target: object,
+    frame: str | None = None,
+    q0: object = None,
+    *,
+    position: str | None = None,
+    rotation: str | None = None,
+    rows: object = None,
+    weights: object = None,
+    tol_position: float = 1e-6,
+    tol_rotation: float = 1e-6,
+    max_iterations: int = 100,
+    restarts: int = 3,
+    rng: np.random.Generator | int | None = None,
+    nullspace_target: object = None,
+    nullspace_gain: float = 0.1,
+    min_damping: float = 1e-6,
+):
     """q (within the limits) that puts ``frame`` (default: end effector) at ``target`` in I.
 
     ``target``: T_IF (4, 4), a batch (N, 4, 4) (then an :class:`~kinengine.control.ik_batch.IKBatchResult`
@@ -108,24 +122,46 @@ def inverse_kinematics(robot, target: object, frame: str | None = None, q0: obje
     ``nullspace_target`` (dof,): preferred q, pursued with ``nullspace_gain`` [1/iteration] where the
     task leaves freedom. ``min_damping``: λ_min [1]. Every option is validated (OptionError).
     """
-    batch = position is None and rotation is None and np.ndim(target) == 3 if not isinstance(target, str) else False
-    problem = _problem(robot, frame, rows, weights, tol_position, tol_rotation, max_iterations, restarts,
-                       nullspace_target, nullspace_gain, min_damping, q0 is not None)
+    batch = (
+        position is None and rotation is None and np.ndim(target) == 3
+        if not isinstance(target, str)
+        else False
+    )
+    problem = _problem(
+        robot,
+        frame,
+        rows,
+        weights,
+        tol_position,
+        tol_rotation,
+        max_iterations,
+        restarts,
+        nullspace_target,
+        nullspace_gain,
+        min_damping,
+        q0 is not None,
+    )
     if problem.rows is not None and (position is not None or rotation is not None):
-        raise OptionError("`rows=` and `weights=` apply to pose targets (4, 4) or (N, 4, 4); for parameters χ "
-                          "name only the parameterizations you need")
+        raise OptionError(
+            "`rows=` and `weights=` apply to pose targets (4, 4) or (N, 4, 4); for parameters χ "
+            "name only the parameterizations you need"
+        )
     generator = _Generator(rng)
     joints = robot.engine.coordinates
     start = None if q0 is None else joints.check(q0, name="q0", allow_batch=batch)
     if batch:
-        from .ik_batch import solve_batch  # noqa: PLC0415  (the batched solver only when asked for)
+        from .ik_batch import solve_batch
+
         p_d, C_d = _targets(target)
         if start is not None and start.ndim == 2 and len(start) != len(p_d):
-            raise OptionError(f"`q0` must be (dof,) or one row per target ({len(p_d)}), got {len(start)} rows")
+            raise OptionError(
+                f"`q0` must be (dof,) or one row per target ({len(p_d)}), got {len(start)} rows"
+            )
         return solve_batch(robot, problem, p_d, C_d, start, generator)
     p_d, C_d = _target(target, position, rotation)
-    seeds = first_seeds(robot, problem, p_d[None] if p_d is not None else None,
-                        C_d[None] if C_d is not None else None, start)[0]
+    seeds = first_seeds(
+        robot, problem, p_d[None] if p_d is not None else None, C_d[None] if C_d is not None else None, start
+    )[0]
     return solve_one(robot, problem, p_d, C_d, seeds, generator)
 
 
@@ -145,8 +181,20 @@ def _count(name: str, value: object, high: int) -> int:
     return int(value)
 
 
-def _problem(robot, frame, rows, weights, tol_position, tol_rotation, max_iterations, restarts,
-             nullspace_target, nullspace_gain, min_damping, has_q0: bool) -> Problem:
+def _problem(
+    robot,
+    frame,
+    rows,
+    weights,
+    tol_position,
+    tol_rotation,
+    max_iterations,
+    restarts,
+    nullspace_target,
+    nullspace_gain,
+    min_damping,
+    has_q0: bool,
+) -> Problem:
     frame = robot.end_effector if frame is None else frame
     fid = robot.frame_id(frame)
     tol_p, tol_r = _number("tol_position", tol_position, 0.0), _number("tol_rotation", tol_rotation, 0.0)
@@ -154,19 +202,37 @@ def _problem(robot, frame, rows, weights, tol_position, tol_rotation, max_iterat
     restarts = _count("restarts", restarts, 10_000)
     gain = _number("nullspace_gain", nullspace_gain, 0.0, 1.0)
     damping = _number("min_damping", min_damping, 0.0, 1e6)
-    q_ns = None if nullspace_target is None else robot.engine.coordinates.check(
-        nullspace_target, name="nullspace_target", allow_batch=False)
+    q_ns = (
+        None
+        if nullspace_target is None
+        else robot.engine.coordinates.check(nullspace_target, name="nullspace_target", allow_batch=False)
+    )
     kept, sqrt_w = None, None
     if rows is not None or weights is not None:
         kept = np.arange(6) if rows is None else _rows(rows)
         if weights is not None:
             w = np.asarray(weights, dtype=object)
             if w.shape != (len(kept),):
-                raise OptionError(f"`weights` must hold one number per kept row ({len(kept)}), got shape {w.shape}")
+                raise OptionError(
+                    f"`weights` must hold one number per kept row ({len(kept)}), got shape {w.shape}"
+                )
             sqrt_w = np.sqrt([_number("weights[i]", v, 0.0, 1e12) for v in w])
     position_rows = (kept if kept is not None else np.arange(6)) < 3
-    return Problem(fid, frame, kept, sqrt_w, position_rows, tol_p, tol_r, max_iterations, restarts,
-                   damping ** 2, q_ns, gain, has_q0)
+    return Problem(
+        fid,
+        frame,
+        kept,
+        sqrt_w,
+        position_rows,
+        tol_p,
+        tol_r,
+        max_iterations,
+        restarts,
+        damping**2,
+        q_ns,
+        gain,
+        has_q0,
+    )
 
 
 def _rows(rows: object) -> np.ndarray:
@@ -190,8 +256,11 @@ class _Generator:
     costs more than a converged solve)."""
 
     def __init__(self, rng: object) -> None:
-        ok = rng is None or isinstance(rng, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence)) \
+        ok = (
+            rng is None
+            or isinstance(rng, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence))
             or (not isinstance(rng, bool) and isinstance(rng, (int, np.integer)) and rng >= 0)
+        )
         if not ok:
             raise OptionError(f"`rng` must be None, a seed >= 0 or a numpy Generator, got {rng!r}")
         self.rng, self.generator = rng, None
@@ -216,8 +285,10 @@ def _rotation_ok(C: np.ndarray) -> bool:
 
 def _position_ok(p: np.ndarray) -> None:
     if not float(np.max(np.abs(p), initial=0.0)) <= MAX_TARGET_DISTANCE:
-        raise ParameterizationError(f"`target`'s position is farther than {MAX_TARGET_DISTANCE:g} m from the "
-                                    "root: no robot reaches it; give a target in metres within reach")
+        raise ParameterizationError(
+            f"`target`'s position is farther than {MAX_TARGET_DISTANCE:g} m from the "
+            "root: no robot reaches it; give a target in metres within reach"
+        )
 
 
 def _target(target: object, position: str | None, rotation: str | None):
@@ -225,16 +296,20 @@ def _target(target: object, position: str | None, rotation: str | None):
     try:
         value = np.asarray(target, dtype=float)
     except (TypeError, ValueError):
-        raise ParameterizationError(f"Expected `target` to be a (4, 4) pose or parameters χ, got {target!r:.80}") \
-            from None
+        raise ParameterizationError(
+            f"Expected `target` to be a (4, 4) pose or parameters χ, got {target!r:.80}"
+        ) from None
     if position is None and rotation is None:
         if value.shape != (4, 4) or not np.isfinite(value).all():
             raise ParameterizationError(
                 f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got {value.shape}; "
-                "for parameters χ name their position= and/or rotation= parameterization")
+                "for parameters χ name their position= and/or rotation= parameterization"
+            )
         C = value[:3, :3]
         if not _rotation_ok(C):
-            raise ParameterizationError("`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)")
+            raise ParameterizationError(
+                "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+            )
         _position_ok(value[:3, 3])
         return value[:3, 3].copy(), C.copy()
     P = get_position(position) if position is not None else None
@@ -243,21 +318,26 @@ def _target(target: object, position: str | None, rotation: str | None):
     if value.shape != (m,) or not np.isfinite(value).all():
         names = " + ".join(n for n in (position, rotation) if n)
         raise ParameterizationError(
-            f"Expected `target` to be finite parameters of shape ({m},) for {names}, got {value.shape}")
+            f"Expected `target` to be finite parameters of shape ({m},) for {names}, got {value.shape}"
+        )
     try:
         with np.errstate(all="ignore"):
-            p_d = P.to_position(value[:P.size]) if P else None
-            C_d = R.to_rotation(value[m - R.size:]) if R else None
+            p_d = P.to_position(value[: P.size]) if P else None
+            C_d = R.to_rotation(value[m - R.size :]) if R else None
     except (ArithmeticError, ValueError):  # e.g. a zero quaternion
-        raise ParameterizationError(f"`target` {value.tolist()} describes no pose for "
-                                    f"{' + '.join(n for n in (position, rotation) if n)}; give valid parameters") from None
+        raise ParameterizationError(
+            f"`target` {value.tolist()} describes no pose for "
+            f"{' + '.join(n for n in (position, rotation) if n)}; give valid parameters"
+        ) from None
     if p_d is not None:
         if not np.isfinite(p_d).all():
             raise ParameterizationError(f"`target` {value.tolist()} gives no finite position for {position}")
         _position_ok(p_d)
     if C_d is not None and not (np.isfinite(C_d).all() and _rotation_ok(C_d)):
-        raise ParameterizationError(f"`target`'s {rotation} parameters {value[m - R.size:].tolist()} describe no "
-                                    "rotation (e.g. a zero quaternion or matrix); give a valid one")
+        raise ParameterizationError(
+            f"`target`'s {rotation} parameters {value[m - R.size :].tolist()} describe no "
+            "rotation (e.g. a zero quaternion or matrix); give a valid one"
+        )
     return p_d, C_d
 
 
@@ -268,13 +348,18 @@ def _targets(target: object) -> tuple[np.ndarray, np.ndarray]:
     except (TypeError, ValueError):
         raise ParameterizationError("Expected `target` to be a batch of poses (N, 4, 4) of numbers") from None
     if value.ndim != 3 or value.shape[1:] != (4, 4) or not len(value) or not np.isfinite(value).all():
-        raise ParameterizationError(f"Expected `target` to be a finite batch of poses (N >= 1, 4, 4), got {value.shape}")
+        raise ParameterizationError(
+            f"Expected `target` to be a finite batch of poses (N >= 1, 4, 4), got {value.shape}"
+        )
     C = value[:, :3, :3]
-    bad = np.flatnonzero((np.abs(np.einsum("nki,nkj->nij", C, C) - np.eye(3)).max(axis=(1, 2)) > 1e-6)
-                         | (np.linalg.det(C) <= 0))
+    bad = np.flatnonzero(
+        (np.abs(np.einsum("nki,nkj->nij", C, C) - np.eye(3)).max(axis=(1, 2)) > 1e-6)
+        | (np.linalg.det(C) <= 0)
+    )
     if len(bad):
-        raise ParameterizationError(f"`target`[{bad[0]}]'s rotation block is not a rotation matrix "
-                                    "(CᵀC ≠ I or det <= 0)")
+        raise ParameterizationError(
+            f"`target`[{bad[0]}]'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+        )
     _position_ok(value[:, :3, 3])
     return np.ascontiguousarray(value[:, :3, 3]), np.ascontiguousarray(C)
 
@@ -301,12 +386,14 @@ class _Tables:
 
 def _seed_table(robot, frame: str, use_p: bool, use_R: bool):
     """(configurations (K, dof), a KD-tree over [p, w·vec(C)/√2] of ``frame`` at them)."""
-    from scipy.spatial import cKDTree  # noqa: PLC0415  (scipy only once IK is used)
+    from scipy.spatial import cKDTree
+
     size = max(64, min(SEED_TABLE_SIZE, SEED_TABLE_BYTES // (8 * (robot.dof + 12))))
     configs = robot.random_configuration(np.random.default_rng(SEED_TABLE_RNG), size=size)
     poses = robot.frame_pose(configs, frame)
-    return configs, cKDTree(_embed(poses[:, :3, 3] if use_p else None, poses[:, :3, :3] if use_R else None,
-                                   len(configs)))
+    return configs, cKDTree(
+        _embed(poses[:, :3, 3] if use_p else None, poses[:, :3, :3] if use_R else None, len(configs))
+    )
 
 
 def _embed(p, C, n: int) -> np.ndarray:
@@ -328,7 +415,9 @@ def first_seeds(robot, problem: Problem, p_d, C_d, q0) -> np.ndarray:
     first = middle if problem.q_ns is None else np.clip(problem.q_ns, joints.lower, joints.upper)
     tables = robot.engine.memoized("ik seed tables", _Tables)
     key = (problem.frame, p_d is not None, C_d is not None)
-    configs, tree = tables.get(key, lambda: _seed_table(robot, problem.frame, p_d is not None, C_d is not None))
+    configs, tree = tables.get(
+        key, lambda: _seed_table(robot, problem.frame, p_d is not None, C_d is not None)
+    )
     k = min(NEAREST_SEEDS, len(configs))
     _, index = tree.query(_embed(p_d, C_d, n), k=k, workers=-1 if n > 256 else 1)
     seeds = np.empty((n, k + 1, robot.dof))
@@ -366,8 +455,9 @@ class LimitWeights:
         """:meth:`inverse_weights` for one q (dof,) in plain floats (a dozen numpy calls on a 6-vector cost
         more than the arithmetic); ``previous`` and the returned gradient are lists."""
         grad, inverse = [], []
-        for i, (qi, lo, hi, mid2, quarter) in enumerate(zip(q.tolist(), self._lower, self._upper, self._mid2,
-                                                            self._quarter)):
+        for i, (qi, lo, hi, mid2, quarter) in enumerate(
+            zip(q.tolist(), self._lower, self._upper, self._mid2, self._quarter)
+        ):
             du, dl = hi - qi, qi - lo
             d = (du if du > 1e-12 else 1e-12) * (dl if dl > 1e-12 else 1e-12)
             g = quarter * abs(2.0 * qi - mid2) / (d * d)
@@ -391,9 +481,14 @@ def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, w
     full = rows is None and p_d is not None and C_d is not None
     part = slice(0 if p_d is not None else 3, 6 if C_d is not None else 3)
     pinocchio_q, fold, identity = kin.pinocchio_q, joints.fold, joints.identity
-    frame_jacobian, place, log3, LWA = pin.computeFrameJacobian, pin.updateFramePlacement, pin.log3, pin.LOCAL_WORLD_ALIGNED
+    frame_jacobian, place, log3, LWA = (
+        pin.computeFrameJacobian,
+        pin.updateFramePlacement,
+        pin.log3,
+        pin.LOCAL_WORLD_ALIGNED,
+    )
     solve, maximum, minimum, hypot = np.linalg.solve, np.maximum, np.minimum, math.hypot
-    m = (len(rows) if rows is not None else part.stop - part.start)
+    m = len(rows) if rows is not None else part.stop - part.start
     eye = np.eye(m)
     limits = LimitWeights(lower, upper)
     best, total = None, 0
@@ -419,8 +514,11 @@ def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, w
                 err = e_d if sqrt_w is None else e_d * sqrt_w
             score = ep + SEED_ROTATION_WEIGHT * er
             done = ep <= tol_p and er <= tol_r
-            if done or iteration == max_iterations or (
-                    iteration == PROBE_ITERATIONS and score > GIVE_UP and not last):
+            if (
+                done
+                or iteration == max_iterations
+                or (iteration == PROBE_ITERATIONS and score > GIVE_UP and not last)
+            ):
                 break
             iteration += 1
             if not identity or J.ndim == 1:

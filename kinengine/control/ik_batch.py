@@ -25,7 +25,17 @@ from ..kinematics import batch
 TAIL = 16
 """When no more than this many targets are left running, each finishes on the single-target solver (one
 target costs it ~20 numpy calls per iteration against ~150 for a batch iteration)."""
-from .ik import GIVE_UP, NULLSPACE_FADE, LimitWeights, solve_one, PROBE_ITERATIONS, SEED_ROTATION_WEIGHT, IKResult, Problem, first_seeds
+from .ik import (
+    GIVE_UP,
+    NULLSPACE_FADE,
+    PROBE_ITERATIONS,
+    SEED_ROTATION_WEIGHT,
+    IKResult,
+    LimitWeights,
+    Problem,
+    first_seeds,
+    solve_one,
+)
 
 
 @dataclass(frozen=True)
@@ -45,15 +55,23 @@ class IKBatchResult:
         return len(self.q)
 
     def __getitem__(self, i: int) -> IKResult:
-        return IKResult(self.q[i].copy(), bool(self.success[i]), int(self.iterations[i]),
-                        float(self.position_error[i]), float(self.rotation_error[i]), int(self.restarts[i]))
+        return IKResult(
+            self.q[i].copy(),
+            bool(self.success[i]),
+            int(self.iterations[i]),
+            float(self.position_error[i]),
+            float(self.rotation_error[i]),
+            int(self.restarts[i]),
+        )
 
     def __iter__(self):
         return (self[i] for i in range(len(self)))
 
     def __str__(self) -> str:
-        return (f"IK batch: {int(self.success.sum())}/{len(self)} converged, "
-                f"{int(self.iterations.sum())} iterations in all")
+        return (
+            f"IK batch: {int(self.success.sum())}/{len(self)} converged, "
+            f"{int(self.iterations.sum())} iterations in all"
+        )
 
 
 def log3(R: np.ndarray) -> np.ndarray:
@@ -85,7 +103,7 @@ def solve_batch(robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0, g
     tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
     lower, upper = joints.lower, joints.upper
     limits = LimitWeights(lower, upper)
-    previous = np.full((n, dof), -1.0)   # |∂φ/∂q| at each target's last iteration (-1: none yet)
+    previous = np.full((n, dof), -1.0)  # |∂φ/∂q| at each target's last iteration (-1: none yet)
     active = np.arange(n)
     while len(active) > TAIL or (len(active) and len(active) == n):
         qa = np.ascontiguousarray(q[active])
@@ -96,11 +114,15 @@ def solve_batch(robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0, g
         e[:, 3:] = log3(Cd @ T[:, :3, :3].transpose(0, 2, 1))
         if rows is None:
             err = e
-            ep, er = np.sqrt(np.einsum("ni,ni->n", e[:, :3], e[:, :3])), np.sqrt(np.einsum("ni,ni->n", e[:, 3:], e[:, 3:]))
+            ep, er = (
+                np.sqrt(np.einsum("ni,ni->n", e[:, :3], e[:, :3])),
+                np.sqrt(np.einsum("ni,ni->n", e[:, 3:], e[:, 3:])),
+            )
         else:
             CdT = Cd.transpose(0, 2, 1)
-            e_d = np.concatenate((np.einsum("nij,nj->ni", CdT, e[:, :3]), np.einsum("nij,nj->ni", CdT, e[:, 3:])),
-                                 axis=1)[:, rows]
+            e_d = np.concatenate(
+                (np.einsum("nij,nj->ni", CdT, e[:, :3]), np.einsum("nij,nj->ni", CdT, e[:, 3:])), axis=1
+            )[:, rows]
             ep = np.sqrt(np.einsum("ni,ni->n", e_d[:, position_rows], e_d[:, position_rows]))
             er = np.sqrt(np.einsum("ni,ni->n", e_d[:, ~position_rows], e_d[:, ~position_rows]))
             err = e_d if sqrt_w is None else e_d * sqrt_w
@@ -148,10 +170,14 @@ def solve_batch(robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0, g
         active.sort()
     for i in active:  # the last few stragglers: the single-target solver, from their current attempt on
         a, S = int(attempt[i]), seeds.shape[1]
-        rest = replace(problem, restarts=problem.restarts - (a - S) if a >= S else problem.restarts,
-                       patient_first=problem.patient_first and a == 0)
-        result = solve_one(robot, rest, p_d[i], C_d[i], seeds[i, a:] if a < S else seeds[i, :0], generator,
-                           wrap=False)
+        rest = replace(
+            problem,
+            restarts=problem.restarts - (a - S) if a >= S else problem.restarts,
+            patient_first=problem.patient_first and a == 0,
+        )
+        result = solve_one(
+            robot, rest, p_d[i], C_d[i], seeds[i, a:] if a < S else seeds[i, :0], generator, wrap=False
+        )
         total[i] += result.iterations
         score = result.position_error + SEED_ROTATION_WEIGHT * result.rotation_error
         if score < best[i, 0]:
@@ -162,13 +188,15 @@ def solve_batch(robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0, g
     return IKBatchResult(best_q, success, total, best[:, 1].copy(), best[:, 2].copy(), best_attempt)
 
 
-def _step(J: np.ndarray, w, err: np.ndarray, score: np.ndarray, q: np.ndarray, problem: Problem) -> np.ndarray:
+def _step(
+    J: np.ndarray, w, err: np.ndarray, score: np.ndarray, q: np.ndarray, problem: Problem
+) -> np.ndarray:
     """q + Δq for every row: weighted damped least squares with λ² = ½|e|² + λ_min² (and the nullspace pull)."""
-    JW = J if w is None else J * w[:, None, :]   # J W⁻¹
+    JW = J if w is None else J * w[:, None, :]  # J W⁻¹
     A = JW @ J.transpose(0, 2, 1)
     JT = JW.transpose(0, 2, 1)
     m = A.shape[1]
-    diagonal = A.reshape(len(A), m * m)[:, ::m + 1]
+    diagonal = A.reshape(len(A), m * m)[:, :: m + 1]
     diagonal += (0.5 * np.einsum("ni,ni->n", err, err) + problem.damping_sq)[:, None]
     if problem.q_ns is None:
         y = np.linalg.solve(A, err[..., None])

@@ -21,11 +21,11 @@ batches loop over Pinocchio instead, which is faster there (see ``CALLS_PER_CONF
 
 from __future__ import annotations
 
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 import itertools
 import os
 import threading
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -53,22 +53,22 @@ class _Step:
     """One movable joint on the path to the frame."""
 
     prismatic: bool
-    coordinate: int             # column of Q that drives it (the leader's, for a mimic joint)
-    scaling: float              # θ = scaling · q + offset
+    coordinate: int  # column of Q that drives it (the leader's, for a mimic joint)
+    scaling: float  # θ = scaling · q + offset
     offset: float
-    rotation: Terms             # K_i (see _terms)
-    translation: tuple[tuple[int, float], ...]   # nonzero entries of t_i: (row, value)
-    accumulate: bool            # an earlier step already wrote this Jacobian column
+    rotation: Terms  # K_i (see _terms)
+    translation: tuple[tuple[int, float], ...]  # nonzero entries of t_i: (row, value)
+    accumulate: bool  # an earlier step already wrote this Jacobian column
 
 
 @dataclass(frozen=True)
 class _Chain:
     steps: tuple[_Step, ...]
-    rotation: Terms             # Q_lastᵀ · C_f (frame placement): C_IF = S_last · this
+    rotation: Terms  # Q_lastᵀ · C_f (frame placement): C_IF = S_last · this
     translation: tuple[tuple[int, float], ...]
     dof: int
-    full: bool                  # every coordinate drives a joint of the chain (no zero Jacobian column)
-    pose_calls: int             # numpy calls per chunk for the pose, and more for the Jacobian
+    full: bool  # every coordinate drives a joint of the chain (no zero Jacobian column)
+    pose_calls: int  # numpy calls per chunk for the pose, and more for the Jacobian
     jacobian_calls: int
 
 
@@ -109,15 +109,27 @@ def _compile(kin: Kinematics, fid: int) -> _Chain:
         axis = np.asarray(joint.axis, dtype=float)
         Q = _axis_basis(axis / np.linalg.norm(axis))
         placement = model.jointPlacements[jid]
-        steps.append(_Step(joint.type == "prismatic", coordinate, float(coords.multiplier[k]),
-                           float(coords.offset[k]), _terms(Q_parent.T @ placement.rotation @ Q),
-                           _vector_terms(Q_parent.T @ placement.translation), coordinate in seen))
+        steps.append(
+            _Step(
+                joint.type == "prismatic",
+                coordinate,
+                float(coords.multiplier[k]),
+                float(coords.offset[k]),
+                _terms(Q_parent.T @ placement.rotation @ Q),
+                _vector_terms(Q_parent.T @ placement.translation),
+                coordinate in seen,
+            )
+        )
         seen.add(coordinate)
         Q_parent = Q
     rotation = _terms(Q_parent.T @ frame.placement.rotation)
     translation = _vector_terms(Q_parent.T @ frame.placement.translation)
-    pose_calls = 12 + _compose_calls(rotation) + 2 * len(translation) + sum(
-        _compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 8) for s in steps)
+    pose_calls = (
+        12
+        + _compose_calls(rotation)
+        + 2 * len(translation)
+        + sum(_compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 8) for s in steps)
+    )
     jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
     full = len({s.coordinate for s in steps}) == kin.dof
     return _Chain(tuple(steps), rotation, translation, kin.dof, full, pose_calls, jacobian_calls)
@@ -150,15 +162,21 @@ def _cross(a, b, out: np.ndarray) -> None:
         np.subtract(a[j] * b[k], a[k] * b[j], out=out[i])
 
 
-def _evaluate(chain: _Chain, qT: np.ndarray, pose: np.ndarray | None, jac: np.ndarray | None,
-              reference: pin.ReferenceFrame | None, analytic: tuple | None = None) -> None:
+def _evaluate(
+    chain: _Chain,
+    qT: np.ndarray,
+    pose: np.ndarray | None,
+    jac: np.ndarray | None,
+    reference: pin.ReferenceFrame | None,
+    analytic: tuple | None = None,
+) -> None:
     """Fill pose (n, 4, 4), jac (n, 6, dof) and/or the analytic Jacobian for the chunk qT (dof, n).
 
     analytic: (pmap, out (n, m, dof), distances (n, parts)), with reference "local_world_aligned".
     """
     n = qT.shape[1]
     eye = np.eye(3)
-    S = [eye[:, k:k + 1] for k in range(3)]  # (3, 1) columns broadcast against (3, n)
+    S = [eye[:, k : k + 1] for k in range(3)]  # (3, 1) columns broadcast against (3, n)
     p = np.zeros((3, 1))
     joints = []
     for step in chain.steps:
@@ -205,7 +223,7 @@ def _evaluate(chain: _Chain, qT: np.ndarray, pose: np.ndarray | None, jac: np.nd
         world = buf.copy()
         for r in range(3):
             for half in (0, 3):
-                block = world[half:half + 3]
+                block = world[half : half + 3]
                 buf[half + r] = R_f[r][0] * block[0] + R_f[r][1] * block[1] + R_f[r][2] * block[2]
     if jac is not None:
         jac[...] = buf.transpose(2, 0, 1)
@@ -234,7 +252,7 @@ def _scratch(dof: int, n: int) -> tuple[np.ndarray, np.ndarray]:
             raise AttributeError
     except AttributeError:
         memory = _LOCAL.memory = np.empty(max(size, 6 * 8 * CHUNK))
-    return memory[:6 * dof * n].reshape(6, dof, n), memory[6 * dof * n:size].reshape(6, n)
+    return memory[: 6 * dof * n].reshape(6, dof, n), memory[6 * dof * n : size].reshape(6, n)
 
 
 _LOCK = threading.Lock()
@@ -251,7 +269,7 @@ def _pool(threads: int) -> ThreadPoolExecutor:
     """The shared pool, with at least ``threads`` threads (WORKERS − 1 unless asked for more)."""
     global _POOL, _POOL_SIZE
     with _LOCK:
-        if _POOL is None or _POOL_SIZE < threads:
+        if _POOL is None or threads > _POOL_SIZE:
             old, _POOL_SIZE = _POOL, max(threads, WORKERS - 1, 1)
             _POOL = ThreadPoolExecutor(_POOL_SIZE, thread_name_prefix="kinengine-batch")
             if old is not None:
@@ -269,7 +287,9 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_forget_pool)
 
 
-def run_chain(chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None, workers: int | None = None) -> None:
+def run_chain(
+    chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None, workers: int | None = None
+) -> None:
     """Evaluate Q in chunks of at most CHUNK rows, split evenly over up to ``workers`` (WORKERS) threads."""
     workers = max(1, min(WORKERS if workers is None else workers, len(Q) // MIN_PER_WORKER))
     pieces = workers * -(-len(Q) // (workers * CHUNK))
@@ -277,18 +297,23 @@ def run_chain(chain: _Chain, Q: np.ndarray, pose, jac, reference, analytic=None,
 
     def work(part: list[tuple[int, int]]) -> None:
         for a, b in part:
-            _evaluate(chain, np.ascontiguousarray(Q[a:b].T), None if pose is None else pose[a:b],
-                      None if jac is None else jac[a:b], reference,
-                      None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]))
+            _evaluate(
+                chain,
+                np.ascontiguousarray(Q[a:b].T),
+                None if pose is None else pose[a:b],
+                None if jac is None else jac[a:b],
+                reference,
+                None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]),
+            )
 
     per = pieces // workers
     pool = _pool(workers - 1) if workers > 1 else None
     futures = []
     for i in range(per, pieces, per):
         try:
-            futures.append(pool.submit(work, chunks[i:i + per]))  # type: ignore[union-attr]
+            futures.append(pool.submit(work, chunks[i : i + per]))  # type: ignore[union-attr]
         except RuntimeError:  # no new work after interpreter shutdown (an atexit handler): do it here
-            work(chunks[i:i + per])
+            work(chunks[i : i + per])
     work(chunks[:per])  # the calling thread takes the first share
     for future in futures:
         future.result()
@@ -313,9 +338,17 @@ def _pinocchio_loop(kin: Kinematics, Q: np.ndarray, fid: int, pose, jac, referen
             pose[i] = pin.updateFramePlacement(model, data, fid).homogeneous
 
 
-def evaluate(kin: Kinematics, Q: np.ndarray, fid: int, reference: pin.ReferenceFrame | None, *,
-             pose: bool = True, jacobian: bool = True, out: tuple[np.ndarray | None, np.ndarray | None] | None = None,
-             workers: int | None = None) -> tuple[np.ndarray | None, np.ndarray | None]:
+def evaluate(
+    kin: Kinematics,
+    Q: np.ndarray,
+    fid: int,
+    reference: pin.ReferenceFrame | None,
+    *,
+    pose: bool = True,
+    jacobian: bool = True,
+    out: tuple[np.ndarray | None, np.ndarray | None] | None = None,
+    workers: int | None = None,
+) -> tuple[np.ndarray | None, np.ndarray | None]:
     """(T (N, 4, 4) or None, J (N, 6, dof) or None) for an already checked float64 Q (N, dof).
 
     ``reference`` is a pin.ReferenceFrame (unused when ``jacobian`` is False); ``out`` optional
@@ -349,18 +382,30 @@ def checked_out(out: object, n: int, dof: int) -> tuple[np.ndarray, np.ndarray] 
     if out is None:
         return None
     shapes = ((n, 4, 4), (n, 6, dof))
-    if not isinstance(out, tuple) or len(out) != 2 or not all(
-            type(a) is np.ndarray and a.dtype == np.float64 and a.shape == shape and a.flags.c_contiguous
-            and a.flags.writeable for a, shape in zip(out, shapes)):
-        raise OptionError(f"`out` must be a tuple (T, J) of writable C-contiguous float64 arrays of shapes "
-                          f"{shapes[0]} and {shapes[1]}")
+    if (
+        not isinstance(out, tuple)
+        or len(out) != 2
+        or not all(
+            type(a) is np.ndarray
+            and a.dtype == np.float64
+            and a.shape == shape
+            and a.flags.c_contiguous
+            and a.flags.writeable
+            for a, shape in zip(out, shapes)
+        )
+    ):
+        raise OptionError(
+            f"`out` must be a tuple (T, J) of writable C-contiguous float64 arrays of shapes "
+            f"{shapes[0]} and {shapes[1]}"
+        )
     if np.shares_memory(out[0], out[1]):
         raise OptionError("`out`'s T and J must not share memory")
     return out  # type: ignore[return-value]
 
 
-def numpy_chain(kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 0,
-                row_cost: int = 1) -> _Chain | None:
+def numpy_chain(
+    kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 0, row_cost: int = 1
+) -> _Chain | None:
     """The compiled chain if numpy over the batch is the faster path, else None (loop row by row).
 
     A loop row costs ``row_cost`` × CALLS_PER_CONFIGURATION numpy calls; the numpy path costs the
@@ -373,6 +418,14 @@ def numpy_chain(kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 
     return chain if budget >= chain.pose_calls + (chain.jacobian_calls if jacobian else 0) + extra else None
 
 
-__all__ = ["CALLS_PER_CONFIGURATION", "CHUNK", "WORKERS", "checked_out", "checked_workers", "compiled_chain",
-           "evaluate", "numpy_chain",
-           "run_chain"]
+__all__ = [
+    "CALLS_PER_CONFIGURATION",
+    "CHUNK",
+    "WORKERS",
+    "checked_out",
+    "checked_workers",
+    "compiled_chain",
+    "evaluate",
+    "numpy_chain",
+    "run_chain",
+]

@@ -19,8 +19,8 @@ threads at once.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import threading
+from collections.abc import Callable
 from typing import TypeVar
 
 import numpy as np
@@ -50,8 +50,10 @@ def resolve_reference(reference: object) -> pin.ReferenceFrame:
         return REFERENCES[reference]
     if type(reference) is pin.ReferenceFrame and reference in _ENUMS:
         return reference
-    raise OptionError(f"unknown reference {reference!r}; use 'world', 'local' or "
-                      "'local_world_aligned' (or a pinocchio.ReferenceFrame)")
+    raise OptionError(
+        f"unknown reference {reference!r}; use 'world', 'local' or "
+        "'local_world_aligned' (or a pinocchio.ReferenceFrame)"
+    )
 
 
 class MimicMap:
@@ -66,13 +68,16 @@ class MimicMap:
         self.prefix = bool(np.array_equal(coords.independent, np.arange(coords.dof)))
         self.unit = bool(np.all(coords.multiplier == 1.0) and not coords.has_offset)  # q_pin = q[leader]
         self.leader = coords.leader
-        self.rows = tuple((k, int(coords.leader[k]), float(coords.multiplier[k]), float(coords.offset[k]))
-                          for k in range(coords.nq) if k >= coords.dof)
+        self.rows = tuple(
+            (k, int(coords.leader[k]), float(coords.multiplier[k]), float(coords.offset[k]))
+            for k in range(coords.nq)
+            if k >= coords.dof
+        )
 
     def q_pin(self, q: np.ndarray, buffer: np.ndarray) -> np.ndarray:
         """M q + b written into ``buffer`` (nq,), which is returned."""
         if self.prefix:  # the independent joints first: one slice copy and one float per mimic joint
-            buffer[:self.dof] = q
+            buffer[: self.dof] = q
             for k, leader, m, o in self.rows:
                 buffer[k] = q.item(leader) if m == 1.0 and o == 0.0 else q.item(leader) * m + o
             return buffer
@@ -129,7 +134,7 @@ class MimicMap:
                 J_pin[:, leader] += J_pin[:, k]
             elif m != 0.0:
                 J_pin[:, leader] += m * J_pin[:, k]
-        return J_pin[:, :self.dof]
+        return J_pin[:, : self.dof]
 
 
 class Kinematics:
@@ -216,7 +221,9 @@ class Kinematics:
             return J if self.dof > 1 else J.reshape(6, 1)
         return self.mimic.fold(_frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref))
 
-    def pose_and_jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
+    def pose_and_jacobian(
+        self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(T_IF (4, 4), J (6, dof) in ``ref``), bit for bit :meth:`pose` and :meth:`jacobian`: for
         "local_world_aligned" and "world" one pass (Pinocchio's frame Jacobian places the joints the
         pose needs), for "local" a placement pass and the Jacobian."""

@@ -17,8 +17,8 @@ never checked.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 import threading
+from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -29,7 +29,7 @@ from .engine import REFERENCES, Kinematics, resolve_reference
 class FrameHandle:
     """Pose and Jacobian of one frame at single configurations q (dof,); see the module doc."""
 
-    __slots__ = ("name", "frame_id", "dof", "check_inputs", "pose", "jacobian", "kinematics")
+    __slots__ = ("check_inputs", "dof", "frame_id", "jacobian", "kinematics", "name", "pose")
 
     pose: Callable[[np.ndarray], np.ndarray]
     jacobian: Callable[..., np.ndarray]
@@ -38,6 +38,7 @@ class FrameHandle:
     def __init__(self, kin: Kinematics, frame: str, *, check_inputs: bool = True) -> None:
         if type(check_inputs) is not bool:
             from ..errors import OptionError
+
             raise OptionError(f"`check_inputs` must be True or False, got {check_inputs!r}")
         self.name, self.frame_id, self.dof = frame, kin.frame_id(frame), kin.dof
         self.check_inputs = check_inputs
@@ -75,6 +76,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             return resolve_reference(reference)
 
     if identity:
+
         def pose(q):
             if checking:
                 q = check(q, allow_batch=False)
@@ -85,6 +87,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             forward(model, data, q)
             return place(model, data, fid).homogeneous
     else:
+
         def pose(q):
             if checking:
                 q = check(q, allow_batch=False)
@@ -96,6 +99,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             return place(model, data, fid).homogeneous
 
     if dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
+
         def jacobian(q, reference="local_world_aligned"):
             resolve(reference)
             if checking:
@@ -105,9 +109,11 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
         def kinematics(q, reference="local_world_aligned"):
             resolve(reference)
             return pose(q), np.zeros((6, 0))
+
         return pose, jacobian, kinematics
 
     if identity and dof > 1:
+
         def jacobian(q, reference="local_world_aligned"):
             try:
                 ref = references[reference]
@@ -137,6 +143,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
                 return place(model, data, fid).homogeneous, frame_jacobian(model, data, q, fid, ref)
             J = frame_jacobian(model, data, q, fid, ref)
             return place(model, data, fid).homogeneous, J
+
         return pose, jacobian, kinematics
 
     # J_pin · M (only the mimic joints that move this frame); (6,) → (6, 1)
@@ -167,6 +174,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             return place(model, data, fid).homogeneous, fold(frame_jacobian(model, data, q, fid, ref))
         J = fold(frame_jacobian(model, data, q, fid, ref))
         return place(model, data, fid).homogeneous, J
+
     return pose, jacobian, kinematics
 
 

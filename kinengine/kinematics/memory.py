@@ -87,7 +87,8 @@ def _too_big(what: str, nv: int, need: int, left: int | None) -> ResourceLimitEr
         "it "
         f"(~{2 * need / mib:.0f} MiB while it is made, plus {RESERVE // mib} MiB kept free) but only {room} "
         "of memory is left: use it from fewer threads (e.g. a pool of a few workers), a smaller model, "
-        "or raise the memory limit")
+        "or raise the memory limit"
+    )
 
 
 def _address_space() -> int | None:

@@ -15,10 +15,10 @@ by one and ≥ 50,000/s as a batch of 10,000.
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
 import json
-from pathlib import Path
 import sys
+from collections.abc import Sequence
+from pathlib import Path
 
 from ..arguments import add_robot_arguments, load_robot, output_path, summary
 from .run import DEFAULT_ROBOTS, FULL, QUICK, run
@@ -28,25 +28,44 @@ PEER_WIDTH = 20
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     """Register ``bench`` on the kinengine command line."""
-    p = subparsers.add_parser("bench", help="time kinengine against raw Pinocchio (and other libraries)",
-                              description=summary(__doc__))
-    p.add_argument("robots", nargs="*", metavar="ROBOT", help=f"robot names or .urdf / .xacro paths "
-                   f"(default: {' '.join(DEFAULT_ROBOTS)})")
+    p = subparsers.add_parser(
+        "bench",
+        help="time kinengine against raw Pinocchio (and other libraries)",
+        description=summary(__doc__),
+    )
+    p.add_argument(
+        "robots",
+        nargs="*",
+        metavar="ROBOT",
+        help=f"robot names or .urdf / .xacro paths (default: {' '.join(DEFAULT_ROBOTS)})",
+    )
     p.add_argument("--quick", action="store_true", help="few repeats and small batches (tests, CI)")
-    p.add_argument("--peers", action="store_true",
-                   help="also time roboticstoolbox-python, pytorch-kinematics, ikpy, MuJoCo and Drake where installed")
-    p.add_argument("--peer-atol", type=float, default=1e-9,
-                   help="a peer whose answer differs from kinengine's by more is reported, not timed")
+    p.add_argument(
+        "--peers",
+        action="store_true",
+        help="also time roboticstoolbox-python, pytorch-kinematics, ikpy, MuJoCo and Drake where installed",
+    )
+    p.add_argument(
+        "--peer-atol",
+        type=float,
+        default=1e-9,
+        help="a peer whose answer differs from kinengine's by more is reported, not timed",
+    )
     p.add_argument("--json", type=output_path, default=None, metavar="PATH", help="write the results as JSON")
-    p.add_argument("--plot", type=output_path, default=None, metavar="PATH",
-                   help="write a PNG bar chart (log scale)")
+    p.add_argument(
+        "--plot", type=output_path, default=None, metavar="PATH", help="write a PNG bar chart (log scale)"
+    )
     add_robot_arguments(p)
     p.set_defaults(handler=handle)
 
 
 def handle(args: argparse.Namespace) -> int:
-    report = run([load_robot(args, name) for name in args.robots or DEFAULT_ROBOTS], QUICK if args.quick else FULL, args.peers,
-                 args.peer_atol)
+    report = run(
+        [load_robot(args, name) for name in args.robots or DEFAULT_ROBOTS],
+        QUICK if args.quick else FULL,
+        args.peers,
+        args.peer_atol,
+    )
     print(format_table(report))
     if args.json is not None:
         args.json.write_text(json.dumps(report, indent=1, allow_nan=False) + "\n")
@@ -69,46 +88,71 @@ def _us(value: float) -> str:
 def format_table(report: dict) -> str:
     """The rows as a text table, then the peers' table and any disagreement."""
     versions = report["versions"]
-    lines = [f"kinengine {versions['kinengine']} · Pinocchio {versions['pin']} · numpy {versions['numpy']} · "
-             + f"{report['cpu']} ({report['cores']} cores) · {report['timestamp']}", ""]
-    header = (f"{'robot':<12} {'case':<42} {'N':>7} {'min µs':>10} {'median µs':>10} {'per s':>12} "
-              f"{'pin min µs':>10} {'ratio':>6}  note")
+    lines = [
+        f"kinengine {versions['kinengine']} · Pinocchio {versions['pin']} · numpy {versions['numpy']} · "
+        + f"{report['cpu']} ({report['cores']} cores) · {report['timestamp']}",
+        "",
+    ]
+    header = (
+        f"{'robot':<12} {'case':<42} {'N':>7} {'min µs':>10} {'median µs':>10} {'per s':>12} "
+        f"{'pin min µs':>10} {'ratio':>6}  note"
+    )
     lines += [header, "-" * len(header)]
     for row in report["rows"]:
         k, p = row["kinengine"], row["pinocchio"]
-        ours = (f"{_us(k['min_us']):>10} {_us(k['median_us']):>10} {k['per_second']:>12,.0f}"
-                if k["status"] == "ok" else f"{'skipped':>10} {'':>10} {'':>12}")
+        ours = (
+            f"{_us(k['min_us']):>10} {_us(k['median_us']):>10} {k['per_second']:>12,.0f}"
+            if k["status"] == "ok"
+            else f"{'skipped':>10} {'':>10} {'':>12}"
+        )
         ratio = f"{row['ratio']:>6.2f}" if "ratio" in row else f"{'':>6}"
-        note = row["note"] + (f" [floor disagrees: {p.get('difference')}]" if p["status"] == "disagrees" else "")
+        note = row["note"] + (
+            f" [floor disagrees: {p.get('difference')}]" if p["status"] == "disagrees" else ""
+        )
         if "success" in row:
             note = f"{row['success']:.1%} reached; " + note
         floor_us = _us(p["min_us"]) if "min_us" in p else "-"
-        lines.append(f"{row['robot']:<12} {case_label(row):<42} {row['n']:>7} {ours} {floor_us:>10} "
-                     f"{ratio}  {note}".rstrip())
+        lines.append(
+            f"{row['robot']:<12} {case_label(row):<42} {row['n']:>7} {ours} {floor_us:>10} "
+            f"{ratio}  {note}".rstrip()
+        )
     codes = {}
     for row in report["rows"]:
         if row.get("floor") and row["pinocchio"]["status"] != "none":
             codes.setdefault(row["floor"], []).append(case_label(row))
     if codes:
-        lines += ["", "floors (inline raw Pinocchio on robot.pinocchio_model(), q_pin = robot.pinocchio_configuration(q)):"]
+        lines += [
+            "",
+            "floors (inline raw Pinocchio on robot.pinocchio_model(), q_pin = robot.pinocchio_configuration(q)):",
+        ]
         for code, labels in codes.items():
             names = sorted(set(labels), key=labels.index)
             lines.append(f"  {', '.join(names)}:\n      {code}")
-    peer_rows = [row for row in report["rows"] if any(v["status"] != "unsupported"
-                                                       for v in row.get("peers", {}).values())]
+    peer_rows = [
+        row
+        for row in report["rows"]
+        if any(v["status"] != "unsupported" for v in row.get("peers", {}).values())
+    ]
     if peer_rows:
         names = list(peer_rows[0]["peers"])
         lines += ["", "peers: min µs per call (× kinengine's min); 'disagrees' rows were not timed", ""]
         head = f"{'robot':<12} {'case':<42} {'N':>7} {'kinengine':>10} " + " ".join(
-            f"{n[:PEER_WIDTH]:>{PEER_WIDTH}}" for n in names)
+            f"{n[:PEER_WIDTH]:>{PEER_WIDTH}}" for n in names
+        )
         lines += [head, "-" * len(head)]
         for row in peer_rows:
             ours = row["kinengine"].get("min_us")
             cells = [_peer_cell(row["peers"][n], ours) for n in names]
-            lines.append(f"{row['robot']:<12} {case_label(row):<42} {row['n']:>7} "
-                         f"{_us(ours) if ours else '-':>10} " + " ".join(f"{c:>{PEER_WIDTH}}" for c in cells))
-    notes = [f"  {robot['name']} / {name}: {status['note']}" for robot in report["robots"]
-             for name, status in robot["peers"].items() if status["note"]]
+            lines.append(
+                f"{row['robot']:<12} {case_label(row):<42} {row['n']:>7} "
+                f"{_us(ours) if ours else '-':>10} " + " ".join(f"{c:>{PEER_WIDTH}}" for c in cells)
+            )
+    notes = [
+        f"  {robot['name']} / {name}: {status['note']}"
+        for robot in report["robots"]
+        for name, status in robot["peers"].items()
+        if status["note"]
+    ]
     return "\n".join(lines + (["", "peer notes:"] + notes if notes else []))
 
 
@@ -124,28 +168,38 @@ def _peer_cell(result: dict, ours: float | None) -> str:
 def plot(report: dict, path: Path) -> None:
     """Horizontal bars on log axes: per-call latency [µs] and batch throughput [configurations/s]."""
     import matplotlib
+
     matplotlib.use("Agg")
-    from matplotlib.patches import Patch
     import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
 
     robots = [r["name"] for r in report["robots"]]
     rows = report["rows"]
-    height = max(len([r for r in rows if r["robot"] == name and r["group"] == g]) for name in robots
-                 for g in ("latency", "throughput"))
+    height = max(
+        len([r for r in rows if r["robot"] == name and r["group"] == g])
+        for name in robots
+        for g in ("latency", "throughput")
+    )
     fig, axes = plt.subplots(len(robots), 2, figsize=(14, 0.32 * height * len(robots) + 1.5), squeeze=False)
     for axes_row, name in zip(axes, robots):
-        panels = ((axes_row[0], "latency", "min_us", "µs per configuration or IK solve (min)"),
-                  (axes_row[1], "throughput", "per_second", "configurations / s"))
+        panels = (
+            (axes_row[0], "latency", "min_us", "µs per configuration or IK solve (min)"),
+            (axes_row[1], "throughput", "per_second", "configurations / s"),
+        )
         for ax, group, key, xlabel in panels:
             selected = [r for r in rows if r["robot"] == name and r["group"] == group]
             labels = [r["case"] + (f"  N={r['n']:,}" if group == "throughput" else "") for r in selected]
             per = [r["n"] if group == "latency" else 1 for r in selected]  # latency: per configuration/solve
-            sides = {"kinengine": [r["kinengine"] for r in selected],
-                     "Pinocchio (floor)": [r["pinocchio"] for r in selected]}
-            for peer in (selected[0].get("peers", {}) if selected else {}):
+            sides = {
+                "kinengine": [r["kinengine"] for r in selected],
+                "Pinocchio (floor)": [r["pinocchio"] for r in selected],
+            }
+            for peer in selected[0].get("peers", {}) if selected else {}:
                 sides[peer] = [r["peers"][peer] for r in selected]
-            series = [(label, [None if v.get(key) is None else v[key] / n for v, n in zip(results, per)])
-                      for label, results in sides.items()]
+            series = [
+                (label, [None if v.get(key) is None else v[key] / n for v, n in zip(results, per)])
+                for label, results in sides.items()
+            ]
             width, handles = 0.8 / len(series), []
             for s, (label, values) in enumerate(series):
                 ys = [i + s * width for i, v in enumerate(values) if v]
@@ -158,8 +212,9 @@ def plot(report: dict, path: Path) -> None:
             ax.set_title(f"{name}: {group}")
             ax.grid(axis="x", which="both", alpha=0.3)
             ax.legend(handles=handles, fontsize=7)
-    fig.suptitle(f"kinengine bench · {report['cpu']} ({report['cores']} cores) · {report['timestamp']}",
-                 fontsize=9)
+    fig.suptitle(
+        f"kinengine bench · {report['cpu']} ({report['cores']} cores) · {report['timestamp']}", fontsize=9
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

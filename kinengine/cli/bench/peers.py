@@ -39,15 +39,24 @@ import warnings
 import numpy as np
 
 PEERS = ("roboticstoolbox", "pytorch_kinematics", "ikpy", "mujoco", "drake")
-_DISTRIBUTIONS = {"roboticstoolbox": "roboticstoolbox-python", "pytorch_kinematics": "pytorch-kinematics",
-                  "ikpy": "ikpy", "mujoco": "mujoco", "drake": "drake"}
+_DISTRIBUTIONS = {
+    "roboticstoolbox": "roboticstoolbox-python",
+    "pytorch_kinematics": "pytorch-kinematics",
+    "ikpy": "ikpy",
+    "mujoco": "mujoco",
+    "drake": "drake",
+}
 RUNTIMES = {"pytorch_kinematics": ("torch",), "roboticstoolbox": ("spatialmath-python",)}
 """Libraries a peer runs on, whose versions the JSON records too."""
 _LWA = "jacobian[local_world_aligned]"
 _ANALYTIC = "analytic_jacobian["
 _REVERSED = [0, 1, 2, 5, 4, 3]
-RTB_ANALYTIC = {"euler_zyz": ("eul", slice(None)), "rotation_vector": ("exp", slice(None)),
-                "euler_zyx": ("rpy/zyx", _REVERSED), "euler_xyz": ("rpy/xyz", _REVERSED)}
+RTB_ANALYTIC = {
+    "euler_zyz": ("eul", slice(None)),
+    "rotation_vector": ("exp", slice(None)),
+    "euler_zyx": ("rpy/zyx", _REVERSED),
+    "euler_xyz": ("rpy/xyz", _REVERSED),
+}
 """kinengine rotation -> (roboticstoolbox representation, its rows in kinengine's order)."""
 LOOP_MAX = 10_000
 """Batches larger than this are not timed for peers that need a Python loop over configurations."""
@@ -70,8 +79,11 @@ class Peer:
             self.version, self.note = None, f"not installed (pip install {self.distribution})"
             return
         try:
-            with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()), \
-                    warnings.catch_warnings():  # e.g. ikpy on fixed links in its chain: its business
+            with (
+                contextlib.redirect_stdout(io.StringIO()),
+                contextlib.redirect_stderr(io.StringIO()),
+                warnings.catch_warnings(),
+            ):  # e.g. ikpy on fixed links in its chain: its business
                 warnings.simplefilter("ignore")
                 self._load()
             self.loaded = True
@@ -118,6 +130,7 @@ class Peer:
     # -- roboticstoolbox ------------------------------------------------------------------------------
     def _load_roboticstoolbox(self) -> None:
         import roboticstoolbox as rtb
+
         self._rtb = rtb.Robot.URDF(self._path())
         self._ets = self._rtb.ets(end=self.frame)
         by_index = {link.jindex: link.name for link in self._rtb.links if link.isjoint}
@@ -131,6 +144,7 @@ class Peer:
 
             def solve():
                 return [ets.ik_LM(T, tol=1e-12, joint_limits=True)[0] for T in targets]
+
             return solve, (lambda out: np.array(out) @ self._unmap())
         x = self._native(case.q, self._rtb_order)
         if case.name == "frame_pose":
@@ -142,8 +156,8 @@ class Peer:
                 return (lambda: ets.jacob0(x[0])), (lambda out: out @ self._unmap())
             self._loop(case)
             return (lambda: [ets.jacob0(xi) for xi in x]), (lambda out: np.array(out) @ self._unmap())
-        if case.name.startswith(_ANALYTIC) and case.name[len(_ANALYTIC):-1] in RTB_ANALYTIC:
-            representation, rows = RTB_ANALYTIC[case.name[len(_ANALYTIC):-1]]
+        if case.name.startswith(_ANALYTIC) and case.name[len(_ANALYTIC) : -1] in RTB_ANALYTIC:
+            representation, rows = RTB_ANALYTIC[case.name[len(_ANALYTIC) : -1]]
 
             def to_kinengine(out):
                 return np.asarray(out)[..., rows, :] @ self._unmap()
@@ -151,8 +165,10 @@ class Peer:
             if single:
                 return (lambda: ets.jacob0_analytical(x[0], representation=representation)), to_kinengine
             self._loop(case)
-            return ((lambda: [ets.jacob0_analytical(xi, representation=representation) for xi in x]),
-                    to_kinengine)
+            return (
+                (lambda: [ets.jacob0_analytical(xi, representation=representation) for xi in x]),
+                to_kinengine,
+            )
         return None
 
     def _unmap(self) -> np.ndarray:
@@ -166,6 +182,7 @@ class Peer:
     def _load_pytorch_kinematics(self) -> None:
         import pytorch_kinematics as pk
         import torch
+
         self._torch = torch
         chain = pk.build_serial_chain_from_urdf(self.robot.urdf_text.encode(), self.frame)
         self._chain = chain.to(dtype=torch.float64)
@@ -183,6 +200,7 @@ class Peer:
     # -- ikpy -----------------------------------------------------------------------------------------
     def _load_ikpy(self) -> None:
         from ikpy.chain import Chain
+
         description = self.robot.description
         parent_joint = {j.child: j for j in description.joints}
         path, link = [], self.frame
@@ -209,17 +227,23 @@ class Peer:
     # -- mujoco -------------------------------------------------------------------------------------
     def _load_mujoco(self) -> None:
         import mujoco
+
         xml = self.robot.description.to_xml()
         head = xml.index(">", xml.index("<robot")) + 1
-        compiler = ('<mujoco><compiler discardvisual="true" fusestatic="false" boundmass="1e-6" '
-                    'boundinertia="1e-9" autolimits="true"/></mujoco>')
+        compiler = (
+            '<mujoco><compiler discardvisual="true" fusestatic="false" boundmass="1e-6" '
+            'boundinertia="1e-9" autolimits="true"/></mujoco>'
+        )
         spec = mujoco.MjSpec.from_string(xml[:head] + compiler + xml[head:])
         spec.body(self.frame).add_site(name="kinengine_frame", pos=[0.0, 0.0, 0.0])
         self._mj = mujoco
         self._mj_model = spec.compile()
         self._mj_data = mujoco.MjData(self._mj_model)
         self._mj_site = mujoco.mj_name2id(self._mj_model, mujoco.mjtObj.mjOBJ_SITE, "kinengine_frame")
-        names = [mujoco.mj_id2name(self._mj_model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(self._mj_model.njnt)]
+        names = [
+            mujoco.mj_id2name(self._mj_model, mujoco.mjtObj.mjOBJ_JOINT, j)
+            for j in range(self._mj_model.njnt)
+        ]
         self._mj_order = self._pinocchio_order(names)
 
     def _pinocchio_order(self, names: list[str]) -> np.ndarray:
@@ -247,6 +271,7 @@ class Peer:
             self._loop(case)
         qpos, xpos, xmat = data.qpos, data.site_xpos, data.site_xmat
         if case.name == "frame_pose":
+
             def pose(x):
                 qpos[:] = x
                 kinematics(model, data)
@@ -254,6 +279,7 @@ class Peer:
                 T[:3, :3] = xmat[site].reshape(3, 3)
                 T[:3, 3] = xpos[site]
                 return T
+
             if single:
                 x = X[0]
                 return (lambda: pose(x)), np.asarray
@@ -267,7 +293,8 @@ class Peer:
             J = np.empty((6, nv))
             jac_site(model, data, J[:3], J[3:], site)
             return J
-        convert = (lambda out: self._fold(np.asarray(out), self._mj_order))
+
+        convert = lambda out: self._fold(np.asarray(out), self._mj_order)
         if single:
             x = X[0]
             return (lambda: jacobian(x)), convert
@@ -278,6 +305,7 @@ class Peer:
         from pydrake.multibody.parsing import Parser
         from pydrake.multibody.plant import MultibodyPlant
         from pydrake.multibody.tree import JacobianWrtVariable
+
         plant = MultibodyPlant(0.0)
         Parser(plant).AddModelsFromString(self.robot.description.to_xml(), "urdf")
         root = self.robot.description.root
@@ -289,12 +317,19 @@ class Peer:
         self._drake_frame = plant.GetFrameByName(self.frame)
         self._drake_qdot = JacobianWrtVariable.kQDot
         pin_names = self.robot.engine.coordinates.pinocchio_names
-        self._drake_index = np.array([plant.GetJointByName(n).position_start() for n in pin_names], dtype=np.intp)
+        self._drake_index = np.array(
+            [plant.GetJointByName(n).position_start() for n in pin_names], dtype=np.intp
+        )
 
     def _prepare_drake(self, case, single: bool):
         if case.name not in ("frame_pose", _LWA):
             return None
-        plant, context, frame, world = self._drake, self._drake_context, self._drake_frame, self._drake.world_frame()
+        plant, context, frame, world = (
+            self._drake,
+            self._drake_context,
+            self._drake_frame,
+            self._drake.world_frame(),
+        )
         QP = self._pinocchio_q(case)
         X = np.zeros((len(QP), plant.num_positions()))
         X[:, self._drake_index] = QP
@@ -307,6 +342,7 @@ class Peer:
             def pose(x):
                 set_positions(context, x)
                 return transform(context, world, frame).GetAsMatrix4()
+
             fn = (lambda: pose(X[0])) if single else (lambda: [pose(x) for x in X])
             return fn, np.asarray
         spatial, qdot = plant.CalcJacobianSpatialVelocity, self._drake_qdot
@@ -316,8 +352,11 @@ class Peer:
             return spatial(context, qdot, frame, origin, world, world)
 
         def convert(out):
-            J = np.asarray(out)[..., [3, 4, 5, 0, 1, 2], :][..., self._drake_index]  # [v; ω], Pinocchio's columns
+            J = np.asarray(out)[..., [3, 4, 5, 0, 1, 2], :][
+                ..., self._drake_index
+            ]  # [v; ω], Pinocchio's columns
             return self.robot.engine.coordinates.fold(J)
+
         fn = (lambda: jacobian(X[0])) if single else (lambda: [jacobian(x) for x in X])
         return fn, convert
 

@@ -11,24 +11,24 @@ core count and a timestamp.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
-from datetime import datetime, timezone
 import importlib.metadata
 import math
 import os
-from pathlib import Path
 import platform
 import statistics
 import timeit
+from collections.abc import Callable
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-from .cases import Case, ik_cases, latency_cases, throughput_cases
-from .peers import RUNTIMES, Skip, load_peers
 from ...loading import load
 from ...parameterizations import ROTATION_PARAMETERIZATIONS
+from .cases import Case, ik_cases, latency_cases, throughput_cases
+from .peers import RUNTIMES, Skip, load_peers
 
 DEFAULT_ROBOTS = ("abb_irb120",)
 
@@ -37,8 +37,8 @@ DEFAULT_ROBOTS = ("abb_irb120",)
 class Settings:
     sizes: tuple[int, ...]
     repeat: int
-    min_time: float           # [s] per repeat
-    ik: tuple[int, int] = (200, 10_000)   # random IK targets: solved one by one, and as one batch
+    min_time: float  # [s] per repeat
+    ik: tuple[int, int] = (200, 10_000)  # random IK targets: solved one by one, and as one batch
 
 
 FULL = Settings((1, 100, 10_000, 100_000, 1_000_000), repeat=21, min_time=0.01)
@@ -68,8 +68,10 @@ def measure_interleaved(fns: list[Callable[[], object]], settings: Settings) -> 
     for _ in range(min(settings.repeat, 5) if slow else settings.repeat):
         for k, timer in enumerate(timers):
             times[k].append(timer.timeit(numbers[k]) / numbers[k])
-    return [{"min_us": min(t) * 1e6, "median_us": statistics.median(t) * 1e6, "calls": number}
-            for t, number in zip(times, numbers)]
+    return [
+        {"min_us": min(t) * 1e6, "median_us": statistics.median(t) * 1e6, "calls": number}
+        for t, number in zip(times, numbers)
+    ]
 
 
 def max_relative_difference(a: object, b: object) -> float:
@@ -94,8 +96,9 @@ def run_case(case: Case, settings: Settings, peers: list | None = None, peer_ato
             floor["status"] = "disagrees"
     timed = [fn for fn in (case.kinengine, case.pinocchio) if fn is not None]
     timings = iter(measure_interleaved(timed, settings))
-    row["kinengine"] = {"status": "skipped"} if case.kinengine is None else \
-        {"status": "ok", **_rate(next(timings), case.n)}
+    row["kinengine"] = (
+        {"status": "skipped"} if case.kinengine is None else {"status": "ok", **_rate(next(timings), case.n)}
+    )
     row["pinocchio"] = {**floor, **(_rate(next(timings), case.n) if case.pinocchio is not None else {})}
     if case.targets is not None and result is not None:
         row["success"] = ik_success(case, result)
@@ -114,7 +117,7 @@ def ik_success(case: Case, Q: object, robot=None) -> float:
     dp = np.linalg.norm(F[:, :3, 3] - T[:, :3, 3], axis=1)
     cos = (np.einsum("nij,nij->n", F[:, :3, :3], T[:, :3, :3]) - 1.0) / 2.0
     angle = np.arccos(np.clip(cos, -1.0, 1.0))
-    inside = np.all((Q >= robot.lower_limits) & (Q <= robot.upper_limits), axis=1)
+    inside = np.all((robot.lower_limits <= Q) & (robot.upper_limits >= Q), axis=1)
     return float(np.mean((dp <= 1e-6) & (angle <= 1e-6 + 2e-8) & inside))
 
 
@@ -140,8 +143,11 @@ def _run_peer(peer, case: Case, expected: object, settings: Settings, atol: floa
     except Exception as exc:  # a peer failing on some robot is a result, not a crash
         return {"status": "failed", "note": f"{type(exc).__name__}: {exc}"[:300]}
     if got.shape != expected.shape:
-        return {"status": "disagrees", "difference": None,
-                "note": f"shape {got.shape}, expected {expected.shape}"}
+        return {
+            "status": "disagrees",
+            "difference": None,
+            "note": f"shape {got.shape}, expected {expected.shape}",
+        }
     difference = float(np.max(np.abs(got - expected)))
     if not difference <= atol:
         return {"status": "disagrees", "difference": difference if math.isfinite(difference) else None}
@@ -157,14 +163,20 @@ def environment(peers: list | None = None) -> dict:
         except importlib.metadata.PackageNotFoundError:
             versions[dist] = None
     from ... import __version__
+
     versions["kinengine"] = versions["kinengine"] or __version__
     for peer in peers or ():
         versions[peer.distribution] = peer.version
         for dist in RUNTIMES.get(peer.name, ()):
             versions[dist] = importlib.metadata.version(dist)
-    return {"timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"), "cpu": cpu_model(),
-            "cores": os.cpu_count(), "python": platform.python_version(), "platform": platform.platform(),
-            "versions": versions}
+    return {
+        "timestamp": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "cpu": cpu_model(),
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "versions": versions,
+    }
 
 
 def cpu_model() -> str:
@@ -184,8 +196,13 @@ def cpu_model() -> str:
     return fields["model name"] + (f" ({', '.join(details)})" if details else "")
 
 
-def run(robots: list[str], settings: Settings, peers: bool = False, peer_atol: float = 1e-9,
-        progress: bool | None = None) -> dict:
+def run(
+    robots: list[str],
+    settings: Settings,
+    peers: bool = False,
+    peer_atol: float = 1e-9,
+    progress: bool | None = None,
+) -> dict:
     """The whole benchmark as a JSON-ready dict: environment, settings and one row per case.
 
     ``progress``: a tqdm bar on stderr (None: only when stderr is a terminal).
@@ -195,18 +212,41 @@ def run(robots: list[str], settings: Settings, peers: bool = False, peer_atol: f
     for name in robots:
         robot = load(name) if isinstance(name, str) else name  # a name, or a Robot loaded by the command
         frame = robot.end_effector
-        cases = (latency_cases(robot, frame, rotations) + throughput_cases(robot, frame, list(settings.sizes))
-                 + ik_cases(robot, frame, *settings.ik))
+        cases = (
+            latency_cases(robot, frame, rotations)
+            + throughput_cases(robot, frame, list(settings.sizes))
+            + ik_cases(robot, frame, *settings.ik)
+        )
         plans.append((robot, frame, load_peers(robot, frame) if peers else None, cases))
     loaded = [peer for *_, robot_peers, _ in plans for peer in robot_peers or () if peer.loaded]
-    report = {"schema": 1, **environment(loaded), "robots": [], "rows": [],
-              "settings": {"sizes": list(settings.sizes), "repeat": settings.repeat,
-                           "min_time_s": settings.min_time, "peer_atol": peer_atol}}
-    with tqdm(total=sum(len(c) for *_, c in plans), desc="kinengine bench", unit="row", leave=False,
-              disable=None if progress is None else not progress) as bar:
+    report = {
+        "schema": 1,
+        **environment(loaded),
+        "robots": [],
+        "rows": [],
+        "settings": {
+            "sizes": list(settings.sizes),
+            "repeat": settings.repeat,
+            "min_time_s": settings.min_time,
+            "peer_atol": peer_atol,
+        },
+    }
+    with tqdm(
+        total=sum(len(c) for *_, c in plans),
+        desc="kinengine bench",
+        unit="row",
+        leave=False,
+        disable=None if progress is None else not progress,
+    ) as bar:
         for robot, frame, robot_peers, cases in plans:
-            report["robots"].append({"name": robot.name, "dof": robot.dof, "frame": frame,
-                                     "peers": {p.name: p.status() for p in robot_peers or ()}})
+            report["robots"].append(
+                {
+                    "name": robot.name,
+                    "dof": robot.dof,
+                    "frame": frame,
+                    "peers": {p.name: p.status() for p in robot_peers or ()},
+                }
+            )
             for case in cases:
                 bar.set_postfix_str(f"{robot.name} {case.name} N={case.n}", refresh=False)
                 row = run_case(case, settings, robot_peers, peer_atol)
