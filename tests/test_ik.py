@@ -13,7 +13,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import kinengine
-from kinengine.control import ik
+from kinengine.control import ik, ik_seeds
 from kinengine.control.ik import inverse_kinematics
 
 
@@ -225,7 +225,7 @@ def test_seed_tables_are_bounded(mixed):
     frames = [f for f in mixed.frame_names if f != mixed.description.root]
     for frame in frames * 2:
         inverse_kinematics(mixed, mixed.frame_pose(mixed.neutral(), frame), frame, max_iterations=1, restarts=0)
-    tables = mixed.engine.memoized("ik seed tables", ik._Tables)
+    tables = mixed.engine.memoized("ik seed tables", ik_seeds.SeedTables)
     assert 0 < len(tables.tables) <= ik.SEED_TABLES
     for configs, tree in tables.tables.values():
         assert configs.nbytes + tree.data.nbytes <= 2 * ik.SEED_TABLE_BYTES

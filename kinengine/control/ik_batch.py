@@ -5,9 +5,9 @@ tolerances), each iteration done for all targets still running: poses and Jacobi
 from the batch chain (:mod:`kinengine.kinematics.batch`), the rotation errors log(C_d Cᵀ) in closed
 form, and the damped least-squares systems (N, m, m) solved by one ``np.linalg.solve``. A target
 leaves the batch when it converges or runs out of attempts; one that gives up on an attempt moves to
-its next seed while the others go on; the last ``TAIL`` stragglers finish on the single-target solver. Its floating point differs from the single solver's
-(Pinocchio's Jacobian vs the batch chain's), so the two agree in convergence and tolerance, not bit
-for bit.
+its next seed while the others go on; the last ``TAIL`` stragglers finish on the single-target solver.
+Its floating point differs from the single solver's (Pinocchio's Jacobian vs the batch chain's), so the
+two agree in convergence and tolerance, not bit for bit.
 
 The result is an :class:`IKBatchResult`: arrays over the batch (``q`` (N, dof), ``success`` (N,), ...),
 and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``list(result)``).
@@ -21,21 +21,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics import batch
+from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
+from .ik_solver import GIVE_UP, NULLSPACE_FADE, PROBE_ITERATIONS, IKResult, LimitWeights, solve_one
+from .ik_target import Problem
 
 TAIL = 16
 """When no more than this many targets are left running, each finishes on the single-target solver (one
 target costs it ~20 numpy calls per iteration against ~150 for a batch iteration)."""
-from .ik import (
-    GIVE_UP,
-    NULLSPACE_FADE,
-    PROBE_ITERATIONS,
-    SEED_ROTATION_WEIGHT,
-    IKResult,
-    LimitWeights,
-    Problem,
-    first_seeds,
-    solve_one,
-)
 
 
 @dataclass(frozen=True)
@@ -191,7 +183,8 @@ def solve_batch(robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0, g
 def _step(
     J: np.ndarray, w, err: np.ndarray, score: np.ndarray, q: np.ndarray, problem: Problem
 ) -> np.ndarray:
-    """q + Δq for every row: weighted damped least squares with λ² = ½|e|² + λ_min² (and the nullspace pull)."""
+    """q + Δq for every row: weighted damped least squares with λ² = ½|e|² + λ_min² (and the nullspace
+    pull)."""
     JW = J if w is None else J * w[:, None, :]  # J W⁻¹
     A = JW @ J.transpose(0, 2, 1)
     JT = JW.transpose(0, 2, 1)

@@ -1,0 +1,97 @@
+"""IK seeds: a per-robot, per-frame table of random in-limit configurations and a KD-tree over their frame
+poses, so each target starts from the stored configurations whose poses are nearest it (plus the middle of
+the joint ranges, or the nullspace target); tables are bounded in number and size (an LRU)."""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections import OrderedDict
+
+import numpy as np
+
+from .ik_target import Problem
+
+NEAREST_SEEDS = 10
+SEED_TABLE_SIZE = 4096
+SEED_TABLE_BYTES = 1 << 21
+"""At most 2 MiB per seed table (fewer than SEED_TABLE_SIZE rows for robots with many joints)."""
+SEED_TABLES = 16
+"""At most this many seed tables (frames × target kinds) are kept per robot, least recently used dropped."""
+SEED_TABLE_RNG = 0x5EED_7AB1E
+SEED_ROTATION_WEIGHT = 0.2
+"""[m/rad]: pose distance |Δp| + 0.2·angle used to rank attempts and pick the stored seeds nearest a
+target."""
+
+
+class SeedTables:
+    """A small LRU of seed tables (bounded: SEED_TABLES tables of at most SEED_TABLE_BYTES each)."""
+
+    def __init__(self) -> None:
+        self.lock, self.tables = threading.Lock(), OrderedDict()
+
+    def get(self, key, make):
+        with self.lock:
+            if key in self.tables:
+                self.tables.move_to_end(key)
+                return self.tables[key]
+        table = make()
+        with self.lock:
+            self.tables[key] = table
+            while len(self.tables) > SEED_TABLES:
+                self.tables.popitem(last=False)
+        return table
+
+
+def _seed_table(robot, frame: str, use_p: bool, use_R: bool):
+    """(configurations (K, dof), a KD-tree over [p, w·vec(C)/√2] of ``frame`` at them)."""
+    from scipy.spatial import cKDTree
+
+    size = max(64, min(SEED_TABLE_SIZE, SEED_TABLE_BYTES // (8 * (robot.dof + 12))))
+    configs = robot.random_configuration(np.random.default_rng(SEED_TABLE_RNG), size=size)
+    poses = robot.frame_pose(configs, frame)
+    return configs, cKDTree(
+        _embed(poses[:, :3, 3] if use_p else None, poses[:, :3, :3] if use_R else None, len(configs))
+    )
+
+
+def _embed(p, C, n: int) -> np.ndarray:
+    """Points whose squared distance is |Δp|² + w²‖ΔC‖²/2 = |Δp|² + w²·2(1 − cos θ) ≈ |Δp|² + (wθ)²."""
+    parts = [p] if p is not None else []
+    if C is not None:
+        parts.append(C.reshape(n, 9) * (SEED_ROTATION_WEIGHT / math.sqrt(2.0)))
+    return np.hstack(parts) if parts else np.zeros((n, 1))
+
+
+def first_seeds(robot, problem: Problem, p_d, C_d, q0) -> np.ndarray:
+    """The seeded attempts' starts (N, S, dof) for targets p_d (N, 3) | None, C_d (N, 3, 3) | None."""
+    joints = robot.engine.coordinates
+    n = len(p_d) if p_d is not None else len(C_d)
+    if q0 is not None:
+        return np.broadcast_to(np.clip(q0, joints.lower, joints.upper), (n, robot.dof))[:, None, :].copy()
+    bounded = np.isfinite(joints.lower) & np.isfinite(joints.upper)
+    middle = (np.where(bounded, joints.lower, 0.0) + np.where(bounded, joints.upper, 0.0)) / 2
+    first = middle if problem.q_ns is None else np.clip(problem.q_ns, joints.lower, joints.upper)
+    tables = robot.engine.memoized("ik seed tables", SeedTables)
+    key = (problem.frame, p_d is not None, C_d is not None)
+    configs, tree = tables.get(
+        key, lambda: _seed_table(robot, problem.frame, p_d is not None, C_d is not None)
+    )
+    k = min(NEAREST_SEEDS, len(configs))
+    _, index = tree.query(_embed(p_d, C_d, n), k=k, workers=-1 if n > 256 else 1)
+    seeds = np.empty((n, k + 1, robot.dof))
+    seeds[:, :k] = configs[np.asarray(index).reshape(n, k)]
+    seeds[:, k] = first  # the middle of the ranges (or the nullspace target): rarely the nearest
+    return seeds
+
+
+__all__ = [
+    "NEAREST_SEEDS",
+    "SEED_ROTATION_WEIGHT",
+    "SEED_TABLES",
+    "SEED_TABLE_BYTES",
+    "SEED_TABLE_RNG",
+    "SEED_TABLE_SIZE",
+    "SeedTables",
+    "first_seeds",
+]

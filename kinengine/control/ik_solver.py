@@ -1,0 +1,169 @@
+"""The single-target IK solver: damped least squares iterations (see :mod:`kinengine.control.ik` for the
+error, the step and the seeds) from each seed in turn, with Chan & Dubey's joint-limit weights
+(:class:`LimitWeights`); returns an :class:`IKResult`."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .ik_seeds import SEED_ROTATION_WEIGHT
+from .ik_target import Problem
+
+PROBE_ITERATIONS = 10
+GIVE_UP = 1e-2
+"""[m] score |e_p| + 0.2 m/rad·|e_R| above which an attempt gives way after PROBE_ITERATIONS iterations."""
+NULLSPACE_FADE = 5e-2
+"""[m] the nullspace pull is gain · min(1, score / this): full strength far from the target, fading with
+the error so that its second-order effect on the task (∝ |z|²) vanishes and the solve converges."""
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """Outcome of one IK solve: the best q found (dof,) [rad | m], within the limits."""
+
+    q: np.ndarray
+    success: bool
+    iterations: int  # total over every attempt
+    position_error: float  # |p_d − p| [m] over the kept position rows (0 if the position is free)
+    rotation_error: float  # angle of C_d Cᵀ [rad] over the kept rotation rows (0 if the rotation is free)
+    restarts: int  # attempts after the first one
+
+    def __str__(self) -> str:
+        state = "converged" if self.success else "did not converge"
+        return (
+            f"IK {state} after {self.iterations} iterations ({self.restarts} restarts): "
+            f"position error {self.position_error:.3g} m, rotation error {self.rotation_error:.3g} rad"
+        )
+
+
+class LimitWeights:
+    """Chan & Dubey's weighted least norm: w_i = 1 + |∂φ/∂q_i| while joint i approaches a limit (|∂φ/∂q_i|
+    grew since the last iteration), else 1, with φ = Σ (u−l)² / (4 (u−q)(q−l)), so
+    ∂φ/∂q = (u−l)² (2q − u − l) / (4 (u−q)² (q−l)²); unbounded joints: 1. Works on q (dof,) or (n, dof)."""
+
+    def __init__(self, lower: np.ndarray, upper: np.ndarray) -> None:
+        self.bounded = np.isfinite(lower) & np.isfinite(upper)
+        self.any = bool(self.bounded.any())
+        self.lower, self.upper = np.where(self.bounded, lower, -1.0), np.where(self.bounded, upper, 1.0)
+        self.middle_twice = self.lower + self.upper
+        self.quarter_span_sq = np.where(self.bounded, self.upper - self.lower, 0.0) ** 2 / 4  # 0: unbounded
+        self._lower, self._upper = self.lower.tolist(), self.upper.tolist()
+        self._mid2, self._quarter = self.middle_twice.tolist(), self.quarter_span_sq.tolist()
+
+    def inverse_weights(self, q: np.ndarray, previous: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """(1 / w, |∂φ/∂q|) at q, given |∂φ/∂q| of the last iteration (None: the first). Distances to the
+        limits are floored at 1e-12 (a joint on its limit gets a huge finite gradient, weight ~0)."""
+        distances = np.maximum(self.upper - q, 1e-12) * np.maximum(q - self.lower, 1e-12)
+        grad = self.quarter_span_sq * np.abs(2 * q - self.middle_twice) / (distances * distances)
+        inverse = 1.0 / (1.0 + grad)
+        if previous is None:
+            return inverse, grad
+        return np.where(grad > previous, inverse, 1.0), grad
+
+    def inverse_weights_one(self, q: np.ndarray, previous: list | None) -> tuple[np.ndarray, list]:
+        """:meth:`inverse_weights` for one q (dof,) in plain floats (a dozen numpy calls on a 6-vector cost
+        more than the arithmetic); ``previous`` and the returned gradient are lists."""
+        grad, inverse = [], []
+        for i, (qi, lo, hi, mid2, quarter) in enumerate(
+            zip(q.tolist(), self._lower, self._upper, self._mid2, self._quarter, strict=True)
+        ):
+            du, dl = hi - qi, qi - lo
+            d = (du if du > 1e-12 else 1e-12) * (dl if dl > 1e-12 else 1e-12)
+            g = quarter * abs(2.0 * qi - mid2) / (d * d)
+            grad.append(g)
+            inverse.append(1.0 / (1.0 + g) if previous is None or g > previous[i] else 1.0)
+        return np.array(inverse), grad
+
+
+def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, wrap: bool = True) -> IKResult:
+    """Attempts from each seed, then ``restarts`` random ones; the first converged (or the best) wins."""
+    kin = robot.engine
+    joints = kin.coordinates
+    model, data = kin.model, kin.data()
+    lower, upper, fid = joints.lower, joints.upper, problem.fid
+    tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
+    rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
+    damping_sq, q_ns, gain = problem.damping_sq, problem.q_ns, problem.gain
+    attempts = len(seeds) + problem.restarts
+    e = np.zeros(6)
+    full = rows is None and p_d is not None and C_d is not None
+    part = slice(0 if p_d is not None else 3, 6 if C_d is not None else 3)
+    pinocchio_q, fold, identity = kin.pinocchio_q, joints.fold, joints.identity
+    frame_jacobian, place, log3, LWA = (
+        pin.computeFrameJacobian,
+        pin.updateFramePlacement,
+        pin.log3,
+        pin.LOCAL_WORLD_ALIGNED,
+    )
+    solve, maximum, minimum, hypot = np.linalg.solve, np.maximum, np.minimum, math.hypot
+    m = len(rows) if rows is not None else part.stop - part.start
+    eye = np.eye(m)
+    limits = LimitWeights(lower, upper)
+    best, total = None, 0
+    for attempt in range(attempts):
+        q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
+        last = attempt == attempts - 1 or (attempt == 0 and problem.patient_first)
+        iteration, previous = 0, None
+        while True:
+            J = frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, LWA)
+            M = place(model, data, fid)
+            if p_d is not None:
+                e[:3] = p_d - M.translation
+            if C_d is not None:
+                e[3:] = log3(C_d @ M.rotation.T)
+            if rows is None:
+                e0, e1, e2, e3, e4, e5 = e.tolist()
+                ep, er = hypot(e0, e1, e2), hypot(e3, e4, e5)
+                err = e if full else e[part]
+            else:
+                e_d = np.concatenate((C_d.T @ e[:3], C_d.T @ e[3:]))[rows]
+                ep = math.sqrt(float(e_d[position_rows] @ e_d[position_rows]))
+                er = math.sqrt(float(e_d[~position_rows] @ e_d[~position_rows]))
+                err = e_d if sqrt_w is None else e_d * sqrt_w
+            score = ep + SEED_ROTATION_WEIGHT * er
+            done = ep <= tol_p and er <= tol_r
+            if (
+                done
+                or iteration == max_iterations
+                or (iteration == PROBE_ITERATIONS and score > GIVE_UP and not last)
+            ):
+                break
+            iteration += 1
+            if not identity or J.ndim == 1:
+                J = fold(J.reshape(6, -1))
+            if rows is not None:
+                J = np.vstack((C_d.T @ J[:3], C_d.T @ J[3:]))[rows]
+                if sqrt_w is not None:
+                    J = J * sqrt_w[:, None]
+            elif not full:
+                J = J[part]
+            if limits.any:
+                w, previous = limits.inverse_weights_one(q, previous)
+                JW = J * w
+            else:
+                JW = J
+            A = JW @ J.T
+            A += (0.5 * float(err @ err) + damping_sq) * eye
+            if q_ns is None:
+                q += JW.T @ solve(A, err)
+            else:
+                z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
+                y = solve(A, np.column_stack((err, J @ z)))
+                q += JW.T @ (y[:, 0] - y[:, 1]) + z
+            minimum(maximum(q, lower, out=q), upper, out=q)
+        total += iteration
+        if best is None or score < best[3]:
+            best = (q, ep, er, score, attempt)
+        if done:
+            break
+    q, ep, er, _, attempt = best
+    if wrap:
+        q[joints.continuous] = np.remainder(q[joints.continuous] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)
+    return IKResult(q, bool(ep <= tol_p and er <= tol_r), total, ep, er, attempt)
+
+
+__all__ = ["GIVE_UP", "NULLSPACE_FADE", "PROBE_ITERATIONS", "IKResult", "LimitWeights", "solve_one"]

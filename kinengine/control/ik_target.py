@@ -1,0 +1,246 @@
+"""IK options and targets, checked once: :class:`Problem` (the validated options shared by the single and
+the batched solver), the target pose p_d (3,) [m] / C_d (3, 3) in the root frame I from a pose T_IF (4, 4),
+a batch (N, 4, 4) or parameters χ, and :class:`RandomSource` (the ``rng`` option)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import OptionError, ParameterizationError
+from ..parameterizations import get_position, get_rotation
+
+MAX_TARGET_DISTANCE = 1e9
+"""[m] a target position farther than this from the root is refused (its squared error would overflow)."""
+ROW_NAMES = ("x", "y", "z", "rx", "ry", "rz")
+
+
+@dataclass(frozen=True)
+class Problem:
+    """Validated options shared by the single and the batched solver."""
+
+    fid: int
+    frame: str
+    rows: np.ndarray | None  # kept rows of e_D (None: all six rows of e in I, unweighted)
+    sqrt_weights: np.ndarray | None
+    position_rows: np.ndarray  # which kept rows are position rows
+    tol_position: float
+    tol_rotation: float
+    max_iterations: int
+    restarts: int
+    damping_sq: float
+    q_ns: np.ndarray | None
+    gain: float
+    patient_first: bool  # the first attempt (from the caller's q0) never gives up early
+
+
+def _number(name: str, value: object, low: float, high: float = math.inf) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise OptionError(f"`{name}` must be a number, got {value!r}")
+    value = float(value)
+    if not (math.isfinite(value) and low <= value <= high):
+        raise OptionError(f"`{name}` must be a finite number in [{low:g}, {high:g}], got {value!r}")
+    return value
+
+
+def _count(name: str, value: object, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= high:
+        raise OptionError(f"`{name}` must be a whole number from 0 to {high:,}, got {value!r}")
+    return int(value)
+
+
+def checked_problem(
+    robot,
+    frame,
+    rows,
+    weights,
+    tol_position,
+    tol_rotation,
+    max_iterations,
+    restarts,
+    nullspace_target,
+    nullspace_gain,
+    min_damping,
+    has_q0: bool,
+) -> Problem:
+    frame = robot.end_effector if frame is None else frame
+    fid = robot.frame_id(frame)
+    tol_p, tol_r = _number("tol_position", tol_position, 0.0), _number("tol_rotation", tol_rotation, 0.0)
+    max_iterations = _count("max_iterations", max_iterations, 1_000_000)
+    restarts = _count("restarts", restarts, 10_000)
+    gain = _number("nullspace_gain", nullspace_gain, 0.0, 1.0)
+    damping = _number("min_damping", min_damping, 0.0, 1e6)
+    q_ns = (
+        None
+        if nullspace_target is None
+        else robot.engine.coordinates.check(nullspace_target, name="nullspace_target", allow_batch=False)
+    )
+    kept, sqrt_w = None, None
+    if rows is not None or weights is not None:
+        kept = np.arange(6) if rows is None else _rows(rows)
+        if weights is not None:
+            w = np.asarray(weights, dtype=object)
+            if w.shape != (len(kept),):
+                raise OptionError(
+                    f"`weights` must hold one number per kept row ({len(kept)}), got shape {w.shape}"
+                )
+            sqrt_w = np.sqrt([_number("weights[i]", v, 0.0, 1e12) for v in w])
+    position_rows = (kept if kept is not None else np.arange(6)) < 3
+    return Problem(
+        fid,
+        frame,
+        kept,
+        sqrt_w,
+        position_rows,
+        tol_p,
+        tol_r,
+        max_iterations,
+        restarts,
+        damping**2,
+        q_ns,
+        gain,
+        has_q0,
+    )
+
+
+def _rows(rows: object) -> np.ndarray:
+    if isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
+        raise OptionError(f"`rows` must be a sequence of labels {ROW_NAMES} or indices 0-5, got {rows!r}")
+    index = []
+    for r in rows:
+        if isinstance(r, str) and r in ROW_NAMES:
+            index.append(ROW_NAMES.index(r))
+        elif not isinstance(r, bool) and isinstance(r, (int, np.integer)) and 0 <= r < 6:
+            index.append(int(r))
+        else:
+            raise OptionError(f"`rows` entries must be labels {ROW_NAMES} or indices 0-5, got {r!r}")
+    if not index or len(set(index)) != len(index):
+        raise OptionError(f"`rows` must name at least one row, each once, got {rows!r}")
+    return np.array(sorted(index))
+
+
+class RandomSource:
+    """``rng`` checked now, made into a numpy Generator only when a random restart needs one (making one
+    costs more than a converged solve)."""
+
+    def __init__(self, rng: object) -> None:
+        ok = (
+            rng is None
+            or isinstance(rng, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence))
+            or (not isinstance(rng, bool) and isinstance(rng, (int, np.integer)) and rng >= 0)
+        )
+        if not ok:
+            raise OptionError(f"`rng` must be None, a seed >= 0 or a numpy Generator, got {rng!r}")
+        self.rng, self.generator = rng, None
+
+    def configurations(self, robot, size: int | None = None) -> np.ndarray:
+        if self.generator is None:
+            self.generator = np.random.default_rng(self.rng)  # type: ignore[arg-type]
+        return robot.random_configuration(self.generator, size=size)
+
+
+def _rotation_ok(C: np.ndarray) -> bool:
+    """CᵀC = I to 1e-6 and det C > 0 (in plain floats: cheaper than numpy for one 3x3)."""
+    (a, b, c), (d, e, f), (g, h, i) = C.tolist()
+    columns = ((a, d, g), (b, e, h), (c, f, i))
+    for j in range(3):
+        for k in range(j, 3):
+            u, v = columns[j], columns[k]
+            if not abs(u[0] * v[0] + u[1] * v[1] + u[2] * v[2] - (j == k)) <= 1e-6:
+                return False
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0
+
+
+def _position_ok(p: np.ndarray) -> None:
+    if not float(np.max(np.abs(p), initial=0.0)) <= MAX_TARGET_DISTANCE:
+        raise ParameterizationError(
+            f"`target`'s position is farther than {MAX_TARGET_DISTANCE:g} m from the "
+            "root: no robot reaches it; give a target in metres within reach"
+        )
+
+
+def single_target(target: object, position: str | None, rotation: str | None):
+    """(p_d (3,) or None, C_d (3, 3) or None) from a pose (4, 4) or parameters χ."""
+    try:
+        value = np.asarray(target, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterizationError(
+            f"Expected `target` to be a (4, 4) pose or parameters χ, got {target!r:.80}"
+        ) from None
+    if position is None and rotation is None:
+        if value.shape != (4, 4) or not np.isfinite(value).all():
+            raise ParameterizationError(
+                f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got "
+                f"{value.shape}; "
+                "for parameters χ name their position= and/or rotation= parameterization"
+            )
+        C = value[:3, :3]
+        if not _rotation_ok(C):
+            raise ParameterizationError(
+                "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+            )
+        _position_ok(value[:3, 3])
+        return value[:3, 3].copy(), C.copy()
+    P = get_position(position) if position is not None else None
+    R = get_rotation(rotation) if rotation is not None else None
+    m = (P.size if P else 0) + (R.size if R else 0)
+    if value.shape != (m,) or not np.isfinite(value).all():
+        names = " + ".join(n for n in (position, rotation) if n)
+        raise ParameterizationError(
+            f"Expected `target` to be finite parameters of shape ({m},) for {names}, got {value.shape}"
+        )
+    try:
+        with np.errstate(all="ignore"):
+            p_d = P.to_position(value[: P.size]) if P else None
+            C_d = R.to_rotation(value[m - R.size :]) if R else None
+    except (ArithmeticError, ValueError):  # e.g. a zero quaternion
+        raise ParameterizationError(
+            f"`target` {value.tolist()} describes no pose for "
+            f"{' + '.join(n for n in (position, rotation) if n)}; give valid parameters"
+        ) from None
+    if p_d is not None:
+        if not np.isfinite(p_d).all():
+            raise ParameterizationError(f"`target` {value.tolist()} gives no finite position for {position}")
+        _position_ok(p_d)
+    if C_d is not None and not (np.isfinite(C_d).all() and _rotation_ok(C_d)):
+        raise ParameterizationError(
+            f"`target`'s {rotation} parameters {value[m - R.size :].tolist()} describe no "
+            "rotation (e.g. a zero quaternion or matrix); give a valid one"
+        )
+    return p_d, C_d
+
+
+def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
+    """(p_d (N, 3), C_d (N, 3, 3)) from a batch of poses (N, 4, 4), every one checked."""
+    try:
+        value = np.asarray(target, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterizationError("Expected `target` to be a batch of poses (N, 4, 4) of numbers") from None
+    if value.ndim != 3 or value.shape[1:] != (4, 4) or not len(value) or not np.isfinite(value).all():
+        raise ParameterizationError(
+            f"Expected `target` to be a finite batch of poses (N >= 1, 4, 4), got {value.shape}"
+        )
+    C = value[:, :3, :3]
+    bad = np.flatnonzero(
+        (np.abs(np.einsum("nki,nkj->nij", C, C) - np.eye(3)).max(axis=(1, 2)) > 1e-6)
+        | (np.linalg.det(C) <= 0)
+    )
+    if len(bad):
+        raise ParameterizationError(
+            f"`target`[{bad[0]}]'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+        )
+    _position_ok(value[:, :3, 3])
+    return np.ascontiguousarray(value[:, :3, 3]), np.ascontiguousarray(C)
+
+
+__all__ = [
+    "MAX_TARGET_DISTANCE",
+    "ROW_NAMES",
+    "Problem",
+    "RandomSource",
+    "batch_targets",
+    "checked_problem",
+    "single_target",
+]
