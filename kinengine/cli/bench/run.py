@@ -27,7 +27,8 @@ from tqdm import tqdm
 
 from ...loading import load
 from ...parameterizations import ROTATION_PARAMETERIZATIONS
-from .cases import Case, ik_cases, latency_cases, throughput_cases
+from .cases import Case, latency_cases, throughput_cases
+from .ik_cases import ik_cases
 from .peers import RUNTIMES, Skip, load_peers
 
 DEFAULT_ROBOTS = ("abb_irb120",)
