@@ -71,14 +71,16 @@ def measure_interleaved(fns: list[Callable[[], object]], settings: Settings) -> 
             times[k].append(timer.timeit(numbers[k]) / numbers[k])
     return [
         {"min_us": min(t) * 1e6, "median_us": statistics.median(t) * 1e6, "calls": number}
-        for t, number in zip(times, numbers)
+        for t, number in zip(times, numbers, strict=True)
     ]
 
 
 def max_relative_difference(a: object, b: object) -> float:
     """max |a − b| / max(1, max |b|) over the arrays of two results (tuples compared element-wise)."""
     if isinstance(a, tuple):
-        return max(max_relative_difference(x, y) for x, y in zip(a, b))
+        if not isinstance(b, tuple) or len(b) != len(a):
+            return float("inf")
+        return max(max_relative_difference(x, y) for x, y in zip(a, b, strict=True))
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     if a.shape != b.shape:
         return float("inf")
