@@ -33,7 +33,8 @@ def main(runs: int = 21) -> dict[str, float]:
     for name, seconds in best.items():
         print(f"{name:10s} {seconds * 1e3:7.1f} ms  ({COMMANDS[name]})")
     print(
-        f"kinengine − pinocchio: {(best['kinengine'] - best['pinocchio']) * 1e3:.1f} ms (target: within 40 ms)"
+        f"kinengine − pinocchio: {(best['kinengine'] - best['pinocchio']) * 1e3:.1f} ms "
+        "(target: within 40 ms)"
     )
     return best
 

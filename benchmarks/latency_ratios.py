@@ -84,7 +84,8 @@ def ratios(name: str) -> None:
     frame = robot.end_effector
     best = best_times(calls(robot, frame, robot.random_configuration(0)))
     print(
-        f"{name} ({frame}): floors pose {best['floor pose']:.2f} µs, jacobian {best['floor jacobian']:.2f} µs, "
+        f"{name} ({frame}): floors pose {best['floor pose']:.2f} µs, "
+        f"jacobian {best['floor jacobian']:.2f} µs, "
         f"kinematics {best['floor kinematics']:.2f} µs"
     )
     for key, value in best.items():

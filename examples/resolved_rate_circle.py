@@ -54,7 +54,7 @@ def simulate(
     q = Q_START.copy()
     chi0 = robot.pose_parameters(q, FRAME, "cartesian", "euler_zyx")
     center, C_d = chi0[:3].copy(), robot.frame_pose(q, FRAME)[:3, :3]
-    n = int(round(duration / dt)) + 1
+    n = round(duration / dt) + 1
     t = np.arange(n) * dt
     qs, pos_err, rot_err = np.empty((n, 6)), np.empty(n), np.empty(n)
     min_sigma = min_distance = np.inf

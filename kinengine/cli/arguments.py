@@ -183,7 +183,8 @@ def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
-    """The Robot named by ``target`` (default ``args.robot``) with the options of :func:`add_robot_arguments`."""
+    """The Robot named by ``target`` (default ``args.robot``) with the options of
+    :func:`add_robot_arguments`."""
     return load(
         args.robot if target is None else target,
         xacro_args=None if args.xacro_args is None else dict(args.xacro_args),

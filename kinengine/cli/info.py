@@ -15,13 +15,16 @@ def _run(args: argparse.Namespace) -> int:
     print(f"root link (the frame poses are given in): {printable(robot.description.root)}")
     print(f"{'q':>3} {'joint':<28} {'type':<11} {'lower':>10} {'upper':>10}")
     kinds = {j.name: j.type for j in robot.description.joints}
-    for i, (name, lo, hi) in enumerate(zip(robot.joint_names, robot.lower_limits, robot.upper_limits)):
+    for i, (name, lo, hi) in enumerate(
+        zip(robot.joint_names, robot.lower_limits, robot.upper_limits, strict=True)
+    ):
         print(f"{i:>3} {printable(name):<28} {kinds[name]:<11} {lo:>10.5g} {hi:>10.5g}")
     for joint in robot.description.joints:
         if joint.mimic is not None:
             m = joint.mimic
             print(
-                f"  - {printable(joint.name)} (mimic, {joint.type}) = {m.multiplier:g}·{printable(m.joint)} + "
+                f"  - {printable(joint.name)} (mimic, {joint.type}) = "
+                f"{m.multiplier:g}·{printable(m.joint)} + "
                 f"{m.offset:g}"
             )
     print("frames: " + ", ".join(printable(f) for f in robot.frame_names))

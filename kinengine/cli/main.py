@@ -11,6 +11,7 @@ control characters escaped; stdout and stderr escape what their encoding cannot 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import re
 import sys
@@ -89,7 +90,5 @@ def _error(message: object, silence: bool = False) -> int:
 
 def _silence_stdout() -> None:
     """Point stdout at /dev/null, so that the flush at exit cannot fail a second time."""
-    try:
+    with contextlib.suppress(OSError, ValueError):
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-    except (OSError, ValueError):
-        pass

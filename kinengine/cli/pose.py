@@ -34,7 +34,10 @@ def _run(args: argparse.Namespace) -> int:
     print(J)
     if analytic:
         name = " + ".join(p for p in (args.position, args.rotation) if p)
-        print(f"\nchi ({name}) = " + ", ".join(f"{label} {value:.5f}" for label, value in zip(labels, chi)))
+        print(
+            f"\nchi ({name}) = "
+            + ", ".join(f"{label} {value:.5f}" for label, value in zip(labels, chi, strict=True))
+        )
         print(f"\nJ_A (rows {' '.join(labels)}):")
         print(JA)
     return 0

@@ -3,7 +3,8 @@
     kinengine show ROBOT [--q v1,v2,...] [--frames tool0,...] [--ellipsoid tool0] [-o robot.png]
                    [--view ELEV,AZIM] [--dpi N]
 
-Drawn by :func:`kinengine.presentation.plotting.plot_robot` in the root link frame [m], headless (Agg backend).
+Drawn by :func:`kinengine.presentation.plotting.plot_robot` in the root link frame [m], headless
+(Agg backend).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """A frame handle for hot loops: one frame's pose and Jacobian with everything looked up once.
 
->>> fk = robot.frame("tool0")                  # FrameHandle; robot.frame(name, check_inputs=False) skips the check
+>>> fk = robot.frame("tool0")                  # FrameHandle; check_inputs=False skips the input check
 >>> T = fk.pose(q)                             # T_IF (4, 4) [m] in the root link frame I
 >>> J = fk.jacobian(q, reference="local")      # (6, dof), rows [linear; angular]
 >>> T, J = fk.kinematics(q)                    # both from one pass, equal to the two calls above

@@ -123,7 +123,8 @@ def format_table(report: dict) -> str:
     if codes:
         lines += [
             "",
-            "floors (inline raw Pinocchio on robot.pinocchio_model(), q_pin = robot.pinocchio_configuration(q)):",
+            "floors (inline raw Pinocchio on robot.pinocchio_model(), "
+            "q_pin = robot.pinocchio_configuration(q)):",
         ]
         for code, labels in codes.items():
             names = sorted(set(labels), key=labels.index)
@@ -181,7 +182,7 @@ def plot(report: dict, path: Path) -> None:
         for g in ("latency", "throughput")
     )
     fig, axes = plt.subplots(len(robots), 2, figsize=(14, 0.32 * height * len(robots) + 1.5), squeeze=False)
-    for axes_row, name in zip(axes, robots):
+    for axes_row, name in zip(axes, robots, strict=True):
         panels = (
             (axes_row[0], "latency", "min_us", "µs per configuration or IK solve (min)"),
             (axes_row[1], "throughput", "per_second", "configurations / s"),
@@ -197,7 +198,10 @@ def plot(report: dict, path: Path) -> None:
             for peer in selected[0].get("peers", {}) if selected else {}:
                 sides[peer] = [r["peers"][peer] for r in selected]
             series = [
-                (label, [None if v.get(key) is None else v[key] / n for v, n in zip(results, per)])
+                (
+                    label,
+                    [None if v.get(key) is None else v[key] / n for v, n in zip(results, per, strict=True)],
+                )
                 for label, results in sides.items()
             ]
             width, handles = 0.8 / len(series), []
