@@ -63,7 +63,13 @@ if hasattr(os, "register_at_fork"):
 
 
 def run_chain(
-    chain: Chain, Q: np.ndarray, pose, jac, reference, analytic=None, workers: int | None = None
+    chain: Chain,
+    Q: np.ndarray,
+    pose: np.ndarray | None,
+    jac: np.ndarray | None,
+    reference: pin.ReferenceFrame | None,
+    analytic: tuple | None = None,
+    workers: int | None = None,
 ) -> None:
     """Evaluate Q in chunks of at most CHUNK rows, split evenly over up to ``workers`` (WORKERS) threads."""
     workers = max(1, min(WORKERS if workers is None else workers, len(Q) // MIN_PER_WORKER))
@@ -94,7 +100,14 @@ def run_chain(
         future.result()
 
 
-def _pinocchio_loop(kin: Kinematics, Q: np.ndarray, fid: int, pose, jac, reference) -> None:
+def _pinocchio_loop(
+    kin: Kinematics,
+    Q: np.ndarray,
+    fid: int,
+    pose: np.ndarray | None,
+    jac: np.ndarray | None,
+    reference: pin.ReferenceFrame | None,
+) -> None:
     """The same outputs from a Python loop over Pinocchio (faster for small batches)."""
     model, data, coords = kin.model, kin.data(), kin.coordinates
     if kin.dof == 0 and jac is not None:
@@ -174,7 +187,7 @@ def checked_out(out: object, n: int, dof: int) -> tuple[np.ndarray, np.ndarray] 
         )
     if np.shares_memory(out[0], out[1]):
         raise OptionError("`out`'s T and J must not share memory")
-    return out  # type: ignore[return-value]
+    return out
 
 
 def numpy_chain(

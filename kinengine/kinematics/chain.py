@@ -19,6 +19,7 @@ import threading
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from .engine import Kinematics
@@ -130,13 +131,15 @@ def _compose(columns: list, terms: Terms) -> list:
     return out
 
 
-def _shift(p, columns: list, terms: tuple[tuple[int, float], ...]):
+def _shift(
+    p: npt.NDArray[np.float64], columns: list, terms: tuple[tuple[int, float], ...]
+) -> npt.NDArray[np.float64]:
     for m, value in terms:
         p = p + columns[m] * value
     return p
 
 
-def _cross(a, b, out: np.ndarray) -> None:
+def _cross(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64], out: np.ndarray) -> None:
     """out[0:3] = a × b for (3, n) arrays (out rows may be strided views)."""
     for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
         np.subtract(a[j] * b[k], a[k] * b[j], out=out[i])
@@ -212,8 +215,8 @@ def evaluate_chain(
         JA = np.empty((pmap.size, chain.dof, n))
         # row-major entries of C_IF and p, as (n,) views (a column the chain never turns is (3, 1))
         C = [np.broadcast_to(R_f[j][i], (n,)) for i in range(3) for j in range(3)]
-        p = [np.broadcast_to(p_f[i], (n,)) for i in range(3)]
-        for k, distance in enumerate(pmap.fill_columns(p, C, buf, JA)):
+        p_rows = [np.broadcast_to(p_f[i], (n,)) for i in range(3)]
+        for k, distance in enumerate(pmap.fill_columns(p_rows, C, buf, JA)):
             distances[:, k] = distance
         out[...] = JA.transpose(2, 0, 1)
 

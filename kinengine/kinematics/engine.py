@@ -182,7 +182,7 @@ class Kinematics:
     def per_thread(self, key: object, make: Callable[[], T]) -> T:
         """A value made once per thread and key (e.g. views into this thread's Data)."""
         try:
-            return self._tls.values[key]  # type: ignore[no-any-return]
+            return self._tls.values[key]
         except AttributeError:
             self._tls.values = {}
         except KeyError:

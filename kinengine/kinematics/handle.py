@@ -23,6 +23,7 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
+from ..arrays import Reference
 from .engine import REFERENCES, Kinematics, resolve_reference
 
 
@@ -48,7 +49,14 @@ class FrameHandle:
         return f"<FrameHandle {self.name!r}: {self.dof} dof, check_inputs={self.check_inputs}>"
 
 
-def _bind(kin: Kinematics, fid: int, checking: bool):
+PoseFunction = Callable[[np.ndarray], np.ndarray]
+JacobianFunction = Callable[..., np.ndarray]
+KinematicsFunction = Callable[..., tuple[np.ndarray, np.ndarray]]
+
+
+def _bind(
+    kin: Kinematics, fid: int, checking: bool
+) -> tuple[PoseFunction, JacobianFunction, KinematicsFunction]:
     """The three closures: ``pose(q)``, ``jacobian(q, reference="local_world_aligned")``,
     ``kinematics(q, reference="local_world_aligned")``."""
     model, coords, dof = kin.model, kin.coordinates, kin.dof
@@ -58,7 +66,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
     references = dict(REFERENCES)
     local = threading.local()
 
-    def state():
+    def state() -> object:
         """This thread's (Data, q_pin buffer): the engine's Data of this thread, a buffer of our own."""
         local.data, local.buffer = kin.data(), np.zeros(coords.nq)
         return local.data
@@ -66,10 +74,10 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
     mimic = kin.mimic
     q_pin = mimic.q_pin_for(model, fid)  # only the mimic joints that move this frame are written
 
-    def pinocchio_q(q):
+    def pinocchio_q(q: np.ndarray) -> np.ndarray:
         return q_pin(q, local.buffer)
 
-    def resolve(reference):
+    def resolve(reference: Reference) -> pin.ReferenceFrame:
         try:
             return references[reference]
         except (KeyError, TypeError):
@@ -77,7 +85,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
 
     if identity:
 
-        def pose(q):
+        def pose(q: np.ndarray) -> np.ndarray:
             if checking:
                 q = check(q, allow_batch=False)
             try:
@@ -88,7 +96,7 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             return place(model, data, fid).homogeneous
     else:
 
-        def pose(q):
+        def pose(q: np.ndarray) -> np.ndarray:
             if checking:
                 q = check(q, allow_batch=False)
             try:
@@ -100,21 +108,23 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
 
     if dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
 
-        def jacobian(q, reference="local_world_aligned"):
+        def zero_jacobian(q: np.ndarray, reference: Reference = "local_world_aligned") -> np.ndarray:
             resolve(reference)
             if checking:
                 check(q, allow_batch=False)
             return np.zeros((6, 0))
 
-        def kinematics(q, reference="local_world_aligned"):
+        def zero_kinematics(
+            q: np.ndarray, reference: Reference = "local_world_aligned"
+        ) -> tuple[np.ndarray, np.ndarray]:
             resolve(reference)
             return pose(q), np.zeros((6, 0))
 
-        return pose, jacobian, kinematics
+        return pose, zero_jacobian, zero_kinematics
 
     if identity and dof > 1:
 
-        def jacobian(q, reference="local_world_aligned"):
+        def plain_jacobian(q: np.ndarray, reference: Reference = "local_world_aligned") -> np.ndarray:
             try:
                 ref = references[reference]
             except (KeyError, TypeError):
@@ -127,7 +137,9 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
                 data = state()
             return frame_jacobian(model, data, q, fid, ref)
 
-        def kinematics(q, reference="local_world_aligned"):
+        def plain_kinematics(
+            q: np.ndarray, reference: Reference = "local_world_aligned"
+        ) -> tuple[np.ndarray, np.ndarray]:
             try:
                 ref = references[reference]
             except (KeyError, TypeError):
@@ -144,12 +156,12 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             J = frame_jacobian(model, data, q, fid, ref)
             return place(model, data, fid).homogeneous, J
 
-        return pose, jacobian, kinematics
+        return pose, plain_jacobian, plain_kinematics
 
     # J_pin · M (only the mimic joints that move this frame); (6,) → (6, 1)
     fold = mimic.folder(model, fid) if not identity else (lambda J: J.reshape(6, -1))
 
-    def jacobian(q, reference="local_world_aligned"):
+    def jacobian(q: np.ndarray, reference: Reference = "local_world_aligned") -> np.ndarray:
         ref = resolve(reference)
         if checking:
             q = check(q, allow_batch=False)
@@ -159,7 +171,9 @@ def _bind(kin: Kinematics, fid: int, checking: bool):
             data = state()
         return fold(frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, ref))
 
-    def kinematics(q, reference="local_world_aligned"):
+    def kinematics(
+        q: np.ndarray, reference: Reference = "local_world_aligned"
+    ) -> tuple[np.ndarray, np.ndarray]:
         ref = resolve(reference)
         if checking:
             q = check(q, allow_batch=False)

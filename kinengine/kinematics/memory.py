@@ -48,8 +48,8 @@ def memory_left() -> int | None:
     """[bytes] what this process may still allocate: the least of RLIMIT_AS minus the address space in
     use, the cgroup's memory.max minus memory.current, and MemAvailable; None if none is known."""
     bounds = []
-    soft, _ = resource.getrlimit(resource.RLIMIT_AS) if resource else (None, None)
-    if resource and soft != resource.RLIM_INFINITY:
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0] if resource else None
+    if soft is not None and soft != resource.RLIM_INFINITY:
         used = _address_space()
         if used is not None:
             bounds.append(soft - used)
