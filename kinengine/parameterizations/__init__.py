@@ -1,4 +1,7 @@
-"""End-effector parameterizations χ_e = (χ_P, χ_R) and their rate maps E (seed 2.8.2, 2.8.6).
+"""End-effector parameterizations χ_e = (χ_P, χ_R) and their rate maps E.
+
+Robot Dynamics lecture notes, ETH Zurich, section 2.8 (Kinematics of Systems of Bodies): task-space
+coordinates (2.8.2) and the relation between geometric and analytic Jacobians (2.8.6).
 
 χ̇_P = E_P(χ_P)·v and χ̇_R = E_R(χ_R)·ω, v and ω in the inertial (root) frame; J_A = blockdiag(E_P, E_R)·J_e0.
 

@@ -1,7 +1,8 @@
 """Base classes of the end-effector parameterizations χ_P(p) and χ_R(C_IE) and of their rate maps E.
 
-χ̇_P = E_P(χ_P)·v and χ̇_R = E_R(χ_R)·ω (seed eq. 2.180), with v the velocity of the frame origin [m/s]
-and ω the angular velocity [rad/s], both expressed in the inertial (root) frame I; J_A = E·J_e0.
+χ̇_P = E_P(χ_P)·v and χ̇_R = E_R(χ_R)·ω (Robot Dynamics lecture notes, ETH Zurich, section 2.8, eq. 2.180),
+with v the velocity of the frame origin [m/s] and ω the angular velocity [rad/s], both expressed in the
+inertial (root) frame I; J_A = E·J_e0.
 
 Every method takes one sample (χ of shape (m,), p of shape (3,), C of shape (3, 3)) or a batch with any
 leading axes ((..., m), (..., 3), (..., 3, 3)). Each family writes its formulas once, as functions of
