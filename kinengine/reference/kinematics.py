@@ -1,10 +1,10 @@
-"""Forward kinematics and geometric Jacobians in plain numpy: the course text made executable.
+"""Forward kinematics and geometric Jacobians in plain numpy: the lecture notes' formulas made executable.
 
 An independent reference for the Pinocchio-based engine: it shares nothing with
 it but the URDF text. Frames: I is the root link frame (T_I0 = identity, the
 robot is fixed-base). Every function is vectorized over a batch of N
-configurations. Equation numbers refer to section 2.8 of the Robot Dynamics
-lecture notes (ETH Zürich).
+configurations. Equation numbers refer to the Robot Dynamics lecture notes, ETH
+Zurich, section 2.8 (Kinematics of Systems of Bodies).
 """
 
 from __future__ import annotations
