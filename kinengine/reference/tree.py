@@ -175,7 +175,7 @@ class KinematicTree:
         return cls(robot.name, roots[0], tuple(ordered), {j.child: i for i, j in enumerate(ordered)})
 
     def chain(self, link: str) -> list[TreeJoint]:
-        """The joints from the root down to ``link``, root first (the factors of T_IF = T_I0 · Π T_{k-1,k})."""
+        """The joints from the root down to ``link``, root first (the factors of T_IF = Π T_{k-1,k})."""
         chain = []
         while link != self.root:
             joint = self.joints[self.parent_joint[link]]
