@@ -25,17 +25,24 @@ The same algorithm runs vectorized over a batch of targets (N, 4, 4): :mod:`kine
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+import numpy.typing as npt
 
 from ..errors import OptionError
 from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, first_seeds
 from .ik_solver import IKResult, solve_one
 from .ik_target import RandomSource, batch_targets, checked_problem, single_target
 
+if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
+    from ..robot import Robot
+    from .ik_batch import IKBatchResult
+
 
 def inverse_kinematics(
-    robot,
-    target: object,
+    robot: Robot,
+    target: npt.ArrayLike,
     frame: str | None = None,
     q0: object = None,
     *,
@@ -51,7 +58,7 @@ def inverse_kinematics(
     nullspace_target: object = None,
     nullspace_gain: float = 0.1,
     min_damping: float = 1e-6,
-):
+) -> IKResult | IKBatchResult:
     """q (within the limits) that puts ``frame`` (default: end effector) at ``target`` in I.
 
     ``target``: T_IF (4, 4), a batch (N, 4, 4) (then an :class:`~kinengine.control.ik_batch.IKBatchResult`
@@ -93,12 +100,12 @@ def inverse_kinematics(
     if batch:
         from .ik_batch import solve_batch
 
-        p_d, C_d = batch_targets(target)
-        if start is not None and start.ndim == 2 and len(start) != len(p_d):
+        P_d, Cs_d = batch_targets(target)  # (N, 3), (N, 3, 3)
+        if start is not None and start.ndim == 2 and len(start) != len(P_d):
             raise OptionError(
-                f"`q0` must be (dof,) or one row per target ({len(p_d)}), got {len(start)} rows"
+                f"`q0` must be (dof,) or one row per target ({len(P_d)}), got {len(start)} rows"
             )
-        return solve_batch(robot, problem, p_d, C_d, start, generator)
+        return solve_batch(robot, problem, P_d, Cs_d, start, generator)
     p_d, C_d = single_target(target, position, rotation)
     seeds = first_seeds(
         robot, problem, p_d[None] if p_d is not None else None, C_d[None] if C_d is not None else None, start

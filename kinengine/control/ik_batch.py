@@ -15,7 +15,9 @@ and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``li
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -23,7 +25,10 @@ import pinocchio as pin
 from ..kinematics import batch
 from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
 from .ik_solver import GIVE_UP, NULLSPACE_FADE, PROBE_ITERATIONS, IKResult, LimitWeights, solve_one
-from .ik_target import Problem
+from .ik_target import Problem, RandomSource
+
+if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
+    from ..robot import Robot
 
 TAIL = 16
 """When no more than this many targets are left running, each finishes on the single-target solver (one
@@ -56,7 +61,7 @@ class IKBatchResult:
             int(self.restarts[i]),
         )
 
-    def __iter__(self):
+    def __iter__(self) -> Iterator[IKResult]:
         return (self[i] for i in range(len(self)))
 
     def __str__(self) -> str:
@@ -81,7 +86,14 @@ def log3(R: np.ndarray) -> np.ndarray:
     return out
 
 
-def solve_batch(robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0, generator) -> IKBatchResult:
+def solve_batch(
+    robot: Robot,
+    problem: Problem,
+    p_d: np.ndarray,
+    C_d: np.ndarray,
+    q0: np.ndarray | None,
+    generator: RandomSource,
+) -> IKBatchResult:
     """Solve every target (p_d (N, 3), C_d (N, 3, 3)) vectorized; see the module doc."""
     kin, joints, dof = robot.engine, robot.engine.coordinates, robot.dof
     n = len(p_d)
@@ -100,6 +112,7 @@ def solve_batch(robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0, g
     while len(active) > TAIL or (len(active) and len(active) == n):
         qa = np.ascontiguousarray(q[active])
         T, J = batch.evaluate(kin, qa, problem.fid, pin.LOCAL_WORLD_ALIGNED)
+        assert T is not None and J is not None  # both asked for
         Cd = C_d[active]
         e = np.empty((len(active), 6))
         e[:, :3] = p_d[active] - T[:, :3, 3]
@@ -181,7 +194,7 @@ def solve_batch(robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0, g
 
 
 def _step(
-    J: np.ndarray, w, err: np.ndarray, score: np.ndarray, q: np.ndarray, problem: Problem
+    J: np.ndarray, w: np.ndarray | None, err: np.ndarray, score: np.ndarray, q: np.ndarray, problem: Problem
 ) -> np.ndarray:
     """q + Δq for every row: weighted damped least squares with λ² = ½|e|² + λ_min² (and the nullspace
     pull)."""

@@ -7,10 +7,15 @@ from __future__ import annotations
 import math
 import threading
 from collections import OrderedDict
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .ik_target import Problem
+
+if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
+    from ..robot import Robot
 
 NEAREST_SEEDS = 10
 SEED_TABLE_SIZE = 4096
@@ -23,14 +28,18 @@ SEED_ROTATION_WEIGHT = 0.2
 """[m/rad]: pose distance |Δp| + 0.2·angle used to rank attempts and pick the stored seeds nearest a
 target."""
 
+SeedTable = tuple[np.ndarray, Any]
+"""(configurations (K, dof), scipy cKDTree over their embedded frame poses)."""
+
 
 class SeedTables:
     """A small LRU of seed tables (bounded: SEED_TABLES tables of at most SEED_TABLE_BYTES each)."""
 
     def __init__(self) -> None:
-        self.lock, self.tables = threading.Lock(), OrderedDict()
+        self.lock = threading.Lock()
+        self.tables: OrderedDict[tuple[str, bool, bool], SeedTable] = OrderedDict()
 
-    def get(self, key, make):
+    def get(self, key: tuple[str, bool, bool], make: Callable[[], SeedTable]) -> SeedTable:
         with self.lock:
             if key in self.tables:
                 self.tables.move_to_end(key)
@@ -43,7 +52,7 @@ class SeedTables:
         return table
 
 
-def _seed_table(robot, frame: str, use_p: bool, use_R: bool):
+def _seed_table(robot: Robot, frame: str, use_p: bool, use_R: bool) -> SeedTable:
     """(configurations (K, dof), a KD-tree over [p, w·vec(C)/√2] of ``frame`` at them)."""
     from scipy.spatial import cKDTree
 
@@ -55,7 +64,7 @@ def _seed_table(robot, frame: str, use_p: bool, use_R: bool):
     )
 
 
-def _embed(p, C, n: int) -> np.ndarray:
+def _embed(p: np.ndarray | None, C: np.ndarray | None, n: int) -> np.ndarray:
     """Points whose squared distance is |Δp|² + w²‖ΔC‖²/2 = |Δp|² + w²·2(1 − cos θ) ≈ |Δp|² + (wθ)²."""
     parts = [p] if p is not None else []
     if C is not None:
@@ -63,10 +72,14 @@ def _embed(p, C, n: int) -> np.ndarray:
     return np.hstack(parts) if parts else np.zeros((n, 1))
 
 
-def first_seeds(robot, problem: Problem, p_d, C_d, q0) -> np.ndarray:
+def first_seeds(
+    robot: Robot, problem: Problem, p_d: np.ndarray | None, C_d: np.ndarray | None, q0: np.ndarray | None
+) -> np.ndarray:
     """The seeded attempts' starts (N, S, dof) for targets p_d (N, 3) | None, C_d (N, 3, 3) | None."""
     joints = robot.engine.coordinates
-    n = len(p_d) if p_d is not None else len(C_d)
+    given = p_d if p_d is not None else C_d
+    assert given is not None  # a target fixes a position, a rotation or both
+    n = len(given)
     if q0 is not None:
         return np.broadcast_to(np.clip(q0, joints.lower, joints.upper), (n, robot.dof))[:, None, :].copy()
     bounded = np.isfinite(joints.lower) & np.isfinite(joints.upper)

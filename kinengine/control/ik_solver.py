@@ -6,12 +6,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
 from .ik_seeds import SEED_ROTATION_WEIGHT
-from .ik_target import Problem
+from .ik_target import Problem, RandomSource
+
+if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
+    from ..robot import Robot
 
 PROBE_ITERATIONS = 10
 GIVE_UP = 1e-2
@@ -79,7 +83,15 @@ class LimitWeights:
         return np.array(inverse), grad
 
 
-def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, wrap: bool = True) -> IKResult:
+def solve_one(
+    robot: Robot,
+    problem: Problem,
+    p_d: np.ndarray | None,
+    C_d: np.ndarray | None,
+    seeds: np.ndarray,
+    generator: RandomSource,
+    wrap: bool = True,
+) -> IKResult:
     """Attempts from each seed, then ``restarts`` random ones; the first converged (or the best) wins."""
     kin = robot.engine
     joints = kin.coordinates
@@ -120,6 +132,7 @@ def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, w
                 ep, er = hypot(e0, e1, e2), hypot(e3, e4, e5)
                 err = e if full else e[part]
             else:
+                assert C_d is not None  # rows= is for pose targets only
                 e_d = np.concatenate((C_d.T @ e[:3], C_d.T @ e[3:]))[rows]
                 ep = math.sqrt(float(e_d[position_rows] @ e_d[position_rows]))
                 er = math.sqrt(float(e_d[~position_rows] @ e_d[~position_rows]))
@@ -136,6 +149,7 @@ def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, w
             if not identity or J.ndim == 1:
                 J = fold(J.reshape(6, -1))
             if rows is not None:
+                assert C_d is not None
                 J = np.vstack((C_d.T @ J[:3], C_d.T @ J[3:]))[rows]
                 if sqrt_w is not None:
                     J = J * sqrt_w[:, None]
@@ -160,6 +174,7 @@ def solve_one(robot, problem: Problem, p_d, C_d, seeds: np.ndarray, generator, w
             best = (q, ep, er, score, attempt)
         if done:
             break
+    assert best is not None  # attempts >= 1: the seeds hold at least one start
     q, ep, er, _, attempt = best
     if wrap:
         q[joints.continuous] = np.remainder(q[joints.continuous] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)

@@ -6,11 +6,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import OptionError, ParameterizationError
 from ..parameterizations import get_position, get_rotation
+
+if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
+    from ..robot import Robot
 
 MAX_TARGET_DISTANCE = 1e9
 """[m] a target position farther than this from the root is refused (its squared error would overflow)."""
@@ -52,19 +56,20 @@ def _count(name: str, value: object, high: int) -> int:
 
 
 def checked_problem(
-    robot,
-    frame,
-    rows,
-    weights,
-    tol_position,
-    tol_rotation,
-    max_iterations,
-    restarts,
-    nullspace_target,
-    nullspace_gain,
-    min_damping,
+    robot: Robot,
+    frame: str | None,
+    rows: object,
+    weights: object,
+    tol_position: object,
+    tol_rotation: object,
+    max_iterations: object,
+    restarts: object,
+    nullspace_target: object,
+    nullspace_gain: object,
+    min_damping: object,
     has_q0: bool,
 ) -> Problem:
+    """The options of :func:`kinengine.control.ik.inverse_kinematics`, each checked (OptionError)."""
     frame = robot.end_effector if frame is None else frame
     fid = robot.frame_id(frame)
     tol_p, tol_r = _number("tol_position", tol_position, 0.0), _number("tol_rotation", tol_rotation, 0.0)
@@ -133,11 +138,12 @@ class RandomSource:
         )
         if not ok:
             raise OptionError(f"`rng` must be None, a seed >= 0 or a numpy Generator, got {rng!r}")
-        self.rng, self.generator = rng, None
+        self.rng = rng
+        self.generator: np.random.Generator | None = None
 
-    def configurations(self, robot, size: int | None = None) -> np.ndarray:
+    def configurations(self, robot: Robot, size: int | None = None) -> np.ndarray:
         if self.generator is None:
-            self.generator = np.random.default_rng(self.rng)  # type: ignore[arg-type]
+            self.generator = np.random.default_rng(self.rng)  # type: ignore[arg-type]  # checked in __init__
         return robot.random_configuration(self.generator, size=size)
 
 
@@ -161,7 +167,9 @@ def _position_ok(p: np.ndarray) -> None:
         )
 
 
-def single_target(target: object, position: str | None, rotation: str | None):
+def single_target(
+    target: object, position: str | None, rotation: str | None
+) -> tuple[np.ndarray | None, np.ndarray | None]:
     """(p_d (3,) or None, C_d (3, 3) or None) from a pose (4, 4) or parameters χ."""
     try:
         value = np.asarray(target, dtype=float)
@@ -204,7 +212,7 @@ def single_target(target: object, position: str | None, rotation: str | None):
         if not np.isfinite(p_d).all():
             raise ParameterizationError(f"`target` {value.tolist()} gives no finite position for {position}")
         _position_ok(p_d)
-    if C_d is not None and not (np.isfinite(C_d).all() and _rotation_ok(C_d)):
+    if R is not None and C_d is not None and not (np.isfinite(C_d).all() and _rotation_ok(C_d)):
         raise ParameterizationError(
             f"`target`'s {rotation} parameters {value[m - R.size :].tolist()} describe no "
             "rotation (e.g. a zero quaternion or matrix); give a valid one"
