@@ -16,6 +16,7 @@ import threading
 import warnings
 from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import TypeVar
 
 from .errors import OptionError, URDFError
 from .model import available_robots, catalog_entry
@@ -26,6 +27,9 @@ from .urdf.source import decode_xml, read_bytes_once
 from .urdf.xacro import expand_xacro
 
 _WARNINGS_LOCK = threading.Lock()  # catch_warnings swaps process-wide state: two loads must not interleave it
+
+
+_T = TypeVar("_T")
 
 
 def load(
@@ -73,7 +77,11 @@ def load(
     ):
         catalog_entry(text_target)  # raises: unknown robot, listing the names
     if is_xacro:
-        text = expand_xacro(path, args=xacro_args, packages=packages)
+        # values as text, exactly as expand_xacro itself turns them (xacro:arg values are strings)
+        as_text = (
+            {k: str(v) for k, v in xacro_args.items()} if isinstance(xacro_args, Mapping) else xacro_args
+        )
+        text = expand_xacro(path, args=as_text, packages=packages)
         description, _ = _warn_once(lambda: (parse_urdf(text, source=text_target, limits=limits), None))
     else:
         description, text = _warn_once(lambda: _read(path, limits))
@@ -121,7 +129,7 @@ def _packages(packages: object, source: str) -> dict[str, str]:
     return {k: os.fspath(v) for k, v in packages.items()}
 
 
-def _warn_once(read: Callable[[], tuple[RobotDescription, object]]) -> tuple[RobotDescription, object]:
+def _warn_once(read: Callable[[], tuple[RobotDescription, _T]]) -> tuple[RobotDescription, _T]:
     """``read()`` with the parser's warnings (one per corrected element) held back, then one warning for the
     load: the floating-base note and a summary of ``description.warnings``. Other warnings pass through."""
     with _WARNINGS_LOCK, warnings.catch_warnings(record=True) as caught:
