@@ -17,6 +17,7 @@ import os
 import re
 import stat
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import NoReturn
 
@@ -69,7 +70,7 @@ def positive_int(text: str) -> int:
     return whole_number(text, 1, 2**63 - 1)
 
 
-def bounded_int(low: int, high: int):
+def bounded_int(low: int, high: int) -> Callable[[str], int]:
     """An argparse type for a whole number in [low, high]."""
 
     def parse(text: str) -> int:

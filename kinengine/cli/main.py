@@ -17,6 +17,7 @@ import re
 import sys
 import warnings
 from collections.abc import Sequence
+from typing import TextIO
 
 from .. import KinematicsError, __version__
 from . import bench, catalog, info, pose, show, verify, view
@@ -48,7 +49,14 @@ def join_negative_values(argv: Sequence[str]) -> list[str]:
     return out
 
 
-def _one_line_warning(message, category, filename, lineno, file=None, line=None) -> None:
+def _one_line_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: TextIO | None = None,
+    line: str | None = None,
+) -> None:
     print(f"kinengine: warning: {one_line(message)}", file=sys.stderr)
 
 

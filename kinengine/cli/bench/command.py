@@ -116,7 +116,7 @@ def format_table(report: dict) -> str:
             f"{row['robot']:<12} {case_label(row):<42} {row['n']:>7} {ours} {floor_us:>10} "
             f"{ratio}  {note}".rstrip()
         )
-    codes = {}
+    codes: dict[str, list[str]] = {}
     for row in report["rows"]:
         if row.get("floor") and row["pinocchio"]["status"] != "none":
             codes.setdefault(row["floor"], []).append(case_label(row))

@@ -21,15 +21,17 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 from tqdm import tqdm
 
 from ...loading import load
 from ...parameterizations import ROTATION_PARAMETERIZATIONS
+from ...robot import Robot
 from .cases import Case, latency_cases, throughput_cases
 from .ik_cases import ik_cases
-from .peers import RUNTIMES, Skip, load_peers
+from .peers import RUNTIMES, Peer, Skip, load_peers
 
 DEFAULT_ROBOTS = ("abb_irb120",)
 
@@ -91,7 +93,7 @@ def run_case(case: Case, settings: Settings, peers: list | None = None, peer_ato
     """Time one case (kinengine, its Pinocchio floor, then each peer) into one JSON row."""
     row: dict = {"group": case.group, "case": case.name, "n": case.n, "note": case.note, "floor": case.floor}
     result = None if case.kinengine is None else case.kinengine()
-    floor = {"status": "ok" if case.pinocchio is not None else "none"}
+    floor: dict[str, object] = {"status": "ok" if case.pinocchio is not None else "none"}
     if case.compare and result is not None and case.pinocchio is not None:
         difference = max_relative_difference(result, case.pinocchio())
         floor["difference"] = difference if math.isfinite(difference) else None
@@ -112,11 +114,14 @@ def run_case(case: Case, settings: Settings, peers: list | None = None, peer_ato
     return row
 
 
-def ik_success(case: Case, Q: object, robot=None) -> float:
+def ik_success(case: Case, Q: object, robot: Robot | None = None) -> float:
     """Fraction of ``case.targets`` that the solutions Q (n, dof) reach within 1e-6 m and 1e-6 rad."""
-    robot = robot or case.robot
-    F = robot.frame_pose(np.asarray(Q, dtype=float), case.frame)
+    if robot is None:
+        robot = cast(Robot, case.robot)  # IK rows carry their robot
+    Q = np.asarray(Q, dtype=float)
+    F = robot.frame_pose(Q, case.frame)
     T = case.targets
+    assert T is not None  # IK rows carry their targets
     dp = np.linalg.norm(F[:, :3, 3] - T[:, :3, 3], axis=1)
     cos = (np.einsum("nij,nij->n", F[:, :3, :3], T[:, :3, :3]) - 1.0) / 2.0
     angle = np.arccos(np.clip(cos, -1.0, 1.0))
@@ -128,7 +133,7 @@ def _rate(timing: dict[str, float], n: int) -> dict[str, float]:
     return {**timing, "per_second": n / timing["min_us"] * 1e6}
 
 
-def _run_peer(peer, case: Case, expected: object, settings: Settings, atol: float) -> dict:
+def _run_peer(peer: Peer, case: Case, expected: object, settings: Settings, atol: float) -> dict:
     """Check the peer's answer against kinengine's, then time it (only if they agree to ``atol``)."""
     try:
         prepared = peer.prepare(case)
@@ -159,7 +164,7 @@ def _run_peer(peer, case: Case, expected: object, settings: Settings, atol: floa
 
 def environment(peers: list | None = None) -> dict:
     """Library versions, CPU model, core count and a UTC timestamp."""
-    versions = {}
+    versions: dict[str, str | None] = {}
     for dist in ("kinengine", "pin", "numpy", "scipy"):
         try:
             versions[dist] = importlib.metadata.version(dist)
@@ -200,7 +205,7 @@ def cpu_model() -> str:
 
 
 def run(
-    robots: list[str],
+    robots: list[str | Robot],
     settings: Settings,
     peers: bool = False,
     peer_atol: float = 1e-9,
