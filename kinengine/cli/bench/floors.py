@@ -11,6 +11,8 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
+from ...robot import Robot
+
 REFERENCES = ("local_world_aligned", "local", "world")
 PIN_REFERENCES = {"local_world_aligned": pin.LOCAL_WORLD_ALIGNED, "local": pin.LOCAL, "world": pin.WORLD}
 PIN_NAMES = {"local_world_aligned": "pin.LOCAL_WORLD_ALIGNED", "local": "pin.LOCAL", "world": "pin.WORLD"}
@@ -35,7 +37,7 @@ FLOOR_GEOMETRIC = (
 FLOOR_LOOP = "for i, q in enumerate(Q): out[i] = <the single-q floor>"
 
 
-def floors(robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], object]]:
+def floors(robot: Robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], object]]:
     """The inline raw-Pinocchio floors at one q, as closures over local names (see the module doc)."""
     model = robot.pinocchio_model()
     data = model.createData()
@@ -51,32 +53,32 @@ def floors(robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], object]]:
     )
     fold = robot.engine.coordinates.fold  # the identity without mimic joints
 
-    def pose():
+    def pose() -> np.ndarray:
         fk(model, data, qp)
         return place(model, data, fid).homogeneous
 
-    def jacobian(ref):
-        def floor():
+    def jacobian(ref: pin.ReferenceFrame) -> Callable[[], np.ndarray]:
+        def floor() -> np.ndarray:
             return fold(frame_jacobian(model, data, qp, fid, ref))
 
         return floor
 
-    def kinematics():
+    def kinematics() -> tuple[np.ndarray, np.ndarray]:
         J = fold(frame_jacobian(model, data, qp, fid, LWA))
         return place(model, data, fid).homogeneous, J
 
-    def zyx():
+    def zyx() -> np.ndarray:
         J = fold(frame_jacobian(model, data, qp, fid, LWA))
         J[3:] = rpy_inverse(matrix_to_rpy(oMf[fid].rotation), LWA)[::-1] @ J[3:]
         return J
 
-    def rotation_vector():
+    def rotation_vector() -> np.ndarray:
         J = fold(frame_jacobian(model, data, qp, fid, LWA))
         R = oMf[fid].rotation
         J[3:] = jlog3(R) @ (R.T @ J[3:])
         return J
 
-    def quat():
+    def quat() -> np.ndarray:
         J = fold(frame_jacobian(model, data, qp, fid, LWA))
         Q = quaternion(oMf[fid].rotation)
         w, x, y, z = Q.w, Q.x, Q.y, Q.z
@@ -89,7 +91,7 @@ def floors(robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], object]]:
         out[3:] = E @ J[3:]
         return out
 
-    def geometric():
+    def geometric() -> np.ndarray:
         return fold(frame_jacobian(model, data, qp, fid, LWA))
 
     return {
@@ -103,7 +105,7 @@ def floors(robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], object]]:
     }
 
 
-def analytic_loop(robot, frame: str, Q: np.ndarray, rot: str) -> Callable[[], np.ndarray]:
+def analytic_loop(robot: Robot, frame: str, Q: np.ndarray, rot: str) -> Callable[[], np.ndarray]:
     """The single-q analytic floor in a loop over Q (its closure reads the configuration from a cell)."""
     model = robot.pinocchio_model()
     data = model.createData()
@@ -114,7 +116,7 @@ def analytic_loop(robot, frame: str, Q: np.ndarray, rot: str) -> Callable[[], np
     rpy_inverse, matrix_to_rpy = pin.rpy.computeRpyJacobianInverse, pin.rpy.matrixToRpy
     rows = 7 if rot == "quaternion" else 6
 
-    def loop():
+    def loop() -> np.ndarray:
         out = np.empty((len(QP), rows, robot.dof))
         for i, qp in enumerate(QP):
             J = fold(frame_jacobian(model, data, qp, fid, LWA))

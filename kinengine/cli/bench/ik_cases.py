@@ -8,12 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ...robot import Robot
 from .row import Case
 
 IK_TARGETS = 8
 
 
-def ik_case(robot, frame: str) -> Case:
+def ik_case(robot: Robot, frame: str) -> Case:
     """IK_TARGETS solves per call, each from a start 0.2 rad (or m) away from a reachable target."""
     rng = np.random.default_rng(2)
     solutions = robot.random_configuration(rng, size=IK_TARGETS)
@@ -42,7 +43,7 @@ def ik_case(robot, frame: str) -> Case:
     pin_targets = [pin.SE3(T) for T in targets]
     pin_starts = [robot.pinocchio_configuration(s) for s in starts]
 
-    def pinocchio():
+    def pinocchio() -> list[np.ndarray]:
         return [clik(T, s) for T, s in zip(pin_targets, pin_starts, strict=True)]
 
     reached = sum(
@@ -60,7 +61,7 @@ def ik_case(robot, frame: str) -> Case:
     )
 
 
-def ik_cases(robot, frame: str, single: int, batch: int, seed: int = 2024) -> list[Case]:
+def ik_cases(robot: Robot, frame: str, single: int, batch: int, seed: int = 2024) -> list[Case]:
     """Random reachable targets, no start given: ``single`` solves one by one, and ``batch`` solved as
     one (N, 4, 4) batch. No Pinocchio floor (Pinocchio has no IK solver); peers: Robotics Toolbox."""
     rng = np.random.default_rng(seed)
@@ -69,11 +70,11 @@ def ik_cases(robot, frame: str, single: int, batch: int, seed: int = 2024) -> li
         targets = robot.frame_pose(robot.random_configuration(rng, size=n), frame)
         if vectorized:
 
-            def solve(targets=targets):
+            def solve(targets: np.ndarray = targets) -> np.ndarray:
                 return robot.inverse_kinematics(targets, frame, rng=0).q
         else:
 
-            def solve(targets=targets):
+            def solve(targets: np.ndarray = targets) -> np.ndarray:
                 return np.array([robot.inverse_kinematics(T, frame, rng=i).q for i, T in enumerate(targets)])
 
         cases.append(
