@@ -12,10 +12,13 @@ For robots with mimic joints the floor is handed Pinocchio's configuration q_pin
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pinocchio as pin
 
 from ...errors import RepresentationSingularityError
+from ...robot import Robot
 from .floors import (
     FLOOR_ANALYTIC,
     FLOOR_GEOMETRIC,
@@ -32,7 +35,7 @@ from .ik_cases import ik_case
 from .row import Case
 
 
-def regular_configuration(robot, frame: str, rotations: list[str], seed: int = 0) -> np.ndarray:
+def regular_configuration(robot: Robot, frame: str, rotations: list[str], seed: int = 0) -> np.ndarray:
     """A seeded q at which every rotation parameterization is at least 0.1 from its singular set."""
     rng = np.random.default_rng(seed)
     for _ in range(200):
@@ -48,7 +51,7 @@ def regular_configuration(robot, frame: str, rotations: list[str], seed: int = 0
     raise RuntimeError(f"no configuration of {robot.name} is regular for every parameterization")
 
 
-def latency_cases(robot, frame: str, rotations: list[str]) -> list[Case]:
+def latency_cases(robot: Robot, frame: str, rotations: list[str]) -> list[Case]:
     """Single-call rows at one configuration regular for every parameterization."""
     q = regular_configuration(robot, frame, rotations)
     floor = floors(robot, frame, q)
@@ -138,7 +141,9 @@ def latency_cases(robot, frame: str, rotations: list[str]) -> list[Case]:
     return cases + [ik_case(robot, frame)]
 
 
-def _task_cases(robot, frame: str, q: np.ndarray, floor: dict) -> list[Case]:
+def _task_cases(
+    robot: Robot, frame: str, q: np.ndarray, floor: dict[str, Callable[[], object]]
+) -> list[Case]:
     qdot = np.random.default_rng(1).uniform(-1.0, 1.0, robot.dof)
     model = robot.pinocchio_model()
     data = model.createData()
@@ -146,7 +151,7 @@ def _task_cases(robot, frame: str, q: np.ndarray, floor: dict) -> list[Case]:
     qp, qdp = robot.pinocchio_configuration(q), robot.engine.coordinates.velocity_to_pinocchio(qdot)
     fold, zyx = robot.engine.coordinates.fold, floor["euler_zyx"]
 
-    def floor_with_velocity():
+    def floor_with_velocity() -> object:
         pin.computeJointJacobiansTimeVariation(model, data, qp, qdp)
         pin.updateFramePlacement(model, data, fid)
         fold(pin.getFrameJacobianTimeVariation(model, data, fid, pin.LOCAL_WORLD_ALIGNED))
@@ -187,7 +192,7 @@ def _task_cases(robot, frame: str, q: np.ndarray, floor: dict) -> list[Case]:
 
 
 def throughput_cases(
-    robot, frame: str, sizes: list[int], seed: int = 3, loop_max: int = 100_000
+    robot: Robot, frame: str, sizes: list[int], seed: int = 3, loop_max: int = 100_000
 ) -> list[Case]:
     """Batched rows for each N: poses, Jacobians, both in one call, and analytic Jacobians; the floor is
     a Python loop of the single-q floor (not timed above ``loop_max``)."""
@@ -207,20 +212,20 @@ def throughput_cases(
         Q = robot.random_configuration(np.random.default_rng(seed), size=n)
         QP = np.array([robot.pinocchio_configuration(q) for q in Q])
 
-        def poses(QP=QP):
+        def poses(QP: np.ndarray = QP) -> np.ndarray:
             out = np.empty((len(QP), 4, 4))
             for i, qp in enumerate(QP):
                 fk(model, data, qp)
                 out[i] = place(model, data, fid).homogeneous
             return out
 
-        def jacobians(QP=QP):
+        def jacobians(QP: np.ndarray = QP) -> np.ndarray:
             out = np.empty((len(QP), 6, dof))
             for i, qp in enumerate(QP):
                 out[i] = fold(frame_jacobian(model, data, qp, fid, LWA))
             return out
 
-        def both(QP=QP):
+        def both(QP: np.ndarray = QP) -> tuple[np.ndarray, np.ndarray]:
             T, J = np.empty((len(QP), 4, 4)), np.empty((len(QP), 6, dof))
             for i, qp in enumerate(QP):
                 J[i] = fold(frame_jacobian(model, data, qp, fid, LWA))
