@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import re
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
 from ..errors import KinematicsError
 from ..presentation.plotting import plot_robot
@@ -24,6 +25,10 @@ from .arguments import (
     parse_vector,
     summary,
 )
+
+if TYPE_CHECKING:  # matplotlib is imported only when a figure is drawn
+    from matplotlib.figure import Figure
+    from mpl_toolkits.mplot3d.axes3d import Axes3D
 
 MAX_DPI = 600
 """The finest --dpi: the 6.4 x 4.8 inch figure is then 3840 x 2880 pixels (~44 MB in memory)."""
@@ -102,16 +107,17 @@ def handle(args: argparse.Namespace) -> int:
     frames = [robot.end_effector] if args.frames is None else args.frames
     output = args.output or Path(re.sub(r"[^\w.-]", "_", robot.name) + ".png")
     ax = plot_robot(robot, args.q, frames=frames, ellipsoid=args.ellipsoid)
+    figure = cast("Figure", ax.figure)  # plot_robot draws on a figure of its own
     if args.view is not None:
-        ax.view_init(*args.view)
+        cast("Axes3D", ax).view_init(*args.view)  # a 3D axes
     try:
-        ax.figure.savefig(output, dpi=args.dpi)
+        figure.savefig(output, dpi=args.dpi)
     except (OSError, ValueError) as exc:
         raise KinematicsError(
             f"cannot write {str(output)!r}: {exc}; choose another -o PATH (e.g. robot.png)"
         ) from None
     finally:
-        plt.close(ax.figure)
+        plt.close(figure)
     print(output)
     return 0
 
