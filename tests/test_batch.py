@@ -7,15 +7,15 @@ and threads.
 
 from __future__ import annotations
 
-from hypothesis import HealthCheck, given, settings
 import numpy as np
 import pytest
+from custom_robots import mixed_chain_urdf
+from hypothesis import HealthCheck, given, settings
+from urdf_strategies import random_urdfs
 
 import kinengine
-from custom_robots import mixed_chain_urdf
 from kinengine.analytic import evaluate as evaluate_module
 from kinengine.kinematics import batch
-from urdf_strategies import random_urdfs
 
 REFERENCES = ("local_world_aligned", "local", "world")
 ROBOTS = ("abb_irb120", "ur5", "panda", "kinova", "baxter")
@@ -87,8 +87,10 @@ def _frames(robot: kinengine.Robot, rng: np.random.Generator) -> list[str]:
 
 
 def _single(robot, Q, frame, reference):
-    return (np.array([robot.frame_pose(q, frame) for q in Q]),
-            np.array([robot.jacobian(q, frame, reference) for q in Q]))
+    return (
+        np.array([robot.frame_pose(q, frame) for q in Q]),
+        np.array([robot.jacobian(q, frame, reference) for q in Q]),
+    )
 
 
 def test_batch_equals_single_calls_for_every_reference(robot, strategy):
@@ -133,8 +135,7 @@ def test_continuous_joint_is_periodic_in_the_batch(strategy):
     robot = _load("kinova")
     Q = robot.random_configuration(2, size=5)
     shifted = Q + np.where(robot.engine.coordinates.continuous, 2 * np.pi, 0.0)
-    np.testing.assert_allclose(robot.frame_pose(shifted), robot.frame_pose(Q),
-                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(robot.frame_pose(shifted), robot.frame_pose(Q), rtol=0, atol=1e-12)
 
 
 def test_single_configuration_and_empty_batch_shapes(strategy):
@@ -148,9 +149,11 @@ def test_single_configuration_and_empty_batch_shapes(strategy):
 
 
 def test_robot_without_coordinates(strategy):
-    robot = kinengine.load_urdf_string('<robot name="fixed"><link name="a"/><link name="b"/><joint name="f" '
-                                       'type="fixed"><parent link="a"/><child link="b"/>'
-                                       '<origin xyz="0.1 0.2 0.3" rpy="0.3 0.2 0.1"/></joint></robot>')
+    robot = kinengine.load_urdf_string(
+        '<robot name="fixed"><link name="a"/><link name="b"/><joint name="f" '
+        'type="fixed"><parent link="a"/><child link="b"/>'
+        '<origin xyz="0.1 0.2 0.3" rpy="0.3 0.2 0.1"/></joint></robot>'
+    )
     assert robot.jacobian(np.zeros((4, 0)), "b", "local").shape == (4, 6, 0)
     T = robot.frame_pose(np.zeros((4, 0)), "b")
     T_ref = robot.frame_pose(np.zeros(0), "b")
@@ -189,9 +192,15 @@ def test_random_trees_match_pinocchio(urdf):
 
 
 # -- Robot's batched calls (routed through kinengine.batch) --------------------------------------------
-ANALYTIC = (("cartesian", "euler_zyz", None), ("cylindrical", "quaternion", None),
-            ("spherical", "rotation_vector", None), ("cartesian", "angle_axis", ("x", "angle", "axis_z")),
-            (None, "rotation_matrix", None), ("cartesian", "euler_zyx", None), ("spherical", None, None))
+ANALYTIC = (
+    ("cartesian", "euler_zyz", None),
+    ("cylindrical", "quaternion", None),
+    ("spherical", "rotation_vector", None),
+    ("cartesian", "angle_axis", ("x", "angle", "axis_z")),
+    (None, "rotation_matrix", None),
+    ("cartesian", "euler_zyx", None),
+    ("spherical", None, None),
+)
 ROUTED = ("abb_irb120", "planar_3dof", "scara", "ur5", "panda", "mixed_chain")
 
 
@@ -211,7 +220,7 @@ def _regular_rows(robot, n: int, seed: int) -> tuple[np.ndarray, list[tuple]]:
     keep = ok.mean(axis=0) > 0.5
     rows = candidates[ok[:, keep].all(axis=1)]
     assert len(rows) >= n
-    return rows[:n], [case for case, k in zip(ANALYTIC, keep) if k]
+    return rows[:n], [case for case, k in zip(ANALYTIC, keep, strict=False) if k]
 
 
 @pytest.fixture(scope="module", params=ROUTED)
@@ -226,11 +235,16 @@ def test_robot_batches_equal_single_calls(routed, strategy, n):
     Q = Q[:n]
     assert len(cases) >= 5
     frame = robot.end_effector
-    np.testing.assert_allclose(robot.frame_pose(Q, frame), [robot.frame_pose(q, frame) for q in Q],
-                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        robot.frame_pose(Q, frame), [robot.frame_pose(q, frame) for q in Q], rtol=0, atol=1e-12
+    )
     for reference in REFERENCES:
-        np.testing.assert_allclose(robot.jacobian(Q, frame, reference),
-                                   [robot.jacobian(q, frame, reference) for q in Q], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            robot.jacobian(Q, frame, reference),
+            [robot.jacobian(q, frame, reference) for q in Q],
+            rtol=0,
+            atol=1e-12,
+        )
     for position, rotation, rows in cases:
         JA = robot.analytic_jacobian(Q, frame, position, rotation, rows=rows)
         expected = [robot.analytic_jacobian(q, frame, position, rotation, rows=rows) for q in Q]
@@ -246,14 +260,22 @@ def test_robot_batches_split_over_chunks_and_threads(monkeypatch, name):
     monkeypatch.setattr(batch, "WORKERS", 3)
     Q, _ = _regular_rows(robot, 151, seed=6)  # 151 rows: 3 workers x 2 chunks of 25-26 rows
     for n in (25, 151):
-        np.testing.assert_allclose(robot.frame_pose(Q[:n]), [robot.frame_pose(q) for q in Q[:n]],
-                                   rtol=0, atol=1e-12)
-        np.testing.assert_allclose(robot.jacobian(Q[:n], reference="local"),
-                                   [robot.jacobian(q, reference="local") for q in Q[:n]], rtol=0, atol=1e-12)
-        for position, rotation, rows in ANALYTIC[:3]:
-            np.testing.assert_allclose(robot.analytic_jacobian(Q[:n], position=position, rotation=rotation),
-                                       [robot.analytic_jacobian(q, position=position, rotation=rotation)
-                                        for q in Q[:n]], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            robot.frame_pose(Q[:n]), [robot.frame_pose(q) for q in Q[:n]], rtol=0, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            robot.jacobian(Q[:n], reference="local"),
+            [robot.jacobian(q, reference="local") for q in Q[:n]],
+            rtol=0,
+            atol=1e-12,
+        )
+        for position, rotation, _rows in ANALYTIC[:3]:
+            np.testing.assert_allclose(
+                robot.analytic_jacobian(Q[:n], position=position, rotation=rotation),
+                [robot.analytic_jacobian(q, position=position, rotation=rotation) for q in Q[:n]],
+                rtol=0,
+                atol=1e-12,
+            )
 
 
 def test_robot_batch_routing_takes_the_fast_path_for_each_size(monkeypatch):
@@ -290,7 +312,7 @@ def test_batched_representation_singularity_names_the_row(strategy, row):
     Q, _ = _regular_rows(robot, 11, seed=7)
     other = 10 if row != 10 else 0
     Q[row] = Q[other] = robot.neutral()  # tool0 pitched by π/2: euler_zyx locks
-    Q[other, 4] = 1.2e-8                 # near, not at, the lock; the first of the two rows is named
+    Q[other, 4] = 1.2e-8  # near, not at, the lock; the first of the two rows is named
     first = min(row, other)
     with pytest.raises(kinengine.RepresentationSingularityError) as single:
         robot.analytic_jacobian(Q[first], rotation="euler_zyx")
@@ -308,15 +330,20 @@ def test_batched_position_singularity_is_checked_before_rotation(strategy):
     robot = kinengine.load("planar_3dof")
     Q = robot.random_configuration(8, size=6)
     Q[3] = 0.0
-    with pytest.raises(kinengine.RepresentationSingularityError, match="row 3 of the batch") as info, \
-            pytest.warns(UserWarning, match="ρ = 0"):
+    with (
+        pytest.raises(kinengine.RepresentationSingularityError, match="row 3 of the batch") as info,
+        pytest.warns(UserWarning, match="ρ = 0"),
+    ):
         robot.analytic_jacobian(Q, position="cylindrical", rotation="euler_zyx")
     assert info.value.parameterization == "cylindrical" and info.value.distance < 1e-12
     for q in (Q[3], Q):  # exactly on it E has no finite value: refused even with threshold 0
-        with pytest.raises(kinengine.RepresentationSingularityError, match="cylindrical"), \
-                pytest.warns(UserWarning, match="ρ = 0"):
-            robot.analytic_jacobian(q, position="cylindrical", rotation="euler_zyx",
-                                    singularity_threshold=0.0)
+        with (
+            pytest.raises(kinengine.RepresentationSingularityError, match="cylindrical"),
+            pytest.warns(UserWarning, match="ρ = 0"),
+        ):
+            robot.analytic_jacobian(
+                q, position="cylindrical", rotation="euler_zyx", singularity_threshold=0.0
+            )
 
 
 @pytest.mark.parametrize("name", ["abb_irb120", "mixed_chain"])
@@ -340,9 +367,13 @@ def test_kinematics_out_and_workers():
     assert T is out[0] and J is out[1]
     T2, J2 = robot.kinematics(Q, workers=3)
     assert np.array_equal(T, T2) and np.array_equal(J, J2)
-    for bad in ((np.empty((9000, 4, 4)),), (np.empty((9000, 4, 4)), np.empty((9000, 6, 5))),
-                (np.empty((9000, 4, 4), dtype=np.float32), np.empty((9000, 6, 6))), [out[0], out[1]],
-                (out[0], out[0])):
+    for bad in (
+        (np.empty((9000, 4, 4)),),
+        (np.empty((9000, 4, 4)), np.empty((9000, 6, 5))),
+        (np.empty((9000, 4, 4), dtype=np.float32), np.empty((9000, 6, 6))),
+        [out[0], out[1]],
+        (out[0], out[0]),
+    ):
         with pytest.raises(kinengine.OptionError):
             robot.kinematics(Q, out=bad)
     for bad in (0, -1, 1.5, True, "2", 10**6):

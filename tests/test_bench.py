@@ -42,16 +42,35 @@ def test_quick_run_has_every_row(quick_run):
     _, report, _ = quick_run
     cases = [(r["group"], r["case"], r["n"]) for r in report["rows"]]
     latency = {c for g, c, _ in cases if g == "latency"}
-    assert {"frame_pose", "jacobian[local_world_aligned]", "jacobian[local]", "jacobian[world]",
-            "task.update(q)", "task.update(q)[euler_zyz]", "task.update(q, qdot)", "kinematics",
-            "frame().pose", "frame().jacobian", "frame().kinematics", "frame(), check_inputs=False.pose",
-            "frame(), check_inputs=False.jacobian", "frame(), check_inputs=False.kinematics",
-            "inverse_kinematics", "inverse_kinematics[random targets]"} <= latency
+    assert {
+        "frame_pose",
+        "jacobian[local_world_aligned]",
+        "jacobian[local]",
+        "jacobian[world]",
+        "task.update(q)",
+        "task.update(q)[euler_zyz]",
+        "task.update(q, qdot)",
+        "kinematics",
+        "frame().pose",
+        "frame().jacobian",
+        "frame().kinematics",
+        "frame(), check_inputs=False.pose",
+        "frame(), check_inputs=False.jacobian",
+        "frame(), check_inputs=False.kinematics",
+        "inverse_kinematics",
+        "inverse_kinematics[random targets]",
+    } <= latency
     assert ("throughput", "inverse_kinematics[random targets]", bench_run.QUICK.ik[1]) in cases
     assert {f"analytic_jacobian[{name}]" for name in ROTATION_PARAMETERIZATIONS} <= latency
     for n in bench_run.QUICK.sizes:
-        for name in ("frame_pose", "jacobian[local_world_aligned]", "kinematics", "kinematics[out=]",
-                     "analytic_jacobian[euler_zyx]", "analytic_jacobian[quaternion]"):
+        for name in (
+            "frame_pose",
+            "jacobian[local_world_aligned]",
+            "kinematics",
+            "kinematics[out=]",
+            "analytic_jacobian[euler_zyx]",
+            "analytic_jacobian[quaternion]",
+        ):
             assert ("throughput", name, n) in cases
     assert len(cases) == len(set(cases))
 
@@ -116,11 +135,19 @@ def _peer_rows(report, name):
 def test_roboticstoolbox_agrees_before_it_is_timed(quick_run):
     _, report, _ = quick_run
     rows = _peer_rows(report, "roboticstoolbox")
-    timed = [key for key, result in rows.items() if result["status"] == "ok" and not key[0].startswith("inverse")]
+    timed = [
+        key for key, result in rows.items() if result["status"] == "ok" and not key[0].startswith("inverse")
+    ]
     # poses and Jacobians (single and batched), and jacob0_analytical for its four representations
-    assert {("frame_pose", 1), ("jacobian[local_world_aligned]", 1), ("frame_pose", 1000),
-            ("analytic_jacobian[euler_zyz]", 1), ("analytic_jacobian[euler_zyx]", 1),
-            ("analytic_jacobian[euler_xyz]", 1), ("analytic_jacobian[rotation_vector]", 1)} <= set(timed)
+    assert {
+        ("frame_pose", 1),
+        ("jacobian[local_world_aligned]", 1),
+        ("frame_pose", 1000),
+        ("analytic_jacobian[euler_zyz]", 1),
+        ("analytic_jacobian[euler_zyx]", 1),
+        ("analytic_jacobian[euler_xyz]", 1),
+        ("analytic_jacobian[rotation_vector]", 1),
+    } <= set(timed)
     for key in timed:
         assert rows[key]["difference"] <= 1e-9 and rows[key]["min_us"] > 0, key
     assert rows[("analytic_jacobian[quaternion]", 1)]["status"] == "unsupported"
@@ -143,9 +170,15 @@ def test_pytorch_kinematics_float32_origins_are_reported_not_timed(quick_run):
 def test_mujoco_and_drake_agree_before_they_are_timed(quick_run, name):
     _, report, _ = quick_run
     rows = _peer_rows(report, name)
-    for key in (("frame_pose", 1), ("jacobian[local_world_aligned]", 1), ("frame_pose", 100),
-                ("jacobian[local_world_aligned]", 1000)):
-        assert rows[key]["status"] == "ok" and rows[key]["difference"] <= 1e-9 and rows[key]["min_us"] > 0, key
+    for key in (
+        ("frame_pose", 1),
+        ("jacobian[local_world_aligned]", 1),
+        ("frame_pose", 100),
+        ("jacobian[local_world_aligned]", 1000),
+    ):
+        assert rows[key]["status"] == "ok" and rows[key]["difference"] <= 1e-9 and rows[key]["min_us"] > 0, (
+            key
+        )
     assert report["versions"][name]
 
 

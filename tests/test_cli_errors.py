@@ -4,9 +4,9 @@ status 2, nothing on stdout; outputs are checked before the work; names cannot b
 from __future__ import annotations
 
 import os
-from pathlib import Path
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -26,11 +26,18 @@ def run_main(argv: list[str], capsys) -> tuple[int, str, str]:
     return code, captured.out, captured.err
 
 
-def run_cli(argv: list[str], *, stdout=subprocess.PIPE, env: dict[str, str] | None = None,
-            timeout: float = 120.0) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "kinengine", *argv], cwd=REPO, stdout=stdout,
-                          stderr=subprocess.PIPE, text=True, timeout=timeout,
-                          env=None if env is None else {**os.environ, **env})
+def run_cli(
+    argv: list[str], *, stdout=subprocess.PIPE, env: dict[str, str] | None = None, timeout: float = 120.0
+) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "kinengine", *argv],
+        cwd=REPO,
+        stdout=stdout,
+        stderr=subprocess.PIPE,
+        text=True,
+        timeout=timeout,
+        env=None if env is None else {**os.environ, **env},
+    )
 
 
 def assert_one_error_line(code: int, out: str, err: str, fragment: str = "") -> None:
@@ -41,33 +48,51 @@ def assert_one_error_line(code: int, out: str, err: str, fragment: str = "") -> 
     assert fragment in lines[0], lines[0]
 
 
-@pytest.mark.parametrize("argv, fragment", [
-    ([], "the following arguments are required: COMMAND"),
-    (["nope"], "invalid choice: 'nope'"),
-    (["pose"], "the following arguments are required: robot"),
-    (["pose", "abb_irb120", "--bogus"], "unrecognized arguments: --bogus"),
-    (["pose", "abb_irb120", "--reference", "bad"], "argument --reference: invalid choice: 'bad'"),
-    (["pose", "abb_irb120", "--q"], "argument --q: expected one argument"),
-    (["pose", "abb_irb120", "--q", "1 5,0,0,0,0,0"], "entry 1 is '1 5'"),
-    (["pose", "abb_irb120", "--q", "1_0,0,0,0,0,0"], "entry 1 is '1_0'"),
-    (["pose", "abb_irb120", "--q", "\u0661,0,0,0,0,0"], "entry 1 is"),
-    (["pose", "abb_irb120", "--q", "0,0,0,0,0,"], "entry 6 is an empty entry"),
-    (["pose", "abb_irb120", "--frame", ""], "argument --frame: expected a name, got an empty string"),
-    (["show", "abb_irb120", "--dpi", "5000"], "argument --dpi: expected a whole number in [1, 600], got 5000"),
-    (["show", "abb_irb120", "--dpi", "0"], "argument --dpi"),
-    (["show", "abb_irb120", "--dpi", "1_00"], "argument --dpi: expected a whole number, got '1_00'"),
-    (["show", "abb_irb120", "-o", ""], "argument -o/--output: expected a file name, got an empty string"),
-    (["show", "abb_irb120", "--ellipsoid", ""], "argument --ellipsoid: expected a name"),
-    (["verify", "abb_irb120", "--samples", "100000000"], "argument --samples: expected a whole number in [1, 100000]"),
-    (["verify", "abb_irb120", "--samples", "1e3"], "argument --samples: expected a whole number, got '1e3'"),
-    (["verify", "abb_irb120", "--seed", "-1"], "argument --seed: expected a whole number in [0,"),
-    (["verify", "abb_irb120", "--json", ""], "argument --json: expected a file name"),
-    (["verify", "abb_irb120", "--json", "/dev/full"], "argument --json: cannot write '/dev/full': not a regular file"),
-    (["verify", "abb_irb120", "--json", "/"], "argument --json: '/' is a folder"),
-    (["verify", "abb_irb120", "--json", "/nonexistent/r.json"], "folder '/nonexistent' does not exist"),
-    (["bench", "abb_irb120", "--quick", "--json", "/dev/full"], "argument --json: cannot write '/dev/full'"),
-    (["show", "abb_irb120", "-o", "/dev/full"], "cannot write '/dev/full': not a regular file"),
-])
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        ([], "the following arguments are required: COMMAND"),
+        (["nope"], "invalid choice: 'nope'"),
+        (["pose"], "the following arguments are required: robot"),
+        (["pose", "abb_irb120", "--bogus"], "unrecognized arguments: --bogus"),
+        (["pose", "abb_irb120", "--reference", "bad"], "argument --reference: invalid choice: 'bad'"),
+        (["pose", "abb_irb120", "--q"], "argument --q: expected one argument"),
+        (["pose", "abb_irb120", "--q", "1 5,0,0,0,0,0"], "entry 1 is '1 5'"),
+        (["pose", "abb_irb120", "--q", "1_0,0,0,0,0,0"], "entry 1 is '1_0'"),
+        (["pose", "abb_irb120", "--q", "\u0661,0,0,0,0,0"], "entry 1 is"),
+        (["pose", "abb_irb120", "--q", "0,0,0,0,0,"], "entry 6 is an empty entry"),
+        (["pose", "abb_irb120", "--frame", ""], "argument --frame: expected a name, got an empty string"),
+        (
+            ["show", "abb_irb120", "--dpi", "5000"],
+            "argument --dpi: expected a whole number in [1, 600], got 5000",
+        ),
+        (["show", "abb_irb120", "--dpi", "0"], "argument --dpi"),
+        (["show", "abb_irb120", "--dpi", "1_00"], "argument --dpi: expected a whole number, got '1_00'"),
+        (["show", "abb_irb120", "-o", ""], "argument -o/--output: expected a file name, got an empty string"),
+        (["show", "abb_irb120", "--ellipsoid", ""], "argument --ellipsoid: expected a name"),
+        (
+            ["verify", "abb_irb120", "--samples", "100000000"],
+            "argument --samples: expected a whole number in [1, 100000]",
+        ),
+        (
+            ["verify", "abb_irb120", "--samples", "1e3"],
+            "argument --samples: expected a whole number, got '1e3'",
+        ),
+        (["verify", "abb_irb120", "--seed", "-1"], "argument --seed: expected a whole number in [0,"),
+        (["verify", "abb_irb120", "--json", ""], "argument --json: expected a file name"),
+        (
+            ["verify", "abb_irb120", "--json", "/dev/full"],
+            "argument --json: cannot write '/dev/full': not a regular file",
+        ),
+        (["verify", "abb_irb120", "--json", "/"], "argument --json: '/' is a folder"),
+        (["verify", "abb_irb120", "--json", "/nonexistent/r.json"], "folder '/nonexistent' does not exist"),
+        (
+            ["bench", "abb_irb120", "--quick", "--json", "/dev/full"],
+            "argument --json: cannot write '/dev/full'",
+        ),
+        (["show", "abb_irb120", "-o", "/dev/full"], "cannot write '/dev/full': not a regular file"),
+    ],
+)
 def test_bad_arguments_are_one_line_and_status_2(capsys, argv, fragment):
     assert_one_error_line(*run_main(argv, capsys), fragment)
 
@@ -78,8 +103,11 @@ def test_unwritable_outputs_are_refused_before_the_work(capsys, tmp_path):
     read_only.chmod(0o444)
     dangling = tmp_path / "dangling.json"
     dangling.symlink_to(tmp_path / "missing" / "x.json")
-    for path, fragment in ((read_only, "the file is read-only"), (dangling, "is a link to a missing file"),
-                           (tmp_path, "is a folder")):
+    for path, fragment in (
+        (read_only, "the file is read-only"),
+        (dangling, "is a link to a missing file"),
+        (tmp_path, "is a folder"),
+    ):
         for argv in (["verify", "abb_irb120", "--json", str(path)], ["show", "abb_irb120", "-o", str(path)]):
             assert_one_error_line(*run_main(argv, capsys), fragment)
     if os.geteuid() != 0:  # root may write anywhere
@@ -90,8 +118,12 @@ def test_kinengine_errors_are_one_line(capsys, tmp_path):
     bad = tmp_path / "bad.urdf"
     bad.write_text('<robot name="x"><link name="a"></robot>')
     assert_one_error_line(*run_main(["info", str(bad)], capsys), "not well-formed XML")
-    assert_one_error_line(*run_main(["pose", "panda", "--frame", "panda_hnd"], capsys), "Did you mean 'panda_hand'")
-    assert_one_error_line(*run_main(["pose", "abb_irb120", "--q", "1e308,0,0,0,0,0"], capsys), "beyond ±1e+09")
+    assert_one_error_line(
+        *run_main(["pose", "panda", "--frame", "panda_hnd"], capsys), "Did you mean 'panda_hand'"
+    )
+    assert_one_error_line(
+        *run_main(["pose", "abb_irb120", "--q", "1e308,0,0,0,0,0"], capsys), "beyond ±1e+09"
+    )
     assert_one_error_line(*run_main(["info", "a" * 300], capsys), "unknown robot")
 
 
@@ -102,9 +134,11 @@ def test_messages_are_collapsed_to_one_line_and_control_characters_escaped():
 
 def test_names_with_newlines_are_escaped_by_info(capsys, tmp_path):
     path = tmp_path / "nl.urdf"
-    path.write_text('<robot name="r&#10;x"><link name="a&#10;b"/><link name="c&#9;d"/>'
-                    '<joint name="j&#10;1" type="revolute"><parent link="a&#10;b"/><child link="c&#9;d"/>'
-                    '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
+    path.write_text(
+        '<robot name="r&#10;x"><link name="a&#10;b"/><link name="c&#9;d"/>'
+        '<joint name="j&#10;1" type="revolute"><parent link="a&#10;b"/><child link="c&#9;d"/>'
+        '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>'
+    )
     code, out, err = run_main(["info", str(path)], capsys)
     assert code == 0 and err == ""
     assert out.splitlines()[0].startswith("r\\x0ax: 1 dof")
@@ -116,7 +150,9 @@ def test_stdout_on_dev_full_is_one_line_and_status_2():
     with open("/dev/full", "w") as full:
         result = run_cli(["info", "abb_irb120"], stdout=full)
     assert result.returncode == 2
-    assert result.stderr.splitlines() == ["kinengine: error: cannot write the output: No space left on device"]
+    assert result.stderr.splitlines() == [
+        "kinengine: error: cannot write the output: No space left on device"
+    ]
 
 
 def test_non_ascii_names_print_under_an_ascii_locale(tmp_path):

@@ -25,8 +25,13 @@ ZERO_DOF = """<robot name="zero"><link name="a"/><link name="b"/>
 
 
 def robots(abb, mixed):
-    return [(abb, "tool0"), (mixed, "finger_b"), (mixed, "tip"), (kinengine.load_urdf_string(ONE_DOF), "c"),
-            (kinengine.load_urdf_string(ZERO_DOF), "b")]
+    return [
+        (abb, "tool0"),
+        (mixed, "finger_b"),
+        (mixed, "tip"),
+        (kinengine.load_urdf_string(ONE_DOF), "c"),
+        (kinengine.load_urdf_string(ZERO_DOF), "b"),
+    ]
 
 
 @pytest.mark.parametrize("check_inputs", [True, False])
@@ -47,12 +52,14 @@ def test_handle_equals_robot_calls_bit_for_bit(abb, mixed, check_inputs):
 
 def test_handle_matches_the_independent_reference(abb):
     from kinengine.reference import ReferenceKinematics
+
     ref = ReferenceKinematics.from_urdf_string(abb.urdf_text)
     fk = abb.frame("tool0")
     for q in abb.random_configuration(3, size=5):
         np.testing.assert_allclose(fk.pose(q), ref.frame_pose(q, "tool0"), atol=1e-12)
-        np.testing.assert_allclose(fk.jacobian(q, reference="local"), ref.jacobian(q, "tool0", reference="local"),
-                                   atol=1e-12)
+        np.testing.assert_allclose(
+            fk.jacobian(q, reference="local"), ref.jacobian(q, "tool0", reference="local"), atol=1e-12
+        )
 
 
 def test_default_frame_and_pinocchio_enum(abb):

@@ -38,10 +38,12 @@ def test_acceptance_1000_random_reachable_targets(name):
     results = [inverse_kinematics(robot, T, frame, rng=i) for i, T in enumerate(targets)]
     elapsed = time.perf_counter() - start
     successes = sum(r.success for r in results)
-    print(f"\n{name}: {successes}/1000 solved, {1000 / elapsed:.0f} solves/s, "
-          f"attempts used {np.bincount([r.restarts for r in results]).tolist()}")
+    print(
+        f"\n{name}: {successes}/1000 solved, {1000 / elapsed:.0f} solves/s, "
+        f"attempts used {np.bincount([r.restarts for r in results]).tolist()}"
+    )
     assert successes >= 995
-    for T, result in zip(targets, results):
+    for T, result in zip(targets, results, strict=False):
         assert result.restarts <= ik.NEAREST_SEEDS + 3
         assert _within_limits(robot, result.q)
         ep, er = _pose_errors(robot, result.q, frame, T)
@@ -51,8 +53,10 @@ def test_acceptance_1000_random_reachable_targets(name):
             assert ep <= 1e-6 and er <= 1e-6 + 2e-8
 
 
-@pytest.mark.parametrize("position,rotation", [("cartesian", "quaternion"), ("spherical", "euler_zyz"),
-                                               ("cylindrical", "rotation_vector")])
+@pytest.mark.parametrize(
+    "position,rotation",
+    [("cartesian", "quaternion"), ("spherical", "euler_zyz"), ("cylindrical", "rotation_vector")],
+)
 def test_parameter_targets_reach_the_pose_they_describe(position, rotation):
     robot = kinengine.load("abb_irb120")
     rng = np.random.default_rng(6)
@@ -123,11 +127,11 @@ def test_a_close_first_guess_stays_on_its_branch():
 def test_unreachable_target_reports_failure_with_the_best_attempt():
     robot = kinengine.load("abb_irb120")
     T = np.eye(4)
-    T[:3, 3] = [2.0, 0.0, 0.5]   # the IRB 120 reaches 0.58 m
+    T[:3, 3] = [2.0, 0.0, 0.5]  # the IRB 120 reaches 0.58 m
     result = inverse_kinematics(robot, T, rng=3)
     assert not result.success and result.restarts <= ik.NEAREST_SEEDS + 3
     assert _within_limits(robot, result.q)
-    ep, er = _pose_errors(robot, result.q, "tool0", T)
+    ep, _er = _pose_errors(robot, result.q, "tool0", T)
     assert ep == pytest.approx(result.position_error, rel=1e-9) and ep > 1.0
     assert "did not converge" in str(result)
 
@@ -160,17 +164,20 @@ def test_inputs_are_checked():
         inverse_kinematics(robot, np.eye(4), restarts=-1)
 
 
-@pytest.mark.parametrize("option,values", [
-    ("max_iterations", [1.5, np.nan, np.inf, -1, True, "5", 10**7]),
-    ("restarts", [1.5, -1, np.nan, "1", None]),
-    ("tol_position", [np.nan, -1e-6, np.inf, "1e-6", None]),
-    ("tol_rotation", [np.nan, -1.0, np.inf]),
-    ("min_damping", [np.nan, -1.0, np.inf, "0"]),
-    ("nullspace_gain", [np.nan, -0.1, 2.0, np.inf]),
-    ("rng", ["abc", -1, 1.5, True]),
-    ("rows", ["xyz", ["x", "q"], [], ["x", "x"], [6], 3]),
-    ("weights", [[1.0] * 5, [np.nan] * 6, [-1.0] * 6, "abc"]),
-])
+@pytest.mark.parametrize(
+    "option,values",
+    [
+        ("max_iterations", [1.5, np.nan, np.inf, -1, True, "5", 10**7]),
+        ("restarts", [1.5, -1, np.nan, "1", None]),
+        ("tol_position", [np.nan, -1e-6, np.inf, "1e-6", None]),
+        ("tol_rotation", [np.nan, -1.0, np.inf]),
+        ("min_damping", [np.nan, -1.0, np.inf, "0"]),
+        ("nullspace_gain", [np.nan, -0.1, 2.0, np.inf]),
+        ("rng", ["abc", -1, 1.5, True]),
+        ("rows", ["xyz", ["x", "q"], [], ["x", "x"], [6], 3]),
+        ("weights", [[1.0] * 5, [np.nan] * 6, [-1.0] * 6, "abc"]),
+    ],
+)
 def test_every_numeric_option_is_validated_without_hanging(abb, option, values):
     """Issue 15 (#4, #8): bad option values are an OptionError up front, never a hang or q = NaN."""
     T = np.eye(4)
@@ -194,7 +201,7 @@ def test_degenerate_targets_are_refused(abb):
     with pytest.raises(kinengine.ParameterizationError):
         inverse_kinematics(abb, "abc")
     with pytest.raises(kinengine.ParameterizationError):
-        inverse_kinematics(abb, np.zeros((3, 4, 4)))       # a batch of zero rotations
+        inverse_kinematics(abb, np.zeros((3, 4, 4)))  # a batch of zero rotations
 
 
 def test_far_but_finite_target_gives_finite_errors(abb):
@@ -224,7 +231,9 @@ def test_five_dimensional_target_position_plus_tool_axis(abb):
 def test_seed_tables_are_bounded(mixed):
     frames = [f for f in mixed.frame_names if f != mixed.description.root]
     for frame in frames * 2:
-        inverse_kinematics(mixed, mixed.frame_pose(mixed.neutral(), frame), frame, max_iterations=1, restarts=0)
+        inverse_kinematics(
+            mixed, mixed.frame_pose(mixed.neutral(), frame), frame, max_iterations=1, restarts=0
+        )
     tables = mixed.engine.memoized("ik seed tables", ik_seeds.SeedTables)
     assert 0 < len(tables.tables) <= ik.SEED_TABLES
     for configs, tree in tables.tables.values():
@@ -243,7 +252,7 @@ def test_batched_ik_equals_single_ik_per_target(name):
     singles = [robot.inverse_kinematics(T, frame, rng=0) for T in targets]
     np.testing.assert_array_equal(batch.success, [s.success for s in singles])
     assert batch.success.all()
-    for T, result in zip(targets, batch):
+    for T, result in zip(targets, batch, strict=False):
         assert isinstance(result, kinengine.IKResult) and _within_limits(robot, result.q)
         ep, er = _pose_errors(robot, result.q, frame, T)
         assert ep <= 1e-6 and er <= 1e-6 + 2e-8
@@ -267,8 +276,10 @@ def test_batched_ik_rows_and_nullspace(abb):
     q0 = np.clip(solutions + 0.05, panda.lower_limits, panda.upper_limits)
     plain = panda.inverse_kinematics(targets, q0=q0, rng=0)
     pulled = panda.inverse_kinematics(targets, q0=q0, rng=0, nullspace_target=preferred, nullspace_gain=0.2)
-    singles = [panda.inverse_kinematics(T, q0=s, rng=0, nullspace_target=preferred, nullspace_gain=0.2)
-               for T, s in zip(targets, q0)]
+    singles = [
+        panda.inverse_kinematics(T, q0=s, rng=0, nullspace_target=preferred, nullspace_gain=0.2)
+        for T, s in zip(targets, q0, strict=False)
+    ]
     assert plain.success.all() and pulled.success.mean() >= 0.9
     ok = pulled.success & np.array([r.success for r in singles])
     distance = np.linalg.norm(pulled.q - preferred, axis=1)

@@ -9,10 +9,10 @@ The xacro files are written here, into a temporary ROS-like workspace: a macro f
 from __future__ import annotations
 
 import os
-from pathlib import Path
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -69,13 +69,17 @@ WRAPPER = """<?xml version="1.0"?>
 def expected_urdf(length: float, wrist: bool) -> str:
     """The wrapper expanded by hand."""
     half = np.pi / 2
-    tool = (f"""<link name="wrist_link"/>
+    tool = (
+        f"""<link name="wrist_link"/>
   <joint name="wrist" type="prismatic"><parent link="upper"/><child link="wrist_link"/>
     <origin xyz="{length!r} 0 0"/><axis xyz="1 0 0"/>
     <limit lower="0" upper="{length / 4!r}" effort="10" velocity="1"/></joint>
   <joint name="flange" type="fixed"><parent link="wrist_link"/><child link="tool0"/>
-    <origin xyz="0 0 0.05"/></joint>""" if wrist else f"""<joint name="flange" type="fixed">
-    <parent link="upper"/><child link="tool0"/><origin xyz="{length!r} 0 0.05"/></joint>""")
+    <origin xyz="0 0 0.05"/></joint>"""
+        if wrist
+        else f"""<joint name="flange" type="fixed">
+    <parent link="upper"/><child link="tool0"/><origin xyz="{length!r} 0 0.05"/></joint>"""
+    )
     return f"""<robot name="small_arm">
   <link name="base"/><link name="upper"/><link name="tool0"/>
   <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
@@ -113,10 +117,16 @@ def assert_same_model(robot, expected_text: str) -> None:
     rng = np.random.default_rng(3)
     for q in [expected.neutral()] + [expected.random_configuration(rng) for _ in range(4)]:
         for frame in expected.frame_names:
-            np.testing.assert_allclose(robot.frame_pose(q, frame), expected.frame_pose(q, frame), rtol=0, atol=1e-15)
+            np.testing.assert_allclose(
+                robot.frame_pose(q, frame), expected.frame_pose(q, frame), rtol=0, atol=1e-15
+            )
             for reference in ("local_world_aligned", "local", "world"):
-                np.testing.assert_allclose(robot.jacobian(q, frame, reference),
-                                           expected.jacobian(q, frame, reference), rtol=0, atol=1e-15)
+                np.testing.assert_allclose(
+                    robot.jacobian(q, frame, reference),
+                    expected.jacobian(q, frame, reference),
+                    rtol=0,
+                    atol=1e-15,
+                )
 
 
 # -- kinengine.load --------------------------------------------------------------------------------
@@ -130,15 +140,20 @@ def test_load_xacro_with_packages_argument(workspace):
 
 
 def test_load_xacro_with_arguments_math_and_conditionals(workspace):
-    robot = kinengine.load(str(workspace["wrapper"]), xacro_args={"length": 0.6, "wrist": "false"},
-                           packages={"kin_parts": str(workspace["parts"])})
+    robot = kinengine.load(
+        str(workspace["wrapper"]),
+        xacro_args={"length": 0.6, "wrist": "false"},
+        packages={"kin_parts": str(workspace["parts"])},
+    )
     assert robot.dof == 1
     assert_same_model(robot, expected_urdf(0.6, False))
 
 
 def test_load_xacro_through_ros_package_path(workspace, monkeypatch):
-    monkeypatch.setenv("ROS_PACKAGE_PATH", os.pathsep.join([str(workspace["root"] / "nowhere"),
-                                                             str(workspace["root"] / "vendor")]))
+    monkeypatch.setenv(
+        "ROS_PACKAGE_PATH",
+        os.pathsep.join([str(workspace["root"] / "nowhere"), str(workspace["root"] / "vendor")]),
+    )
     assert_same_model(kinengine.load(workspace["wrapper"]), expected_urdf(0.4, True))
 
 
@@ -153,8 +168,9 @@ def test_xacro_errors_are_one_line_urdf_errors(workspace, tmp_path):
         kinengine.load(workspace["wrapper"])  # kin_parts is nowhere it looks
     assert "\n" not in str(exc.value) and "packages=" in str(exc.value)
     needs = tmp_path / "needs.xacro"
-    needs.write_text('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="$(arg base)"/>'
-                     '</robot>')
+    needs.write_text(
+        '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="$(arg base)"/></robot>'
+    )
     with pytest.raises(URDFError, match="base") as exc:
         kinengine.load(needs)
     assert "\n" not in str(exc.value)
@@ -176,12 +192,18 @@ def test_options_are_checked(workspace, abb_path):
 
 def test_plain_urdf_keeps_packages_for_package_uris(workspace, tmp_path):
     urdf = tmp_path / "robot.urdf"
-    urdf.write_text(expected_urdf(0.4, True).replace(
-        '<link name="upper"/>', '<link name="upper"><visual><geometry><mesh filename="package://kin_parts/m.stl"/>'
-        '</geometry></visual></link>'))
+    urdf.write_text(
+        expected_urdf(0.4, True).replace(
+            '<link name="upper"/>',
+            '<link name="upper"><visual><geometry><mesh filename="package://kin_parts/m.stl"/>'
+            "</geometry></visual></link>",
+        )
+    )
     robot = kinengine.load(urdf, packages={"kin_parts": workspace["parts"]})
-    assert resolve_uri("package://kin_parts/m.stl", packages=robot.packages, start=Path(robot.source)) == \
-        workspace["parts"].resolve() / "m.stl"
+    assert (
+        resolve_uri("package://kin_parts/m.stl", packages=robot.packages, start=Path(robot.source))
+        == workspace["parts"].resolve() / "m.stl"
+    )
     from_text = kinengine.load_urdf_string(urdf.read_text(), packages={"kin_parts": workspace["parts"]})
     assert dict(from_text.packages) == {"kin_parts": str(workspace["parts"])}
     assert dict(kinengine.load("abb_irb120").packages) == {}
@@ -189,10 +211,24 @@ def test_plain_urdf_keeps_packages_for_package_uris(workspace, tmp_path):
 
 # -- command line ----------------------------------------------------------------------------------
 def test_cli_info_on_a_xacro_in_a_subprocess(workspace):
-    run = subprocess.run([sys.executable, "-m", "kinengine", "info", str(workspace["wrapper"]),
-                          "--xacro-arg", "length=0.6", "--xacro-arg", "wrist=false",
-                          "--package", f"kin_parts={workspace['parts']}"],
-                         capture_output=True, text=True, timeout=120)
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "kinengine",
+            "info",
+            str(workspace["wrapper"]),
+            "--xacro-arg",
+            "length=0.6",
+            "--xacro-arg",
+            "wrist=false",
+            "--package",
+            f"kin_parts={workspace['parts']}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert run.returncode == 0, run.stderr
     assert "small_arm: 1 dof" in run.stdout and "shoulder" in run.stdout and "wrist" not in run.stdout
     assert run.stderr == ""
@@ -294,13 +330,21 @@ def test_info_names_gripper_coordinates(capsys):
 @pytest.fixture
 def abb_path() -> Path:
     from kinengine.model import catalog_entry
+
     return catalog_entry("abb_irb120").path
 
 
 def _erd(relative: str) -> Path:
     import importlib.metadata
-    path = Path(importlib.metadata.distribution("example-robot-data").locate_file(
-        "cmeel.prefix/share/example-robot-data/robots")) / relative
+
+    path = (
+        Path(
+            importlib.metadata.distribution("example-robot-data").locate_file(
+                "cmeel.prefix/share/example-robot-data/robots"
+            )
+        )
+        / relative
+    )
     if not path.is_file():
         pytest.skip(f"example-robot-data has no {relative}")
     return path
@@ -317,7 +361,7 @@ def test_concurrent_loads_each_warn_once_and_leave_warnings_working():
             thread.start()
         for thread in threads:
             thread.join()
-        warnings.warn("after the loads", UserWarning)
+        warnings.warn("after the loads", UserWarning, stacklevel=1)
     messages = [str(w.message) for w in caught]
     assert sum("held fixed" in m for m in messages) == 4 and messages.count("after the loads") == 1, messages
     assert len(messages) == 5, messages

@@ -9,44 +9,59 @@ from __future__ import annotations
 
 import copy
 import os
-from pathlib import Path
 import pickle
 import re
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import kinengine
-from kinengine import (ConfigurationError, FrameNotFoundError, KinematicSingularityError, KinematicsError,
-                       OptionError, ParameterizationError, RepresentationSingularityError, URDFError)
+from kinengine import (
+    ConfigurationError,
+    FrameNotFoundError,
+    KinematicsError,
+    KinematicSingularityError,
+    OptionError,
+    ParameterizationError,
+    RepresentationSingularityError,
+    URDFError,
+)
 from kinengine.errors import ResourceLimitError
 from kinengine.urdf import Limits
 
 REPO = Path(__file__).resolve().parents[1]
 LIMIT = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
 
-CHAIN = textwrap.dedent('''
+CHAIN = textwrap.dedent("""
     def chain(n, kind="revolute"):
         body = "" if kind == "fixed" else '<limit lower="-1" upper="1" effort="1" velocity="1"/><axis xyz="0 0 1"/>'
         links = "".join(f'<link name="l{i}"/>' for i in range(n + 1))
         joints = "".join(f'<joint name="j{i}" type="{kind}"><parent link="l{i - 1}"/><child link="l{i}"/>'
                          f'<origin xyz="0 0 0.01"/>{body}</joint>' for i in range(1, n + 1))
         return f'<robot name="chain">{links}{joints}</robot>'
-''')
+""")
 
 
-def run_child(code: str, *, address_space: int | None = None, timeout: float = 120.0,
-              env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+def run_child(
+    code: str, *, address_space: int | None = None, timeout: float = 120.0, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess:
     """``code`` in a fresh Python (optionally under RLIMIT_AS); fails the test on a timeout."""
     prelude = "import resource\n"
     if address_space:
         prelude += f"resource.setrlimit(resource.RLIMIT_AS, ({address_space}, {address_space}))\n"
     try:
-        return subprocess.run([sys.executable, "-c", prelude + CHAIN + textwrap.dedent(code)], cwd=REPO,
-                              capture_output=True, text=True, timeout=timeout, env=env)
+        return subprocess.run(
+            [sys.executable, "-c", prelude + CHAIN + textwrap.dedent(code)],
+            cwd=REPO,
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            env=env,
+        )
     except subprocess.TimeoutExpired:
         pytest.fail(f"the child hung for {timeout} s")
 
@@ -63,7 +78,7 @@ def R():
 
 # -- item 2: deep chains in small-stack threads ---------------------------------------------------------
 def test_deepest_admitted_chain_loads_and_computes_in_a_128_KiB_thread():
-    child = run_child('''
+    child = run_child("""
         import threading
         import numpy as np
         import kinengine
@@ -80,7 +95,7 @@ def test_deepest_admitted_chain_loads_and_computes_in_a_128_KiB_thread():
         thread.start()
         thread.join()
         print(box[0])
-    ''')
+    """)
     assert child.returncode == 0, child.stderr
     dof, z, lateral, shape = eval(child.stdout)
     assert dof == 128 and shape == (6, 128, 128)
@@ -90,12 +105,12 @@ def test_deepest_admitted_chain_loads_and_computes_in_a_128_KiB_thread():
 
 def test_deepest_admitted_chain_loads_in_a_main_thread_with_a_256_KiB_stack_limit():
     # the main thread builds in place only when RLIMIT_STACK is at least twice what the tree needs
-    child = run_child('''
+    child = run_child("""
         resource.setrlimit(resource.RLIMIT_STACK, (256 * 1024, resource.getrlimit(resource.RLIMIT_STACK)[1]))
         import kinengine
         robot = kinengine.load_urdf_string(chain(128))
         print(robot.dof, float(robot.frame_pose(robot.neutral(), "l128")[2, 3]))
-    ''')
+    """)
     assert child.returncode == 0, child.stderr
     dof, z = child.stdout.split()
     assert dof == "128" and float(z) == pytest.approx(1.28, abs=1e-12)
@@ -103,7 +118,8 @@ def test_deepest_admitted_chain_loads_in_a_main_thread_with_a_256_KiB_stack_limi
 
 def test_raised_tree_depth_gets_a_bigger_build_stack():
     # 9,000 fixed levels need ~20 MiB of Pinocchio stack: more than the 16 MiB default build thread
-    child = run_child('''
+    child = run_child(
+        """
         import threading
         import kinengine
         from kinengine.urdf import Limits
@@ -117,14 +133,17 @@ def test_raised_tree_depth_gets_a_bigger_build_stack():
         thread.start()
         thread.join()
         print(box[0])
-    ''', timeout=300)
+    """,
+        timeout=300,
+    )
     assert child.returncode == 0, child.stderr
     assert float(child.stdout) == pytest.approx(90.0, rel=1e-12)
 
 
 # -- item 3: Data per thread under a memory cap ------------------------------------------------------
 def test_a_128_dof_robot_from_32_threads_under_a_memory_cap_ends_in_answers_or_resource_errors():
-    child = run_child('''
+    child = run_child(
+        """
         import threading
         from collections import Counter
         import numpy as np
@@ -150,7 +169,10 @@ def test_a_128_dof_robot_from_32_threads_under_a_memory_cap_ends_in_answers_or_r
         for t in threads:
             t.join()
         print(dict(Counter(seen)))
-    ''', address_space=3 * 1024**3, timeout=300)
+    """,
+        address_space=3 * 1024**3,
+        timeout=300,
+    )
     assert child.returncode == 0, child.stderr[-2000:]
     seen = eval(child.stdout)
     assert set(seen) <= {"ok", "ResourceLimitError"}, seen
@@ -163,7 +185,8 @@ def test_resource_limit_error_is_a_memory_error_and_a_kinematics_error():
 
 # -- items 5 and 6: fork, pickle, worker processes -------------------------------------------------
 def test_a_forked_child_runs_a_large_batch_after_the_parent_ran_one():
-    child = run_child('''
+    child = run_child(
+        """
         import multiprocessing as mp
         import numpy as np
         import kinengine
@@ -175,7 +198,9 @@ def test_a_forked_child_runs_a_large_batch_after_the_parent_ran_one():
         with mp.get_context("fork").Pool(2) as pool:
             results = pool.map(work, range(2), chunksize=1)
         print(all(np.array_equal(np.array(r), parent[::9973]) for r in results))
-    ''', timeout=120)
+    """,
+        timeout=120,
+    )
     assert child.returncode == 0, child.stderr
     assert child.stdout.strip() == "True"
 
@@ -203,7 +228,8 @@ def test_every_error_round_trips_through_pickle_and_deepcopy(error):
 
 def test_a_pool_whose_workers_raise_kinengine_errors_completes():
     # bound methods of a Robot pickle (the Robot is rebuilt in the worker), so spawn works with python -c
-    child = run_child('''
+    child = run_child(
+        """
         import multiprocessing as mp
         import kinengine
         robot = kinengine.load("abb_irb120")
@@ -216,10 +242,15 @@ def test_a_pool_whose_workers_raise_kinengine_errors_completes():
                         print(context, "RETURNED")
                     except kinengine.KinematicsError as exc:
                         print(context, type(exc).__name__, getattr(exc, "name", None) or exc.alternatives[0])
-    ''', timeout=180)
+    """,
+        timeout=180,
+    )
     assert child.returncode == 0, child.stderr
-    assert child.stdout.splitlines() == [f"{c} {e}" for c in ("fork", "spawn") for e in
-                                         ("FrameNotFoundError tool_0", "RepresentationSingularityError quaternion")]
+    assert child.stdout.splitlines() == [
+        f"{c} {e}"
+        for c in ("fork", "spawn")
+        for e in ("FrameNotFoundError tool_0", "RepresentationSingularityError quaternion")
+    ]
 
 
 def test_a_robot_pickles_deep_copies_and_travels_to_worker_processes(R):
@@ -228,7 +259,8 @@ def test_a_robot_pickles_deep_copies_and_travels_to_worker_processes(R):
         assert again is not R and again.name == R.name and again.end_effector == R.end_effector
         assert again.urdf_text == R.urdf_text and again.joint_names == R.joint_names
         np.testing.assert_array_equal(again.jacobian(q), R.jacobian(q))
-    child = run_child('''
+    child = run_child(
+        """
         import multiprocessing as mp
         import numpy as np
         import kinengine
@@ -239,26 +271,43 @@ def test_a_robot_pickles_deep_copies_and_travels_to_worker_processes(R):
             name, ee = pool.apply_async(getattr, (robot, "name")).get(timeout=60), \\
                 pool.apply_async(getattr, (robot, "end_effector")).get(timeout=60)
         print(name, ee, np.array_equal(T, robot.frame_pose(q)))
-    ''', timeout=120)
+    """,
+        timeout=120,
+    )
     assert child.returncode == 0, child.stderr
     assert child.stdout.split() == ["panda", "panda_link7", "True"]
 
 
 # -- item 7: magnitudes ------------------------------------------------------------------------------
 def _two_joints(first: str, second: str) -> str:
-    return ('<robot name="m"><link name="a"/><link name="b"/><link name="c"/>'
-            f'<joint name="j1" {first}<parent link="a"/><child link="b"/></joint>'
-            f'<joint name="j2" {second}<parent link="b"/><child link="c"/></joint></robot>')
+    return (
+        '<robot name="m"><link name="a"/><link name="b"/><link name="c"/>'
+        f'<joint name="j1" {first}<parent link="a"/><child link="b"/></joint>'
+        f'<joint name="j2" {second}<parent link="b"/><child link="c"/></joint></robot>'
+    )
 
 
-@pytest.mark.parametrize("text, message", [
-    (_two_joints('type="fixed"><origin xyz="1e308 0 0"/>', 'type="fixed"><origin xyz="1e308 0 0"/>'),
-     r"joint 'j1': origin xyz 1e\+308 is beyond ±1e\+06 m \(Limits.max_offset\)"),
-    (_two_joints(f'type="prismatic">{LIMIT}', f'type="prismatic">{LIMIT}<mimic joint="j1" multiplier="1e308"/>'),
-     r"joint 'j2': mimic multiplier 1e\+308 is beyond ±1e\+06 \(Limits.max_multiplier\)"),
-    (_two_joints(f'type="prismatic">{LIMIT}', f'type="prismatic">{LIMIT}<mimic joint="j1" offset="-1e308"/>'),
-     r"joint 'j2': mimic offset -1e\+308 is beyond ±1e\+06"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        (
+            _two_joints('type="fixed"><origin xyz="1e308 0 0"/>', 'type="fixed"><origin xyz="1e308 0 0"/>'),
+            r"joint 'j1': origin xyz 1e\+308 is beyond ±1e\+06 m \(Limits.max_offset\)",
+        ),
+        (
+            _two_joints(
+                f'type="prismatic">{LIMIT}', f'type="prismatic">{LIMIT}<mimic joint="j1" multiplier="1e308"/>'
+            ),
+            r"joint 'j2': mimic multiplier 1e\+308 is beyond ±1e\+06 \(Limits.max_multiplier\)",
+        ),
+        (
+            _two_joints(
+                f'type="prismatic">{LIMIT}', f'type="prismatic">{LIMIT}<mimic joint="j1" offset="-1e308"/>'
+            ),
+            r"joint 'j2': mimic offset -1e\+308 is beyond ±1e\+06",
+        ),
+    ],
+)
 def test_magnitudes_that_would_overflow_together_are_refused_at_load(text, message):
     with pytest.raises(URDFError, match=message) as info:
         kinengine.load_urdf_string(text)
@@ -272,7 +321,7 @@ def test_a_bigger_max_offset_admits_a_bigger_model():
 
 
 def test_huge_prismatic_coordinates_are_refused_before_pinocchio():
-    big = f'type="prismatic"><limit lower="-1e308" upper="1e308" effort="1" velocity="1"/>'
+    big = 'type="prismatic"><limit lower="-1e308" upper="1e308" effort="1" velocity="1"/>'
     robot = kinengine.load_urdf_string(_two_joints(big, big))
     for q in ([1e308, 1e308], [1e308, -1e308], [2e9, 0.0], np.array([[0.0, 0.0], [1e308, 1e308]])):
         for call in (robot.frame_pose, robot.jacobian, robot.kinematics):
@@ -290,25 +339,40 @@ def test_huge_prismatic_coordinates_are_refused_before_pinocchio():
 
 def test_verify_and_sampling_survive_limits_of_1e308():
     from kinengine.verify import verify
-    text = _two_joints('type="prismatic"><limit lower="-1e308" upper="1e308" effort="1" velocity="1"/>',
-                       'type="revolute"><axis xyz="0 0 1"/><limit lower="-1e308" upper="1e308" effort="1" '
-                       'velocity="1"/>')
+
+    text = _two_joints(
+        'type="prismatic"><limit lower="-1e308" upper="1e308" effort="1" velocity="1"/>',
+        'type="revolute"><axis xyz="0 0 1"/><limit lower="-1e308" upper="1e308" effort="1" velocity="1"/>',
+    )
     robot = kinengine.load_urdf_string(text)
     assert verify(robot, samples=3).passed
 
 
 # -- item 8 (non-IK): singularity_threshold ------------------------------------------------------------
-BAD_THRESHOLDS = [float("nan"), -1.0, -1e-12, float("inf"), None, "1e-6", [1e-6], True, 1e400 * 10, complex(1, 0)]
+BAD_THRESHOLDS = [
+    float("nan"),
+    -1.0,
+    -1e-12,
+    float("inf"),
+    None,
+    "1e-6",
+    [1e-6],
+    True,
+    1e400 * 10,
+    complex(1, 0),
+]
 
 
 @pytest.mark.parametrize("threshold", BAD_THRESHOLDS, ids=repr)
 def test_a_bad_singularity_threshold_is_an_option_error_on_every_path(R, threshold):
     q0 = R.neutral()  # ZYX gimbal lock: a NaN or negative threshold used to return 3.5e15 entries here
-    calls = [lambda: R.analytic_jacobian(q0, singularity_threshold=threshold),
-             lambda: R.analytic_jacobian(np.tile(q0, (3, 1)), singularity_threshold=threshold),
-             lambda: R.analytic_hessian(q0, singularity_threshold=threshold),
-             lambda: R.task(singularity_threshold=threshold),
-             lambda: R.pose_parameters(q0, on_singularity="raise", singularity_threshold=threshold)]
+    calls = [
+        lambda: R.analytic_jacobian(q0, singularity_threshold=threshold),
+        lambda: R.analytic_jacobian(np.tile(q0, (3, 1)), singularity_threshold=threshold),
+        lambda: R.analytic_hessian(q0, singularity_threshold=threshold),
+        lambda: R.task(singularity_threshold=threshold),
+        lambda: R.pose_parameters(q0, on_singularity="raise", singularity_threshold=threshold),
+    ]
     for call in calls:
         with pytest.raises(OptionError, match="singularity_threshold") as info:
             call()
@@ -317,7 +381,10 @@ def test_a_bad_singularity_threshold_is_an_option_error_on_every_path(R, thresho
 
 def test_single_and_batch_paths_agree_at_gimbal_lock(R):
     q0 = R.neutral()
-    for call in (lambda q: R.analytic_jacobian(q), lambda q: R.analytic_jacobian(q, singularity_threshold=0.0)):
+    for call in (
+        lambda q: R.analytic_jacobian(q),
+        lambda q: R.analytic_jacobian(q, singularity_threshold=0.0),
+    ):
         outcomes = []
         for q in (q0, q0[None, :]):
             try:
@@ -329,11 +396,18 @@ def test_single_and_batch_paths_agree_at_gimbal_lock(R):
 
 # -- item 9: an unknown end effector -------------------------------------------------------------------
 def test_an_unknown_end_effector_is_a_frame_not_found_error_with_suggestions():
-    with pytest.raises(FrameNotFoundError, match=r"unknown frame 'panda_hnd'. Did you mean 'panda_hand'") as info:
+    with pytest.raises(
+        FrameNotFoundError, match=r"unknown frame 'panda_hnd'. Did you mean 'panda_hand'"
+    ) as info:
         kinengine.load("panda", end_effector="panda_hnd")
     assert_one_line(info.value)
-    cli = subprocess.run([sys.executable, "-m", "kinengine", "pose", "panda", "--frame", "panda_hnd"], cwd=REPO,
-                         capture_output=True, text=True, timeout=120)
+    cli = subprocess.run(
+        [sys.executable, "-m", "kinengine", "pose", "panda", "--frame", "panda_hnd"],
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert cli.returncode == 2 and cli.stdout == ""
     assert cli.stderr.splitlines() == [cli.stderr.strip()] and "Did you mean 'panda_hand'" in cli.stderr
 
@@ -341,12 +415,17 @@ def test_an_unknown_end_effector_is_a_frame_not_found_error_with_suggestions():
 # -- item 10: urdf_text is what was parsed --------------------------------------------------------------
 def _declared(robot, encoding: str) -> str:
     body = re.sub(r"^<\?xml[^>]*\?>\s*", "", robot.urdf_text)
-    return f'<?xml version="1.0" encoding="{encoding}"?>\n' + body.replace('name="abb_irb120"', 'name="bras_é"', 1)
+    return f'<?xml version="1.0" encoding="{encoding}"?>\n' + body.replace(
+        'name="abb_irb120"', 'name="bras_é"', 1
+    )
 
 
-@pytest.mark.parametrize("encoding, codec", [("UTF-16", "utf-16"), ("ISO-8859-1", "latin-1"), ("UTF-8", "utf-8")])
+@pytest.mark.parametrize(
+    "encoding, codec", [("UTF-16", "utf-16"), ("ISO-8859-1", "latin-1"), ("UTF-8", "utf-8")]
+)
 def test_files_in_other_encodings_keep_their_text_and_verify(R, tmp_path, encoding, codec):
     from kinengine.verify import verify
+
     path = tmp_path / "bras.urdf"
     path.write_bytes(_declared(R, encoding).encode(codec))
     robot = kinengine.load(path)
@@ -380,8 +459,9 @@ def test_a_file_is_read_once(R, tmp_path, monkeypatch):
 
 
 # -- item 11: configuration values ------------------------------------------------------------------------
-@pytest.mark.parametrize("value", ["0.5", b"0.5", True, np.bool_(False), None, [0.5], 10**400, float("nan"),
-                                   complex(0.5, 0), 1e10])
+@pytest.mark.parametrize(
+    "value", ["0.5", b"0.5", True, np.bool_(False), None, [0.5], 10**400, float("nan"), complex(0.5, 0), 1e10]
+)
 def test_configuration_refuses_non_numbers(R, value):
     with pytest.raises(ConfigurationError, match="joint 'joint_1'") as info:
         R.configuration({"joint_1": value})
@@ -397,12 +477,19 @@ def test_configuration_accepts_real_numbers(R):
 @pytest.mark.parametrize("reference", [True, False, 1.0, 0, np.int64(2), "LOCAL", None, b"world"], ids=repr)
 def test_only_reference_names_and_pinocchio_enums_are_references(R, reference):
     q = R.neutral()
-    calls = [lambda: R.jacobian(q, reference=reference), lambda: R.jacobian(np.tile(q, (2, 1)), reference=reference),
-             lambda: R.kinematics(q, reference=reference), lambda: R.jacobian_time_variation(q, q, reference=reference),
-             lambda: R.kinematic_hessian(q, reference=reference)]
+    calls = [
+        lambda: R.jacobian(q, reference=reference),
+        lambda: R.jacobian(np.tile(q, (2, 1)), reference=reference),
+        lambda: R.kinematics(q, reference=reference),
+        lambda: R.jacobian_time_variation(q, q, reference=reference),
+        lambda: R.kinematic_hessian(q, reference=reference),
+    ]
     if hasattr(R, "frame"):  # the hot-loop frame handle
         handle = R.frame()
-        calls += [lambda: handle.jacobian(q, reference=reference), lambda: handle.kinematics(q, reference=reference)]
+        calls += [
+            lambda: handle.jacobian(q, reference=reference),
+            lambda: handle.kinematics(q, reference=reference),
+        ]
     for call in calls:
         with pytest.raises(OptionError, match="unknown reference") as info:
             call()
@@ -447,7 +534,9 @@ FOREIGN = {
     "Limits(max_attribute_length=inf)": lambda R: Limits(max_attribute_length=float("inf")),
     "Limits(max_bytes=True)": lambda R: Limits(max_bytes=True),
     "load(limits=dict)": lambda R: kinengine.load("abb_irb120", limits={}),
-    "load_urdf_string(limits=dict)": lambda R: kinengine.load_urdf_string(R.urdf_text, limits={"max_bytes": 1}),
+    "load_urdf_string(limits=dict)": lambda R: kinengine.load_urdf_string(
+        R.urdf_text, limits={"max_bytes": 1}
+    ),
     "load('a' * 300)": lambda R: kinengine.load("a" * 300),
     "load('a' * 300 + '.urdf')": lambda R: kinengine.load("a" * 300 + ".urdf"),
     "load of a NUL path": lambda R: kinengine.load("arm\0.urdf"),
@@ -479,7 +568,7 @@ def test_a_path_in_an_unreadable_folder_is_a_urdf_error(tmp_path):
 
 
 def test_a_large_batch_from_an_atexit_handler_runs():
-    child = run_child('''
+    child = run_child("""
         import atexit
         import kinengine
         robot = kinengine.load("abb_irb120")
@@ -489,7 +578,7 @@ def test_a_large_batch_from_an_atexit_handler_runs():
             T = robot.frame_pose(Q)
             print("ok", T.shape, bool((T[:5] == expected).all()))
         atexit.register(late)
-    ''')
+    """)
     assert child.returncode == 0 and child.stderr == "", child.stderr
     assert child.stdout.strip() == "ok (200000, 4, 4) True"
 

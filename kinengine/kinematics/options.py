@@ -62,7 +62,9 @@ def checked_frames(frames: object, kinds: tuple[type, ...]) -> None:
     entries = frames if isinstance(frames, (list, tuple)) else [frames]
     bad = next((f for f in entries if not isinstance(f, kinds)), None)
     if bad is not None or not isinstance(frames, (list, tuple)):
-        raise OptionError(f"a task's frames are frame names or kinengine.FrameTask entries, got {_short(bad)}")
+        raise OptionError(
+            f"a task's frames are frame names or kinengine.FrameTask entries, got {_short(bad)}"
+        )
 
 
 def checked_rng(rng: object) -> np.random.Generator:
@@ -70,8 +72,10 @@ def checked_rng(rng: object) -> np.random.Generator:
     if rng is None or isinstance(rng, np.random.Generator):
         return np.random.default_rng(rng)
     if isinstance(rng, (bool, np.bool_)) or not isinstance(rng, numbers.Integral) or rng < 0:
-        raise OptionError(f"rng must be None, a seed (a whole number >= 0) or a numpy.random.Generator, got "
-                          f"{type(rng).__name__} {_short(rng)}")
+        raise OptionError(
+            f"rng must be None, a seed (a whole number >= 0) or a numpy.random.Generator, got "
+            f"{type(rng).__name__} {_short(rng)}"
+        )
     return np.random.default_rng(int(rng))
 
 
@@ -80,21 +84,26 @@ def checked_parameterization(position: object, rotation: object, rows: object) -
     (the names and labels themselves are checked by the pose map)."""
     for option, value in (("position", position), ("rotation", rotation)):
         if value is not None and type(value) is not str:
-            raise ParameterizationError(f"{option} must be a parameterization name (str) or None, got "
-                                        f"{type(value).__name__} {_short(value)}")
+            raise ParameterizationError(
+                f"{option} must be a parameterization name (str) or None, got "
+                f"{type(value).__name__} {_short(value)}"
+            )
     if rows is None:
         return position, rotation, None
     if isinstance(rows, str):
         return position, rotation, (rows,)
     if isinstance(rows, (bytes, dict)) or not hasattr(rows, "__iter__"):
-        raise ParameterizationError("rows must be None, a row label or a sequence of labels (str) and "
-                                    f"indices (int), got {type(rows).__name__} {_short(rows)}")
+        raise ParameterizationError(
+            "rows must be None, a row label or a sequence of labels (str) and "
+            f"indices (int), got {type(rows).__name__} {_short(rows)}"
+        )
     selected = tuple(rows)
     for row in selected:
         index = isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_))
         if not (type(row) is str or index):
-            raise ParameterizationError(f"rows must hold labels (str) and indices (int), got "
-                                        f"{type(row).__name__} {_short(row)}")
+            raise ParameterizationError(
+                f"rows must hold labels (str) and indices (int), got {type(row).__name__} {_short(row)}"
+            )
     return position, rotation, selected
 
 
@@ -103,5 +112,12 @@ def _short(value: object) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-__all__ = ["checked_flag", "checked_frames", "checked_nonnegative", "checked_parameterization", "checked_rng",
-           "checked_threshold", "checked_tolerance"]
+__all__ = [
+    "checked_flag",
+    "checked_frames",
+    "checked_nonnegative",
+    "checked_parameterization",
+    "checked_rng",
+    "checked_threshold",
+    "checked_tolerance",
+]
