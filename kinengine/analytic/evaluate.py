@@ -5,12 +5,15 @@ batches, the single path row by row for small ones). q is checked by the caller.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
 from ..kinematics import batch, relative
 from ..kinematics.engine import Kinematics
+from ..kinematics.handle import FrameHandle
 from .pose_map import PoseMap
 
 ANALYTIC_CALLS = 100
@@ -53,9 +56,21 @@ def analytic_at(
 def analytic_single(
     kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float, nan: bool = False
 ) -> npt.NDArray[np.float64]:
-    """J_A (m, dof) at one checked q, with this thread's cached views of the frame."""
-    views = kin.per_thread(("frame views", fid), lambda: frame_views(kin.data(), fid))
-    return analytic_at(kin, q, fid, views, pmap, threshold, nan=nan)
+    """J_A (m, dof) at one checked q, with this thread's cached views of the frame and the frame's unchecked
+    handle (which writes and folds only the mimic joints that move the frame)."""
+    if kin.dof == 0:
+        views = kin.per_thread(("frame views", fid), lambda: frame_views(kin.data(), fid))
+        return analytic_at(kin, q, fid, views, pmap, threshold, nan=nan)
+    views, jacobian = kin.per_thread(("analytic", fid), lambda: _single_path(kin, fid))
+    J = jacobian(q, "local_world_aligned")  # also places the frame: the views show T_IF at q
+    return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, None, nan)
+
+
+def _single_path(
+    kin: Kinematics, fid: int
+) -> tuple[tuple[np.ndarray, np.ndarray], Callable[[np.ndarray, str], npt.NDArray[np.float64]]]:
+    name = next(n for n, i in kin.frame_ids.items() if i == fid)
+    return frame_views(kin.data(), fid), FrameHandle(kin, name, check_inputs=False).jacobian
 
 
 def analytic_batch(
