@@ -68,6 +68,7 @@ class Peer(SimulatorPeers):
         self.name, self.distribution = name, _DISTRIBUTIONS[name]
         self.robot, self.frame = robot, frame
         self.loaded, self.note = False, ""
+        self.version: str | None
         try:
             self.version = importlib.metadata.version(self.distribution)
         except importlib.metadata.PackageNotFoundError:
@@ -193,7 +194,8 @@ class Peer(SimulatorPeers):
 
         description = self.robot.description
         parent_joint = {j.child: j for j in description.joints}
-        path, link = [], self.frame
+        path: list[str] = []
+        link = self.frame
         while link in parent_joint:
             path[:0] = [parent_joint[link].name, parent_joint[link].child]
             link = parent_joint[link].parent
