@@ -29,7 +29,7 @@ from .facade.analytic import AnalyticMethods
 from .facade.configurations import ConfigurationMethods
 from .facade.editing import EditingMethods
 from .facade.presentation import PresentationMethods
-from .kinematics import REFERENCES, Kinematics, resolve_reference
+from .kinematics import Kinematics, resolve_reference
 from .kinematics import batch as _batch
 from .kinematics.handle import FrameHandle
 from .urdf import RobotDescription
@@ -61,7 +61,7 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
         if end_effector is not None:
             kin.frame_id(end_effector)  # FrameNotFoundError with suggestions for an unknown name
         self._end_effector = end_effector if end_effector is not None else _default_end_effector(description)
-        self._handles: dict[object, FrameHandle] = {}  # frame name (None: end effector) -> unchecked handle
+        self._handles: dict[object, FrameHandle] = {}  # frame name (None: end effector) -> checked handle
 
     # -- description ------------------------------------------------------------------------
     name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
@@ -118,24 +118,16 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
         return FrameHandle(self._kin, self._end_effector if name is None else name, check_inputs=check_inputs)
 
     def _handle(self, frame: str | None) -> FrameHandle:
-        """The unchecked handle of ``frame`` (None: the end effector), kept for up to 256 frame names: the
-        single-q paths of frame_pose/jacobian/kinematics call it after checking q once."""
+        """The Robot's own handle of ``frame`` (None: the end effector): inputs checked, batches taken to
+        the vectorized path; kept for up to 256 frame names (frame_pose, jacobian, kinematics use it)."""
         try:
             return self._handles[frame]
         except (KeyError, TypeError):
             pass
-        handle = FrameHandle(self._kin, self._end_effector if frame is None else frame, check_inputs=False)
+        handle = FrameHandle(self._kin, self._end_effector if frame is None else frame, batches=True)
         if len(self._handles) < 256:
             self._handles[frame] = handle
         return handle
-
-    def _fid(self, frame: str | None) -> int:
-        fid = (
-            self._kin.frame_ids.get(self._end_effector if frame is None else frame)
-            if type(frame) is str or frame is None
-            else None
-        )
-        return self._kin.frame_id(frame) if fid is None else fid
 
     @overload
     def frame_pose(
@@ -159,16 +151,9 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
             handle = self._handles[frame]
         except (KeyError, TypeError):
             handle = self._handle(frame)
-        q = (
-            self._coords.check(q)
-            if check_limits is False
-            else self._coords.check(q, check_limits=check_limits)
-        )
-        if q.ndim == 2:
-            T = _batch.evaluate(self._kin, q, handle.frame_id, None, jacobian=False)[0]
-            assert T is not None  # asked for
-            return T
-        return handle.pose(q)
+        if check_limits is False:
+            return handle.pose(q)
+        return handle.pose(self._coords.check(q, check_limits=check_limits))
 
     @overload
     def jacobian(
@@ -209,21 +194,10 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
             handle = self._handles[frame]
         except (KeyError, TypeError):
             handle = self._handle(frame)
-        ref = (
-            REFERENCES[reference]
-            if type(reference) is str and reference in REFERENCES
-            else resolve_reference(reference)
-        )
-        q = (
-            self._coords.check(q)
-            if check_limits is False
-            else self._coords.check(q, check_limits=check_limits)
-        )
-        if q.ndim == 2:
-            J = _batch.evaluate(self._kin, q, handle.frame_id, ref, pose=False)[1]
-            assert J is not None  # asked for
-            return J
-        return handle.jacobian(q, reference)  # the name: the handle's fast lookup
+        if check_limits is False:
+            return handle.jacobian(q, reference)
+        resolve_reference(reference)  # an unknown reference is reported before q
+        return handle.jacobian(self._coords.check(q, check_limits=check_limits), reference)
 
     @overload
     def kinematics(
@@ -277,12 +251,10 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
             handle = self._handles[frame]
         except (KeyError, TypeError):
             handle = self._handle(frame)
+        if check_limits is False and out is None and workers is None:
+            return handle.kinematics(q, reference)
         ref = resolve_reference(reference)
-        q = (
-            self._coords.check(q)
-            if check_limits is False
-            else self._coords.check(q, check_limits=check_limits)
-        )
+        q = self._coords.check(q, check_limits=check_limits)
         if q.ndim == 2:
             T, J = _batch.evaluate(
                 self._kin,
@@ -296,7 +268,7 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
         if out is not None:
             raise OptionError("`out=` is for batches q (N, dof); a single q returns fresh arrays")
         _batch.checked_workers(workers)
-        return handle.kinematics(q, reference)  # the name: the handle's fast lookup
+        return handle.kinematics(q, reference)
 
 
 def _rebuild_robot(

@@ -70,7 +70,8 @@ def _single_path(
     kin: Kinematics, fid: int
 ) -> tuple[tuple[np.ndarray, np.ndarray], Callable[[np.ndarray, str], npt.NDArray[np.float64]]]:
     name = next(n for n, i in kin.frame_ids.items() if i == fid)
-    return frame_views(kin.data(), fid), FrameHandle(kin, name, check_inputs=False).jacobian
+    handle = FrameHandle(kin, name, check_inputs=False)
+    return handle.placement(), handle.jacobian  # views of the Data the handle's Jacobian places
 
 
 def analytic_batch(

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from typing import TypeVar
+from typing import NamedTuple, TypeVar
 
 import numpy as np
 import pinocchio as pin
@@ -137,6 +137,15 @@ class MimicMap:
         return J_pin[:, : self.dof]
 
 
+class FramePath(NamedTuple):
+    """How one frame's pose and Jacobian are computed at a checked q (see :meth:`Kinematics.frame_path`)."""
+
+    model: pin.Model
+    frame_id: int  # the frame's index in ``model``
+    data: Callable[[], pin.Data]  # this thread's Data of ``model``
+    mapped: bool  # True: q goes through q_pin = M q + b and J through J_pin · M; False: both as they are
+
+
 class Kinematics:
     """Pinocchio model + coordinate map of one robot; poses and Jacobians at checked configurations."""
 
@@ -158,6 +167,46 @@ class Kinematics:
         except AttributeError:
             data = self._tls.data = create_data(self.model, f"robot {self.description.name!r}")
             return data
+
+    def frame_path(self, fid: int) -> FramePath:
+        """The cheapest exact way to frame ``fid``. Without mimic joints: the model itself, q untouched.
+        With mimic joints, for a frame that no mimic joint moves (an arm's flange and hand, not the
+        mimicking finger): Pinocchio's reduced model with the mimic joints locked, whose nq = dof joints are
+        q's coordinates in q's order — the frame's pose and Jacobian there equal the full model's at
+        q_pin = M q + b (its J_pin columns of mimic joints are zero), so again q passes untouched. Only frames
+        that a mimic joint moves take the map (``mapped``)."""
+        if self.coordinates.identity:
+            return FramePath(self.model, fid, self.data, False)
+        model, independent = self.model, self.coordinates.names
+        locked = self.memoized("mimic joints locked", self._locked_mimics)
+        if locked is None or any(model.names[k] not in independent for k in self._supports(fid)):
+            return FramePath(model, fid, self.data, True)
+        reduced, reduced_data = locked
+        frame = model.frames[fid]
+        return FramePath(reduced, reduced.getFrameId(frame.name, frame.type), reduced_data, False)
+
+    def _supports(self, fid: int) -> list[int]:
+        """Pinocchio joint indices (1-based) that move frame ``fid``."""
+        return [k for k in self.model.supports[self.model.frames[fid].parentJoint] if k > 0]
+
+    def _locked_mimics(self) -> tuple[pin.Model, Callable[[], pin.Data]] | None:
+        """Pinocchio's model with every mimic joint locked at 0 and its per-thread Data (None if its joints
+        were not q's coordinates in q's order)."""
+        model, names = self.model, set(self.coordinates.names)
+        mimic_joints = [k for k in range(1, model.njoints) if model.names[k] not in names]
+        reduced = pin.buildReducedModel(model, mimic_joints, np.zeros(model.nq))
+        if tuple(reduced.names)[1:] != self.coordinates.names or reduced.nq != self.dof:
+            return None
+        local = threading.local()
+
+        def data() -> pin.Data:
+            try:
+                return local.data
+            except AttributeError:
+                local.data = create_data(reduced, f"robot {self.description.name!r}")
+                return local.data
+
+        return reduced, data
 
     def pinocchio_q(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio's configuration (nq,) for a checked q (dof,): q itself without mimic joints, else
@@ -248,4 +297,4 @@ def _frame_ids(model: pin.Model) -> dict[str, int]:
     return dict(sorted(ids.items(), key=lambda kv: kv[1]))
 
 
-__all__ = ["REFERENCES", "Kinematics", "MimicMap", "resolve_reference"]
+__all__ = ["REFERENCES", "FramePath", "Kinematics", "MimicMap", "resolve_reference"]

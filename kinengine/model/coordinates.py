@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
@@ -23,12 +23,13 @@ from ..urdf import RobotDescription
 from .mimics import mimic_roots, narrow_by_mimics
 
 _F64 = np.dtype(np.float64)
+_SMALL_BATCH = 256
+"""Up to this many entries, a ready batch is checked by one scalar hypot instead of two numpy reductions."""
 MAX_MAGNITUDE = 1e9
 """[m or rad] the largest |q_i| accepted: beyond it a prismatic coordinate (or a mimic multiplier times
 one) could overflow a pose; an angle of 1e9 rad is 1.6e8 turns. Limits beyond it are sampled within it."""
 MAX_SAMPLES = 2**28
 """The most numbers one random_configuration call makes (2 GiB of float64)."""
-_STRIDES = (_F64.itemsize,)  # a C-contiguous float64 vector
 
 
 class CoordinateMap:
@@ -62,7 +63,9 @@ class CoordinateMap:
         self.lower, self.upper = lower, upper
         self.continuous = np.array([joints[n].type == "continuous" for n in names], dtype=bool)
         self._index = index
-        self._shape = (self.dof,)
+        self.ready: Callable[[object], bool] = _ready_vector(self.dof)
+        """``ready(q)``: True iff q is already a C-contiguous float64 ndarray of shape (dof,) with every
+        |q_i| <= MAX_MAGNITUDE (finite): :meth:`check` returns it as it is. The one check's fast path."""
         self._mimics = {name: root[0] for name, root in roots.items()}
 
     # -- the map ------------------------------------------------------------------------------
@@ -97,14 +100,11 @@ class CoordinateMap:
         ints, float32, lists, tuples, strided, Fortran-ordered and read-only arrays are
         accepted and converted (a new array when conversion is needed; the input is never
         modified). NaN/inf, strings, None, booleans, complex, masked entries, empty batches
-        and wrongly shaped input are refused with the expected shape in the message.
+        and wrongly shaped input are refused with the expected shape in the message. A q that is
+        :attr:`ready` is returned unchanged.
         """
-        # Hot path: a contiguous float64 vector (strides (8,): one axis, no gaps) of the right length costs
-        # one float sum to check; a sum beyond ±MAX_MAGNITUDE (NaN, inf, overflow, large) is looked at
-        # entry-wise.
-        if type(q) is np.ndarray and q.dtype is _F64 and q.strides == _STRIDES and len(q) == self.dof:
-            if not -MAX_MAGNITUDE <= sum(q.tolist()) <= MAX_MAGNITUDE:  # NaN, inf, overflow or large
-                self._check_values(q, name)
+        if self.ready(q):  # a float64 vector of the right length and magnitude: returned as it is
+            pass
         elif (
             allow_batch
             and type(q) is np.ndarray
@@ -113,9 +113,12 @@ class CoordinateMap:
             and q.shape[0]
             and q.shape[1] == self.dof
             and q.flags.c_contiguous
-        ):  # a ready batch: one sum as well
-            total = sum(q.ravel().tolist()) if q.size <= 256 else float(q.sum())
-            if not -MAX_MAGNITUDE <= total <= MAX_MAGNITUDE:
+        ):  # a ready batch: one hypot (small) or max/min (large) bounds every entry; NaN fails both
+            if not (
+                math.hypot(*q.ravel().tolist()) <= MAX_MAGNITUDE
+                if q.size <= _SMALL_BATCH
+                else -MAX_MAGNITUDE <= q.min() and q.max() <= MAX_MAGNITUDE
+            ):
                 self._check_values(q, name)
         else:
             q = self._convert(q, name, allow_batch)
@@ -280,6 +283,25 @@ class CoordinateMap:
             )
         shape = (self.dof,) if size is None else (size, self.dof)
         return rng.uniform(lo, hi, size=shape)
+
+
+def _ready_vector(dof: int) -> Callable[[object], bool]:
+    """The predicate :attr:`CoordinateMap.ready` for ``dof`` coordinates. ``hypot`` of the entries is NaN
+    for a NaN, inf for an inf and at least max |q_i| otherwise, so ``hypot <= MAX_MAGNITUDE`` bounds every
+    entry with one scalar call (a plain sum would let +1e300 and -1e300 cancel). Strides (8,): one axis,
+    contiguous (Eigen's vectorized loops round a strided vector's products differently)."""
+    ndarray, f64, strides, hypot, limit = np.ndarray, _F64, (_F64.itemsize,), math.hypot, MAX_MAGNITUDE
+
+    def ready(q: object) -> bool:
+        return (
+            type(q) is ndarray
+            and q.dtype is f64  # type: ignore[attr-defined]
+            and q.strides == strides  # type: ignore[attr-defined]
+            and len(q) == dof  # type: ignore[arg-type]
+            and hypot(*q.tolist()) <= limit  # type: ignore[attr-defined]
+        )
+
+    return ready
 
 
 def _short(value: object) -> str:
