@@ -8,6 +8,8 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pinocchio as pin
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import kinengine
 from kinengine import ConfigurationError, FrameNotFoundError, OptionError
@@ -118,3 +120,115 @@ def test_mimic_buffer_is_per_call_and_per_thread(mixed):
         for i, (T, J) in enumerate(result):
             T0, J0 = expected[(i + offset) % len(Q)]
             assert np.array_equal(T, T0) and np.array_equal(J, J0)
+
+
+def _full_model_answer(robot, frame, q):
+    """Pinocchio's full model (every movable joint) at q_pin = M q + b, J folded by M: the plain definition."""
+    model = robot.pinocchio_model()
+    data = model.createData()
+    fid = robot.frame_id(frame)
+    qp = robot.pinocchio_configuration(q)
+    pin.forwardKinematics(model, data, qp)
+    T = pin.updateFramePlacement(model, data, fid).homogeneous
+    M = robot.engine.coordinates.matrix
+    Js = {r: pin.computeFrameJacobian(model, data, qp, fid, p).reshape(6, -1) @ M for r, p in PIN.items()}
+    return T, Js
+
+
+PIN = {"local_world_aligned": pin.LOCAL_WORLD_ALIGNED, "local": pin.LOCAL, "world": pin.WORLD}
+
+
+@pytest.mark.parametrize("robot_name", ["panda", "mixed"])
+def test_frames_of_mimic_robots_on_the_locked_model_equal_the_full_model(robot_name, request):
+    """A frame that no mimic joint moves is computed on Pinocchio's reduced model (mimic joints locked, q
+    untouched); a frame a mimic joint moves takes the map. Both equal the full model at q_pin = M q + b."""
+    robot = kinengine.load("panda") if robot_name == "panda" else request.getfixturevalue("mixed")
+    kin = robot.engine
+    mapped = {name: kin.frame_path(kin.frame_id(name)).mapped for name in robot.frame_names}
+    assert any(mapped.values()) and not all(mapped.values())
+    if robot_name == "panda":
+        assert not mapped["panda_hand"] and not mapped["panda_leftfinger"] and mapped["panda_rightfinger"]
+    for q in robot.random_configuration(11, size=5):
+        for name in robot.frame_names:
+            fk = robot.frame(name, check_inputs=False)
+            T, Js = _full_model_answer(robot, name, q)
+            np.testing.assert_allclose(fk.pose(q), T, rtol=0, atol=1e-14)
+            for ref, J in Js.items():
+                np.testing.assert_allclose(
+                    fk.jacobian(q, ref), J, rtol=0, atol=1e-14, err_msg=f"{name} {ref}"
+                )
+                T2, J2 = fk.kinematics(q, ref)
+                assert np.array_equal(T2, fk.pose(q)) and np.array_equal(J2, fk.jacobian(q, ref))
+            R, p = fk.placement()
+            np.testing.assert_array_equal(R, fk.pose(q)[:3, :3])
+            np.testing.assert_array_equal(p, fk.pose(q)[:3, 3])
+            assert not R.flags.writeable
+
+
+def test_ready_is_exactly_the_inputs_check_returns_unchanged(abb):
+    """ready(q) (the one check's fast path) holds for C-contiguous float64 (6,) arrays with every |q_i| <=
+    1e9 and for nothing else; check() returns a ready q itself and refuses a NaN, an inf, or entries that
+    only cancel in a sum (+1e300, -1e300)."""
+    coords = abb.engine.coordinates
+    q = abb.random_configuration(3)
+    readonly = q.copy()
+    readonly.flags.writeable = False
+    for x in (q, readonly, np.zeros(6), np.full(6, 1e9 / np.sqrt(6) * 0.999)):
+        assert coords.ready(x) and coords.check(x) is x
+    not_ready = {
+        "strided": np.repeat(q, 2)[::2],
+        "reversed": q[::-1],
+        "column": q.reshape(6, 1),
+        "row": q.reshape(1, 6),
+        "float32": q.astype(np.float32),
+        "big_endian": q.astype(">f8"),
+        "int64": np.arange(6),
+        "long": np.r_[q, 0.0],
+        "short": q[:5].copy(),
+        "list": q.tolist(),
+        "masked": np.ma.masked_array(q, mask=[0, 0, 0, 0, 0, 1]),
+        "0d": np.array(1.0),
+    }
+    for name, x in not_ready.items():
+        assert not coords.ready(x), name
+    for bad in (
+        [1e300, -1e300, 0, 0, 0, 0],
+        [np.nan, 0, 0, 0, 0, 0],
+        [0, 0, np.inf, 0, 0, 0],
+        [2e9, 0, 0, 0, 0, 0],
+    ):
+        x = np.array(bad, dtype=float)
+        assert not coords.ready(x)
+        with pytest.raises(ConfigurationError, match=r"`q`\[\d\]"):
+            abb.frame_pose(x)
+        with pytest.raises(ConfigurationError):
+            abb.frame("tool0").jacobian(x)
+    with pytest.raises(ConfigurationError):  # the same hole in a batch (a large one: max/min, not a sum)
+        abb.frame_pose(np.tile([1e300, -1e300, 0, 0, 0, 0.0], (100, 1)))
+    with pytest.raises(ConfigurationError):
+        abb.frame_pose(np.array([[1e300, -1e300, 0, 0, 0, 0.0]]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.floats(allow_nan=True, allow_infinity=True, width=64)
+        | st.sampled_from([1e300, -1e300, 1e9, -1e9]),
+        min_size=6,
+        max_size=6,
+    )
+)
+def test_ready_never_passes_an_entry_the_check_refuses(values):
+    coords = _ABB.engine.coordinates
+    x = np.array(values, dtype=float)
+    entries_ok = bool(np.all(np.isfinite(x)) and np.all(np.abs(x) <= 1e9))
+    if coords.ready(x):
+        assert entries_ok and coords.check(x) is x
+    if entries_ok and np.all(np.abs(x) <= 1e9 / np.sqrt(6)):
+        assert coords.ready(x)
+    if not entries_ok:
+        with pytest.raises(ConfigurationError):
+            coords.check(x)
+
+
+_ABB = kinengine.load("abb_irb120")

@@ -35,14 +35,16 @@ class FrameHandle:
 
     __slots__ = ("check_inputs", "dof", "frame_id", "jacobian", "kinematics", "name", "placement", "pose")
 
-    pose: Callable[[np.ndarray], np.ndarray]
+    pose: Callable[..., np.ndarray]
     jacobian: Callable[..., np.ndarray]
     kinematics: Callable[..., tuple[np.ndarray, np.ndarray]]
     placement: Callable[[], tuple[np.ndarray, np.ndarray]]
     """``placement()``: (C_IF (3, 3), p (3,)) as live read-only views of this thread's Data: they show the
     frame as the last pose/jacobian/kinematics call of this thread placed it (LOCAL Jacobians excepted)."""
 
-    def __init__(self, kin: Kinematics, frame: str, *, check_inputs: bool = True, batches: bool = False) -> None:
+    def __init__(
+        self, kin: Kinematics, frame: str, *, check_inputs: bool = True, batches: bool = False
+    ) -> None:
         for option, value in (("check_inputs", check_inputs), ("batches", batches)):
             if type(value) is not bool:
                 from ..errors import OptionError
@@ -58,7 +60,7 @@ class FrameHandle:
         return f"<FrameHandle {self.name!r}: {self.dof} dof, check_inputs={self.check_inputs}>"
 
 
-PoseFunction = Callable[[np.ndarray], np.ndarray]
+PoseFunction = Callable[..., np.ndarray]
 JacobianFunction = Callable[..., np.ndarray]
 KinematicsFunction = Callable[..., tuple[np.ndarray, np.ndarray]]
 PlacementFunction = Callable[[], tuple[np.ndarray, np.ndarray]]

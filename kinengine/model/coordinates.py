@@ -14,7 +14,9 @@ from __future__ import annotations
 
 import math
 import numbers
+import struct
 from collections.abc import Callable, Mapping
+from typing import TypeGuard
 
 import numpy as np
 
@@ -63,7 +65,7 @@ class CoordinateMap:
         self.lower, self.upper = lower, upper
         self.continuous = np.array([joints[n].type == "continuous" for n in names], dtype=bool)
         self._index = index
-        self.ready: Callable[[object], bool] = _ready_vector(self.dof)
+        self.ready: Callable[[object], TypeGuard[np.ndarray]] = _ready_vector(self.dof)
         """``ready(q)``: True iff q is already a C-contiguous float64 ndarray of shape (dof,) with every
         |q_i| <= MAX_MAGNITUDE (finite): :meth:`check` returns it as it is. The one check's fast path."""
         self._mimics = {name: root[0] for name, root in roots.items()}
@@ -117,7 +119,7 @@ class CoordinateMap:
             if not (
                 math.hypot(*q.ravel().tolist()) <= MAX_MAGNITUDE
                 if q.size <= _SMALL_BATCH
-                else -MAX_MAGNITUDE <= q.min() and q.max() <= MAX_MAGNITUDE
+                else q.min() >= -MAX_MAGNITUDE and q.max() <= MAX_MAGNITUDE
             ):
                 self._check_values(q, name)
         else:
@@ -285,21 +287,23 @@ class CoordinateMap:
         return rng.uniform(lo, hi, size=shape)
 
 
-def _ready_vector(dof: int) -> Callable[[object], bool]:
-    """The predicate :attr:`CoordinateMap.ready` for ``dof`` coordinates. ``hypot`` of the entries is NaN
-    for a NaN, inf for an inf and at least max |q_i| otherwise, so ``hypot <= MAX_MAGNITUDE`` bounds every
-    entry with one scalar call (a plain sum would let +1e300 and -1e300 cancel). Strides (8,): one axis,
-    contiguous (Eigen's vectorized loops round a strided vector's products differently)."""
-    ndarray, f64, strides, hypot, limit = np.ndarray, _F64, (_F64.itemsize,), math.hypot, MAX_MAGNITUDE
+def _ready_vector(dof: int) -> Callable[[object], TypeGuard[np.ndarray]]:
+    """The predicate :attr:`CoordinateMap.ready` for ``dof`` coordinates, in one pass over q's bytes:
+    ``Struct("<dof>d").unpack`` reads exactly dof float64 from a C-contiguous buffer (a strided view or a
+    wrong size raises, and Eigen's vectorized loops would round a strided vector's products differently);
+    ``hypot`` of the entries is NaN for a NaN, inf for an inf and at least max |q_i| otherwise, so
+    ``hypot <= MAX_MAGNITUDE`` bounds every entry with one scalar call (a plain sum would let +1e300 and
+    -1e300 cancel). The dtype test keeps other 8-byte types out; ndim keeps (dof, 1) out."""
+    ndarray, f64, hypot, limit = np.ndarray, _F64, math.hypot, MAX_MAGNITUDE
+    unpack = struct.Struct(f"={dof}d").unpack
 
-    def ready(q: object) -> bool:
-        return (
-            type(q) is ndarray
-            and q.dtype is f64  # type: ignore[attr-defined]
-            and q.strides == strides  # type: ignore[attr-defined]
-            and len(q) == dof  # type: ignore[arg-type]
-            and hypot(*q.tolist()) <= limit  # type: ignore[attr-defined]
-        )
+    def ready(q: object) -> TypeGuard[np.ndarray]:
+        if type(q) is not ndarray or q.dtype is not f64 or q.ndim != 1:
+            return False
+        try:
+            return hypot(*unpack(q)) <= limit  # type: ignore[arg-type]  # an ndarray is a buffer
+        except (ValueError, struct.error):  # not C-contiguous, or not dof entries
+            return False
 
     return ready
 
