@@ -89,39 +89,22 @@ class MimicMap:
             _add(buffer, coords.offset, out=buffer)
         return buffer
 
-    def q_pin_for(self, model: pin.Model, fid: int) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """M q + b into a buffer, for frame ``fid``'s pose and Jacobian only: a mimic joint that does not move
-        the frame keeps whatever its entry holds (its value changes nothing the frame's results read)."""
-        if not self.prefix:
-            return self.q_pin
-        support = set(model.supports[model.frames[fid].parentJoint])
-        rows = tuple(row for row in self.rows if row[0] + 1 in support)
-        dof = self.dof
+    def gather(self) -> Callable[[np.ndarray], np.ndarray]:
+        """q (dof,) -> a fresh q_pin = M q + b (nq,) for a frame that mimic joints move: one gather
+        ``q[leader]`` (numpy's cheapest call for it) when every mimic joint copies its leader, else the
+        gather scaled and shifted."""
+        leader, multiplier, offset = self.leader, self.coords.multiplier, self.coords.offset
+        if self.unit:
+            return lambda q: q[leader]
+        if not self.coords.has_offset:
+            return lambda q: q[leader] * multiplier
+        return lambda q: q[leader] * multiplier + offset
 
-        def q_pin(q: np.ndarray, buffer: np.ndarray) -> np.ndarray:
-            buffer[:dof] = q
-            for k, leader, m, o in rows:
-                buffer[k] = q.item(leader) * m + o
-            return buffer
-
-        return q_pin
-
-    def folder(self, model: pin.Model, fid: int) -> Callable[[np.ndarray], np.ndarray]:
-        """J_pin -> J for frame ``fid`` only: a mimic joint that does not move the frame (a gripper's finger
-        for the hand's frame) has a zero column there, so only the mimic joints supporting it are added."""
-        if not self.prefix:
-            return self.fold
-        support = set(model.supports[model.frames[fid].parentJoint])
-        rows = tuple(row for row in self.rows if row[0] + 1 in support)  # Pinocchio joint k + 1 is q_pin[k]
-        dof = self.dof
-
-        def fold(J_pin: np.ndarray) -> np.ndarray:
-            J_pin = J_pin.reshape(6, -1)
-            for k, leader, m, _ in rows:
-                J_pin[:, leader] += m * J_pin[:, k]
-            return J_pin[:, :dof]
-
-        return fold
+    def folder(self) -> Callable[[np.ndarray], np.ndarray]:
+        """J_pin (6, nq) -> J = J_pin · M (6, dof), a fresh C-contiguous array from one product (cheaper
+        than column updates at these sizes)."""
+        matrix = self.coords.matrix
+        return lambda J_pin: J_pin.dot(matrix)
 
     def fold(self, J_pin: np.ndarray) -> np.ndarray:
         """J (6, dof) = J_pin (6, nq) · M; J_pin (fresh from Pinocchio) may be modified."""

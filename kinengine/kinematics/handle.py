@@ -7,8 +7,8 @@
 
 Same frames, units and references as :mod:`kinengine.kinematics.engine`. The handle binds the
 frame's Pinocchio model (:meth:`Kinematics.frame_path`), its frame index and Pinocchio's functions
-once; each thread gets its own Pinocchio Data (and, for a frame that a mimic joint moves, its own
-buffer for q_pin = M q + b), so one handle serves several threads. With ``check_inputs=True`` every
+once; each thread gets its own Pinocchio Data (a frame that a mimic joint moves gets a fresh
+q_pin = M q + b per call), so one handle serves several threads. With ``check_inputs=True`` every
 call runs the one input check: :attr:`CoordinateMap.ready` first (a float64 vector of the right
 length and magnitude passes with one scalar test), :meth:`CoordinateMap.check` for anything else
 (converted, or refused with a ConfigurationError). With ``check_inputs=False`` the caller promises a
@@ -81,8 +81,8 @@ def _bind(
     local = threading.local()
 
     def state() -> pin.Data:
-        """This thread's Data of the frame's model (and, if mapped, a q_pin buffer of our own)."""
-        local.data, local.buffer = new_data(), np.zeros(coords.nq)
+        """This thread's Data of the frame's model."""
+        local.data = new_data()
         return local.data
 
     def check(q: object) -> np.ndarray:
@@ -198,11 +198,8 @@ def _bind(
 
     # A frame moved by mimic joints (q_pin = M q + b for those joints only; J_pin · M), or dof == 1
     # (eigenpy returns a (6, 1) Jacobian as (6,)).
-    q_pin = kin.mimic.q_pin_for(model, pfid) if mapped else None
-    fold = kin.mimic.folder(model, pfid) if mapped else (lambda J: J.reshape(6, -1))
-
-    def pinocchio_q(q: np.ndarray) -> np.ndarray:
-        return q if q_pin is None else q_pin(q, local.buffer)
+    pinocchio_q = kin.mimic.gather() if mapped else (lambda q: q)
+    fold = kin.mimic.folder() if mapped else (lambda J: J.reshape(6, -1))
 
     def mapped_pose(q: np.ndarray) -> np.ndarray:
         if checking and not ready(q):
