@@ -80,7 +80,7 @@ def run_chain(
         for a, b in part:
             evaluate_chain(
                 chain,
-                np.ascontiguousarray(Q[a:b].T),
+                Q[a:b].T,  # a strided view: the chain reads its rows
                 None if pose is None else pose[a:b],
                 None if jac is None else jac[a:b],
                 reference,

@@ -16,7 +16,6 @@ configurations (chunks run in parallel: see :mod:`kinengine.kinematics.batch`). 
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -24,33 +23,76 @@ import pinocchio as pin
 
 from .engine import Kinematics
 
-CHUNK = 8192
-"""Most configurations per numpy pass (the temporaries stay in the core's cache)."""
+CHUNK = 4096
+"""Most configurations per numpy pass: a chunk's rows (32 KiB each) stay in the core's L2/L3 share
+while the per-call overhead of numpy (~1 µs) stays small against the work on them."""
 Terms = tuple[tuple[tuple[int, float], ...], ...]
 
 
-@dataclass(frozen=True)
 class Step:
-    """One movable joint on the path to the frame."""
+    """One movable joint on the path to the frame (plain slots: no dataclass machinery at import)."""
 
-    prismatic: bool
-    coordinate: int  # column of Q that drives it (the leader's, for a mimic joint)
-    scaling: float  # θ = scaling · q + offset
-    offset: float
-    rotation: Terms  # K_i (see _terms)
-    translation: tuple[tuple[int, float], ...]  # nonzero entries of t_i: (row, value)
-    accumulate: bool  # an earlier step already wrote this Jacobian column
+    __slots__ = ("accumulate", "coordinate", "offset", "prismatic", "rotation", "scaling", "translation")
+
+    def __init__(
+        self,
+        prismatic: bool,
+        coordinate: int,
+        scaling: float,
+        offset: float,
+        rotation: Terms,
+        translation: tuple[tuple[int, float], ...],
+        accumulate: bool,
+    ) -> None:
+        self.prismatic = prismatic
+        self.coordinate = coordinate  # column of Q that drives it (the leader's, for a mimic joint)
+        self.scaling = scaling  # θ = scaling · q + offset
+        self.offset = offset
+        self.rotation = rotation  # K_i (see _terms)
+        self.translation = translation  # nonzero entries of t_i: (row, value)
+        self.accumulate = accumulate  # an earlier step already wrote this Jacobian column
 
 
-@dataclass(frozen=True)
 class Chain:
-    steps: tuple[Step, ...]
-    rotation: Terms  # Q_lastᵀ · C_f (frame placement): C_IF = S_last · this
-    translation: tuple[tuple[int, float], ...]
-    dof: int
-    full: bool  # every coordinate drives a joint of the chain (no zero Jacobian column)
-    pose_calls: int  # numpy calls per chunk for the pose, and more for the Jacobian
-    jacobian_calls: int
+    """The compiled chain: its steps, the frame placement after the last one, and call counts."""
+
+    __slots__ = (
+        "columns",
+        "dof",
+        "full",
+        "jacobian_calls",
+        "pose_calls",
+        "rotation",
+        "steps",
+        "translation",
+        "unused",
+    )
+
+    def __init__(
+        self,
+        steps: tuple[Step, ...],
+        rotation: Terms,
+        translation: tuple[tuple[int, float], ...],
+        dof: int,
+        pose_calls: int,
+        jacobian_calls: int,
+    ) -> None:
+        self.steps = steps
+        self.rotation = rotation  # Q_lastᵀ · C_f (frame placement): C_IF = S_last · this
+        self.translation = translation
+        self.dof = dof
+        driven = {s.coordinate for s in steps}
+        self.unused = tuple(k for k in range(dof) if k not in driven)  # zero Jacobian columns
+        self.full = not self.unused
+        # Jacobian columns a slice of revolute steps fills one each (no mimic): computed for all steps at once
+        first = steps[0].coordinate if steps else 0
+        plain = all(
+            not s.prismatic and s.scaling == 1.0 and s.offset == 0.0 and s.coordinate == first + i
+            for i, s in enumerate(steps)
+        )
+        self.columns = slice(first, first + len(steps)) if plain and steps else None
+        self.pose_calls = pose_calls  # numpy calls per chunk for the pose, and more for the Jacobian
+        self.jacobian_calls = jacobian_calls
 
 
 def _axis_basis(axis: np.ndarray) -> np.ndarray:
@@ -112,8 +154,7 @@ def _compile(kin: Kinematics, fid: int) -> Chain:
         + sum(_compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 8) for s in steps)
     )
     jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
-    full = len({s.coordinate for s in steps}) == kin.dof
-    return Chain(tuple(steps), rotation, translation, kin.dof, full, pose_calls, jacobian_calls)
+    return Chain(tuple(steps), rotation, translation, kin.dof, pose_calls, jacobian_calls)
 
 
 def _compose(columns: list, terms: Terms) -> list:
@@ -139,10 +180,17 @@ def _shift(
     return p
 
 
-def _cross(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64], out: np.ndarray) -> None:
-    """out[0:3] = a × b for (3, n) arrays (out rows may be strided views)."""
+def _cross(
+    a: npt.NDArray[np.float64], b: npt.NDArray[np.float64], out: np.ndarray, temp: np.ndarray | None = None
+) -> None:
+    """out[0:3] = a × b for (3, ...) arrays (out rows may be strided views; temp: two scratch rows)."""
     for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
-        np.subtract(a[j] * b[k], a[k] * b[j], out=out[i])
+        if temp is None:
+            np.subtract(a[j] * b[k], a[k] * b[j], out=out[i])
+        else:
+            np.subtract(
+                np.multiply(a[j], b[k], out=temp[0]), np.multiply(a[k], b[j], out=temp[1]), out=out[i]
+            )
 
 
 def evaluate_chain(
@@ -155,86 +203,127 @@ def evaluate_chain(
 ) -> None:
     """Fill pose (n, 4, 4), jac (n, 6, dof) and/or the analytic Jacobian for the chunk qT (dof, n).
 
-    analytic: (pmap, out (n, m, dof), distances (n, parts)), with reference "local_world_aligned".
+    qT may be a strided view (``Q[a:b].T``): only its rows are read. Results go straight into the
+    outputs' strided views (no transposing copy); analytic: (pmap, out (n, m, dof), distances (n, parts)),
+    with reference "local_world_aligned". Few numpy calls per chunk, each over many entries: threads
+    hand the GIL over at every call.
     """
-    n = qT.shape[1]
+    dof, n, m = chain.dof, qT.shape[1], len(chain.steps)
+    jacobian = jac is not None or analytic is not None
+    memory = _rows(n, 2 * dof + (11 * m + 6 * dof + 6 if jacobian else 0))
+    cos, sin = np.cos(qT, out=memory[:dof]), np.sin(qT, out=memory[dof : 2 * dof])  # every coordinate
+    stacked = jacobian and chain.columns is not None  # z_i, p_i stacked (3, m, n) for the Jacobian
+    if stacked:
+        Z = memory[2 * dof : 2 * dof + 3 * m].reshape(3, m, n)
+        P = memory[2 * dof + 3 * m : 2 * dof + 6 * m].reshape(3, m, n)
     eye = np.eye(3)
     S = [eye[:, k : k + 1] for k in range(3)]  # (3, 1) columns broadcast against (3, n)
     p = np.zeros((3, 1))
     joints = []
-    for step in chain.steps:
+    for i, step in enumerate(chain.steps):
         p = _shift(p, S, step.translation)
         S = _compose(S, step.rotation)
-        theta = qT[step.coordinate]
         if step.scaling != 1.0 or step.offset != 0.0:
-            theta = theta * step.scaling + step.offset
+            theta = qT[step.coordinate] * step.scaling + step.offset
+            c, s = np.cos(theta), np.sin(theta)
+        else:
+            theta, c, s = qT[step.coordinate], cos[step.coordinate], sin[step.coordinate]
         if step.prismatic:
             p = p + S[2] * theta
         else:
-            c, s = np.cos(theta), np.sin(theta)
             S = [S[0] * c + S[1] * s, S[1] * c - S[0] * s, S[2]]
-        joints.append((step, S[2], p))
+        if stacked:
+            Z[:, i], P[:, i] = S[2], p
+        elif jacobian:
+            joints.append((step, S[2], p))
     p_f = _shift(p, S, chain.translation)
     R_f = _compose(S, chain.rotation)
     if pose is not None:
-        for k in range(3):
-            pose[:, :3, k] = R_f[k].T
-        pose[:, :3, 3] = p_f.T
-        pose[:, 3, :] = (0.0, 0.0, 0.0, 1.0)
-    if jac is None and analytic is None:
+        for k in range(3):  # one strided copy per entry: faster than a transposing copy of (3, n) blocks
+            for r in range(3):
+                pose[:, r, k] = R_f[k][r]
+            pose[:, k, 3] = p_f[k]
+        pose[:, 3] = (0.0, 0.0, 0.0, 1.0)
+    if not jacobian:
         return
-    buf, col = _scratch(chain.dof, n)
-    if not chain.full:
-        buf.fill(0.0)
-    for step, z, p_i in joints:
-        if step.prismatic:
-            col[:3] = z
-            col[3:] = 0.0
+    direct = analytic is None and reference != pin.LOCAL  # columns straight into jac's strided view
+    rest = memory[2 * dof + 6 * m :]
+    target = jac.transpose(1, 2, 0) if direct else rest[: 6 * dof].reshape(6, dof, n)  # type: ignore[union-attr]
+    for k in chain.unused:
+        target[:, k] = 0.0
+    if stacked:
+        cols = target[:, chain.columns]  # (6, m, n)
+        temp = rest[6 * dof : 6 * dof + 5 * m].reshape(5, m, n)  # p_f − p_i, then two products
+        if reference == pin.WORLD:
+            _cross(P, Z, cols, temp[3:])
         else:
-            if reference == pin.WORLD:
-                _cross(p_i, z, col)
-            else:
-                _cross(z, p_f - p_i, col)
-            col[3:] = z
-        if step.scaling != 1.0:
-            col *= step.scaling
-        if step.accumulate:
-            buf[:, step.coordinate] += col
-        else:
-            buf[:, step.coordinate] = col
-    if reference == pin.LOCAL:  # [v; ω] in F: C_IFᵀ applied to both halves
-        world = buf.copy()
+            _cross(Z, np.subtract(p_f[:, None], P, out=temp[:3]), cols, temp[3:])
         for r in range(3):
-            for half in (0, 3):
-                block = world[half : half + 3]
-                buf[half + r] = R_f[r][0] * block[0] + R_f[r][1] * block[1] + R_f[r][2] * block[2]
+            cols[3 + r] = Z[r]
+    else:
+        _columns(joints, p_f, reference, target, rest[6 * dof : 6 * dof + 6])
+    if direct:
+        return
     if jac is not None:
-        jac[...] = buf.transpose(2, 0, 1)
+        if reference == pin.LOCAL:  # [v; ω] in F: C_IFᵀ applied to both halves
+            for r in range(3):
+                for half in (0, 3):
+                    block = target[half : half + 3]
+                    np.add(
+                        R_f[r][0] * block[0] + R_f[r][1] * block[1],
+                        R_f[r][2] * block[2],
+                        out=jac[:, half + r, :].T,
+                    )
+        else:
+            jac.transpose(1, 2, 0)[...] = target
     if analytic is not None:
         pmap, out, distances = analytic
         JA = np.empty((pmap.size, chain.dof, n))
         # row-major entries of C_IF and p, as (n,) views (a column the chain never turns is (3, 1))
         C = [np.broadcast_to(R_f[j][i], (n,)) for i in range(3) for j in range(3)]
         p_rows = [np.broadcast_to(p_f[i], (n,)) for i in range(3)]
-        for k, distance in enumerate(pmap.fill_columns(p_rows, C, buf, JA)):
+        for k, distance in enumerate(pmap.fill_columns(p_rows, C, target, JA)):
             distances[:, k] = distance
         out[...] = JA.transpose(2, 0, 1)
+
+
+def _columns(
+    joints: list, p_f: np.ndarray, reference: pin.ReferenceFrame | None, target: np.ndarray, col: np.ndarray
+) -> None:
+    """The Jacobian column of each step in turn (prismatic joints; mimic joints scaled and accumulated
+    through the scratch ``col`` (6, n))."""
+    for step, z, p_i in joints:
+        rows = target[:, step.coordinate]  # (6, n)
+        dst = rows
+        if step.accumulate or step.scaling != 1.0:
+            dst = col
+        if step.prismatic:
+            dst[:3] = z
+            dst[3:] = 0.0
+        else:
+            if reference == pin.WORLD:
+                _cross(p_i, z, dst)
+            else:
+                _cross(z, p_f - p_i, dst)
+            dst[3:] = z
+        if step.scaling != 1.0:
+            dst *= step.scaling
+        if step.accumulate:
+            rows += dst
+        elif dst is not rows:
+            rows[...] = dst
 
 
 _LOCAL = threading.local()
 
 
-def _scratch(dof: int, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """This thread's reusable (6, dof, n) Jacobian buffer and (6, n) column: one allocation per thread
-    (grown when needed), not one per chunk (which page-faults through large batches)."""
-    size = 6 * dof * n + 6 * n
-    try:
-        memory = _LOCAL.memory
-        if memory.size < size:
-            raise AttributeError
-    except AttributeError:
-        memory = _LOCAL.memory = np.empty(max(size, 6 * 8 * CHUNK))
-    return memory[: 6 * dof * n].reshape(6, dof, n), memory[6 * dof * n : size].reshape(6, n)
+def _rows(n: int, rows: int) -> np.ndarray:
+    """This thread's reusable scratch as (rows, n): one allocation per thread (grown when needed), not
+    one per chunk (which page-faults through large batches)."""
+    memory = getattr(_LOCAL, "memory", None)
+    if memory is None or memory.size < rows * n:
+        memory = _LOCAL.memory = np.empty(rows * n)
+    return memory[: rows * n].reshape(rows, n)
 
 
 def compiled_chain(kin: Kinematics, fid: int) -> Chain:

@@ -1,0 +1,128 @@
+"""Batch throughput of ``robot.kinematics(Q, frame)`` (T (N, 4, 4) and J (N, 6, dof) in one call) against the
+raw-Pinocchio loop a user would write, in one process.
+
+    python benchmarks/batch_throughput.py [ROBOT ...]      # default: abb_irb120 ur5 panda kinova
+    python benchmarks/batch_throughput.py --quick ur5      # fewer repeats
+
+Per robot and N = 1k, 10k, 100k, 1M: configs/s (best of a few calls; a busy neighbour on the shared
+machine only slows a call, so the best one is the least disturbed) for ``robot.kinematics(Q, frame)``
+and for the same call with ``out=(T, J)`` preallocated, the minor page faults of one call
+(``ru_minflt`` delta) and its peak extra memory beyond the outputs (``tracemalloc``: numpy reports its
+allocations to it). The floor is the inline Pinocchio loop
+
+    for i, q in enumerate(Q):
+        pin.forwardKinematics(model, data, q)
+        J[i] = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+        T[i] = pin.updateFramePlacement(model, data, fid).homogeneous
+
+timed on 10k rows (its rate does not depend on N); "x floor" is configs/s over the floor's.
+"""
+
+from __future__ import annotations
+
+import gc
+import resource
+import sys
+import time
+import tracemalloc
+
+import numpy as np
+import pinocchio as pin
+
+import kinengine
+from kinengine.kinematics import batch
+
+ROBOTS = ("abb_irb120", "ur5", "panda", "kinova")
+SIZES = (1_000, 10_000, 100_000, 1_000_000)
+
+
+def _best(fn, repeats: int, budget: float = 3.0) -> float:
+    """The shortest of ``repeats`` timed calls (stops early after ``budget`` seconds)."""
+    best, spent = float("inf"), 0.0
+    for _ in range(repeats):
+        start = time.perf_counter()
+        fn()
+        took = time.perf_counter() - start
+        best, spent = min(best, took), spent + took
+        if spent > budget:
+            break
+    return best
+
+
+def floor_rate(robot: kinengine.Robot, Q: np.ndarray) -> float:
+    """configs/s of the inline Pinocchio loop over Q on ``robot.pinocchio_model()`` (one plain joint per
+    movable URDF joint; Q mapped to its coordinates once, outside the timing: the identity without mimics)."""
+    model = robot.pinocchio_model()
+    data = model.createData()
+    fid = robot.frame_id(robot.end_effector)
+    Qp = np.array([robot.pinocchio_configuration(q) for q in Q])
+    T = np.empty((len(Q), 4, 4))
+    J = np.empty((len(Q), 6, model.nv))
+    lwa = pin.LOCAL_WORLD_ALIGNED
+
+    def loop() -> None:
+        for i, q in enumerate(Qp):
+            pin.forwardKinematics(model, data, q)
+            J[i] = pin.computeFrameJacobian(model, data, q, fid, lwa)
+            T[i] = pin.updateFramePlacement(model, data, fid).homogeneous
+
+    return len(Q) / _best(loop, 3)
+
+
+def faults_and_memory(fn) -> tuple[int, float]:
+    """(minor page faults of one call, peak memory [MiB] it allocates beyond what it returns)."""
+    gc.collect()
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    result = fn()
+    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - before
+    del result
+    gc.collect()
+    tracemalloc.start()
+    result = fn()
+    kept, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    del result
+    return faults, (peak - kept) / 2**20
+
+
+def run(name: str, repeats: int) -> None:
+    robot = kinengine.load(name)
+    frame = robot.end_effector
+    rng = np.random.default_rng(0)
+    Q_all = robot.random_configuration(rng, size=max(SIZES))
+    floor = floor_rate(robot, Q_all[:10_000])
+    print(
+        f"\n{name} ({robot.dof} dof, frame {frame!r}); workers {batch.WORKERS}; "
+        f"Pinocchio loop floor {floor / 1e6:.3f} M configs/s"
+    )
+    print(
+        f"{'N':>9} {'M/s':>7} {'x floor':>7} {'M/s out=':>9} {'x floor':>7} "
+        f"{'faults':>7} {'faults out=':>11} {'extra MiB':>9} {'out MiB':>8}"
+    )
+    for n in SIZES:
+        Q = np.ascontiguousarray(Q_all[:n])
+        out = (np.empty((n, 4, 4)), np.empty((n, 6, robot.dof)))
+        robot.kinematics(Q, frame, out=out)  # warm: pool threads, per-thread buffers, the compiled chain
+        reps = repeats if n < 1_000_000 else max(2, repeats // 3)
+        fresh = n / _best(lambda Q=Q: robot.kinematics(Q, frame), reps)
+        into = n / _best(lambda Q=Q, out=out: robot.kinematics(Q, frame, out=out), reps)
+        faults, extra = faults_and_memory(lambda Q=Q: robot.kinematics(Q, frame))
+        faults_out, _ = faults_and_memory(lambda Q=Q, out=out: robot.kinematics(Q, frame, out=out))
+        out_mib = (out[0].nbytes + out[1].nbytes) / 2**20
+        print(
+            f"{n:>9} {fresh / 1e6:7.3f} {fresh / floor:7.2f} {into / 1e6:9.3f} {into / floor:7.2f} "
+            f"{faults:>7} {faults_out:>11} {extra:9.2f} {out_mib:8.1f}"
+        )
+        del out
+
+
+def main(argv: list[str]) -> None:
+    quick = "--quick" in argv
+    names = [a for a in argv if not a.startswith("--")] or list(ROBOTS)
+    print(f"python {sys.version.split()[0]}, numpy {np.__version__}, pinocchio {pin.__version__}")
+    for name in names:
+        run(name, 3 if quick else 7)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
