@@ -33,33 +33,27 @@ class Step:
     """One movable joint on the path to the frame (plain slots: no dataclass machinery at import)."""
 
     __slots__ = ("accumulate", "coordinate", "offset", "prismatic", "rotation", "scaling", "translation")
+    FIELDS = ("prismatic", "coordinate", "scaling", "offset", "rotation", "translation", "accumulate")
+    prismatic: bool
+    coordinate: int  # column of Q that drives it (the leader's, for a mimic joint)
+    scaling: float  # θ = scaling · q + offset
+    offset: float
+    rotation: Terms  # K_i (see _terms)
+    translation: tuple[tuple[int, float], ...]  # nonzero entries of t_i: (row, value)
+    accumulate: bool  # an earlier step already wrote this Jacobian column
 
-    def __init__(
-        self,
-        prismatic: bool,
-        coordinate: int,
-        scaling: float,
-        offset: float,
-        rotation: Terms,
-        translation: tuple[tuple[int, float], ...],
-        accumulate: bool,
-    ) -> None:
-        self.prismatic = prismatic
-        self.coordinate = coordinate  # column of Q that drives it (the leader's, for a mimic joint)
-        self.scaling = scaling  # θ = scaling · q + offset
-        self.offset = offset
-        self.rotation = rotation  # K_i (see _terms)
-        self.translation = translation  # nonzero entries of t_i: (row, value)
-        self.accumulate = accumulate  # an earlier step already wrote this Jacobian column
+    def __init__(self, *values: object) -> None:
+        for name, value in zip(self.FIELDS, values, strict=True):
+            setattr(self, name, value)
 
 
 class Chain:
-    """The compiled chain: its steps, the frame placement after the last one, and call counts."""
+    """The compiled chain: its steps, the frame placement after the last one (C_IF = S_last · rotation),
+    the zero Jacobian columns, and the numpy calls per chunk for the pose and for the Jacobian."""
 
     __slots__ = (
         "columns",
         "dof",
-        "full",
         "jacobian_calls",
         "pose_calls",
         "rotation",
@@ -69,30 +63,23 @@ class Chain:
     )
 
     def __init__(
-        self,
-        steps: tuple[Step, ...],
-        rotation: Terms,
-        translation: tuple[tuple[int, float], ...],
-        dof: int,
-        pose_calls: int,
-        jacobian_calls: int,
+        self, steps: tuple[Step, ...], rotation: Terms, translation: tuple, dof: int, pose: int, jac: int
     ) -> None:
-        self.steps = steps
-        self.rotation = rotation  # Q_lastᵀ · C_f (frame placement): C_IF = S_last · this
-        self.translation = translation
-        self.dof = dof
+        self.steps, self.rotation, self.translation, self.dof = steps, rotation, translation, dof
+        self.pose_calls, self.jacobian_calls = pose, jac
         driven = {s.coordinate for s in steps}
-        self.unused = tuple(k for k in range(dof) if k not in driven)  # zero Jacobian columns
-        self.full = not self.unused
-        # Jacobian columns a slice of revolute steps fills one each (no mimic): computed for all steps at once
-        first = steps[0].coordinate if steps else 0
-        plain = all(
+        self.unused = tuple(k for k in range(dof) if k not in driven)
+        first = steps[0].coordinate if steps else 0  # revolute steps filling a slice of columns, one each:
+        plain = all(  # their Jacobian columns are computed at once
             not s.prismatic and s.scaling == 1.0 and s.offset == 0.0 and s.coordinate == first + i
             for i, s in enumerate(steps)
         )
         self.columns = slice(first, first + len(steps)) if plain and steps else None
-        self.pose_calls = pose_calls  # numpy calls per chunk for the pose, and more for the Jacobian
-        self.jacobian_calls = jacobian_calls
+
+    @property
+    def full(self) -> bool:
+        """Every coordinate drives a joint of the chain (no zero Jacobian column)."""
+        return not self.unused
 
 
 def _axis_basis(axis: np.ndarray) -> np.ndarray:
