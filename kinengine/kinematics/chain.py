@@ -180,6 +180,20 @@ def _cross(
             )
 
 
+def _cos_sin(q: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """cos q and sin q (the first two thirds of ``rows``) from t = tan(q/2): cos = (1 − t²)/(1 + t²),
+    sin = 2t/(1 + t²). One tan and six cheap passes cost ~30 ns per angle where numpy's cos and sin
+    take ~40; within 2.3e-16 of them (q/2 is exact; measured on 3e6 angles, ±π and ±π/2 included)."""
+    k = len(q)
+    cos, sin, d = rows[:k], rows[k : 2 * k], rows[2 * k :]
+    t = np.tan(np.multiply(q, 0.5, out=sin), out=sin)
+    tt = np.multiply(t, t, out=cos)
+    np.reciprocal(np.add(tt, 1.0, out=d), out=d)
+    np.multiply(np.subtract(1.0, tt, out=cos), d, out=cos)
+    np.multiply(np.add(t, t, out=sin), d, out=sin)
+    return cos, sin
+
+
 def evaluate_chain(
     chain: Chain,
     qT: np.ndarray,
@@ -197,12 +211,15 @@ def evaluate_chain(
     """
     dof, n, m = chain.dof, qT.shape[1], len(chain.steps)
     jacobian = jac is not None or analytic is not None
-    memory = _rows(n, 2 * dof + (11 * m + 6 * dof + 6 if jacobian else 0))
-    cos, sin = np.cos(qT, out=memory[:dof]), np.sin(qT, out=memory[dof : 2 * dof])  # every coordinate
+    direct = analytic is None and reference != pin.LOCAL  # Jacobian columns straight into jac's view
+    # this thread's scratch rows: cos, sin, 1/(1 + t²) | z_i, p_i (3, m, n) each | 2 (m, n) products
+    # | a column (6, n) | the Jacobian (6, dof, n) when it is not written straight into jac
+    memory = _rows(n, 3 * dof + (8 * m + 6 + (0 if direct else 6 * dof) if jacobian else 0))
+    cos, sin = _cos_sin(qT, memory[: 3 * dof])  # of every coordinate
     stacked = jacobian and chain.columns is not None  # z_i, p_i stacked (3, m, n) for the Jacobian
     if stacked:
-        Z = memory[2 * dof : 2 * dof + 3 * m].reshape(3, m, n)
-        P = memory[2 * dof + 3 * m : 2 * dof + 6 * m].reshape(3, m, n)
+        Z = memory[3 * dof : 3 * dof + 3 * m].reshape(3, m, n)
+        P = memory[3 * dof + 3 * m : 3 * dof + 6 * m].reshape(3, m, n)
     eye = np.eye(3)
     S = [eye[:, k : k + 1] for k in range(3)]  # (3, 1) columns broadcast against (3, n)
     p = np.zeros((3, 1))
@@ -233,22 +250,21 @@ def evaluate_chain(
         pose[:, 3] = (0.0, 0.0, 0.0, 1.0)
     if not jacobian:
         return
-    direct = analytic is None and reference != pin.LOCAL  # columns straight into jac's strided view
-    rest = memory[2 * dof + 6 * m :]
-    target = jac.transpose(1, 2, 0) if direct else rest[: 6 * dof].reshape(6, dof, n)  # type: ignore[union-attr]
+    rest = memory[3 * dof + 6 * m :]
+    target = jac.transpose(1, 2, 0) if direct else rest[2 * m + 6 :].reshape(6, dof, n)  # type: ignore[union-attr]
     for k in chain.unused:
         target[:, k] = 0.0
     if stacked:
         cols = target[:, chain.columns]  # (6, m, n)
-        temp = rest[6 * dof : 6 * dof + 5 * m].reshape(5, m, n)  # p_f − p_i, then two products
+        temp = rest[: 2 * m].reshape(2, m, n)
         if reference == pin.WORLD:
-            _cross(P, Z, cols, temp[3:])
-        else:
-            _cross(Z, np.subtract(p_f[:, None], P, out=temp[:3]), cols, temp[3:])
+            _cross(P, Z, cols, temp)
+        else:  # p_f − p_i in place of p_i
+            _cross(Z, np.subtract(p_f[:, None], P, out=P), cols, temp)
         for r in range(3):
             cols[3 + r] = Z[r]
     else:
-        _columns(joints, p_f, reference, target, rest[6 * dof : 6 * dof + 6])
+        _columns(joints, p_f, reference, target, rest[2 * m : 2 * m + 6])
     if direct:
         return
     if jac is not None:
