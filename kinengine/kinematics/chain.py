@@ -118,27 +118,17 @@ def _compile(kin: Kinematics, fid: int) -> Chain:
         coordinate = int(coords.leader[k])
         axis = np.asarray(joint.axis, dtype=float)
         Q = _axis_basis(axis / np.linalg.norm(axis))
-        placement = model.jointPlacements[jid]
-        steps.append(
-            Step(
-                joint.type == "prismatic",
-                coordinate,
-                float(coords.multiplier[k]),
-                float(coords.offset[k]),
-                _terms(Q_parent.T @ placement.rotation @ Q),
-                _vector_terms(Q_parent.T @ placement.translation),
-                coordinate in seen,
-            )
-        )
+        placement, scale = model.jointPlacements[jid], float(coords.multiplier[k])
+        K, t = _terms(Q_parent.T @ placement.rotation @ Q), _vector_terms(Q_parent.T @ placement.translation)
+        prismatic, offset = joint.type == "prismatic", float(coords.offset[k])
+        steps.append(Step(prismatic, coordinate, scale, offset, K, t, coordinate in seen))
         seen.add(coordinate)
         Q_parent = Q
     rotation = _terms(Q_parent.T @ frame.placement.rotation)
     translation = _vector_terms(Q_parent.T @ frame.placement.translation)
-    pose_calls = (
-        12
-        + _compose_calls(rotation)
-        + 2 * len(translation)
-        + sum(_compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 8) for s in steps)
+    pose_calls = 20 + _compose_calls(rotation) + 2 * len(translation)  # the tan pass, the pose's entries
+    pose_calls += sum(
+        _compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 6) for s in steps
     )
     jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
     return Chain(tuple(steps), rotation, translation, kin.dof, pose_calls, jacobian_calls)
