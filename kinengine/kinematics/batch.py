@@ -16,15 +16,22 @@ from __future__ import annotations
 import itertools
 import os
 import threading
-from concurrent.futures import ThreadPoolExecutor
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError
-from .chain import CHUNK, Chain, compiled_chain, evaluate_chain
+from .chain import CHUNK, Chain, compiled_chain, evaluate_chain, scratch_rows
 from .engine import Kinematics
 
+if TYPE_CHECKING:  # imported when the first pool starts: concurrent.futures (and logging) cost ~5 ms
+    from concurrent.futures import ThreadPoolExecutor
+
+MIN_CHUNK = 2048
+"""Fewest rows per chunk (unless CHUNK is smaller): below this numpy's ~1 µs per call dominates."""
+MEMORY_SHARE = 0.1
+"""Chunks shrink (down to MIN_CHUNK) until the threads' scratch is within this share of the output."""
 MIN_PER_WORKER = 4096
 """Batches are split over several threads only when each gets at least this many rows."""
 WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
@@ -43,6 +50,8 @@ _POOL_SIZE = 0
 def _pool(threads: int) -> ThreadPoolExecutor:
     """The shared pool, with at least ``threads`` threads (WORKERS − 1 unless asked for more)."""
     global _POOL, _POOL_SIZE
+    from concurrent.futures import ThreadPoolExecutor
+
     with _LOCK:
         if _POOL is None or threads > _POOL_SIZE:
             old, _POOL_SIZE = _POOL, max(threads, WORKERS - 1, 1)
@@ -71,9 +80,11 @@ def run_chain(
     analytic: tuple | None = None,
     workers: int | None = None,
 ) -> None:
-    """Evaluate Q in chunks of at most CHUNK rows, split evenly over up to ``workers`` (WORKERS) threads."""
+    """Evaluate Q in chunks of at most CHUNK rows (see chunk_rows), split evenly over up to ``workers``
+    (WORKERS) threads, each reusing its own scratch from chunk to chunk."""
     workers = max(1, min(WORKERS if workers is None else workers, len(Q) // MIN_PER_WORKER))
-    pieces = workers * -(-len(Q) // (workers * CHUNK))
+    chunk = chunk_rows(chain, len(Q), workers, pose is not None, jac is not None, analytic, reference)
+    pieces = workers * -(-len(Q) // (workers * chunk))
     chunks = list(itertools.pairwise(len(Q) * i // pieces for i in range(pieces + 1)))
 
     def work(part: list[tuple[int, int]]) -> None:
@@ -98,6 +109,19 @@ def run_chain(
     work(chunks[:per])  # the calling thread takes the first share
     for future in futures:
         future.result()
+
+
+def chunk_rows(
+    chain: Chain, n: int, workers: int, pose: bool, jac: bool, analytic: tuple | None, reference: object
+) -> int:
+    """Rows per chunk: CHUNK, or fewer (not below MIN_CHUNK) so that ``workers`` threads' scratch stays
+    within MEMORY_SHARE of the outputs of the n rows."""
+    direct = analytic is None and reference != pin.LOCAL
+    out = (16 if pose else 0) + (6 * chain.dof if jac else 0)
+    if analytic is not None:
+        out += analytic[1].shape[1] * chain.dof + analytic[2].shape[1]
+    scratch = scratch_rows(chain, jac or analytic is not None, direct)
+    return min(CHUNK, max(MIN_CHUNK, int(MEMORY_SHARE * out * n / (workers * scratch))))
 
 
 def _pinocchio_loop(
@@ -208,9 +232,12 @@ def numpy_chain(
 __all__ = [
     "CALLS_PER_CONFIGURATION",
     "CHUNK",
+    "MEMORY_SHARE",
+    "MIN_CHUNK",
     "WORKERS",
     "checked_out",
     "checked_workers",
+    "chunk_rows",
     "compiled_chain",
     "evaluate",
     "numpy_chain",
