@@ -22,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError
-from .chain import CHUNK, Chain, compiled_chain, evaluate_chain, scratch_rows
+from .chain import CHUNK, Chain, Step, Terms, evaluate_chain, scratch_rows
 from .engine import Kinematics
 
 if TYPE_CHECKING:  # imported when the first pool starts: concurrent.futures (and logging) cost ~5 ms
@@ -177,6 +177,63 @@ def evaluate(
     else:
         run_chain(chain, Q, T if pose else None, J if jacobian else None, reference, workers=workers)
     return (T if pose else None), (J if jacobian else None)
+
+
+def _axis_basis(axis: np.ndarray) -> np.ndarray:
+    """A rotation Q with Q e_z = axis (exact signed permutation when the axis is a coordinate axis)."""
+    e = np.zeros(3)
+    e[int(np.argmin(np.abs(axis)))] = 1.0
+    x = e - (e @ axis) * axis
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(axis, x), axis])
+
+
+def _terms(matrix: np.ndarray) -> Terms:
+    """Nonzero entries of a 3x3 matrix, column by column: ((row, value), ...) per column."""
+    return tuple(tuple((m, float(matrix[m, k])) for m in range(3) if matrix[m, k] != 0.0) for k in range(3))
+
+
+def _vector_terms(vector: np.ndarray) -> tuple[tuple[int, float], ...]:
+    return tuple((m, float(vector[m])) for m in range(3) if vector[m] != 0.0)
+
+
+def _compose_calls(terms: Terms) -> int:
+    """numpy calls that _compose makes (a column that is a plain copy costs none)."""
+    return sum(0 if len(t) == 1 and t[0][1] == 1.0 else 2 * len(t) - 1 for t in terms)
+
+
+def _compile(kin: Kinematics, fid: int) -> Chain:
+    """The chain of movable joints from the root to frame ``fid``, with its constants."""
+    model, coords = kin.model, kin.coordinates
+    joints = {j.name: j for j in kin.description.joints}
+    frame = model.frames[fid]
+    steps, seen = [], set()
+    Q_parent = np.eye(3)
+    for jid in list(model.supports[frame.parentJoint])[1:]:
+        k = model.joints[jid].idx_v  # Pinocchio's coordinate: row k of the coordinate map
+        joint = joints[model.names[jid]]
+        coordinate = int(coords.leader[k])
+        axis = np.asarray(joint.axis, dtype=float)
+        Q = _axis_basis(axis / np.linalg.norm(axis))
+        placement, scale = model.jointPlacements[jid], float(coords.multiplier[k])
+        K, t = _terms(Q_parent.T @ placement.rotation @ Q), _vector_terms(Q_parent.T @ placement.translation)
+        prismatic, offset = joint.type == "prismatic", float(coords.offset[k])
+        steps.append(Step(prismatic, coordinate, scale, offset, K, t, coordinate in seen))
+        seen.add(coordinate)
+        Q_parent = Q
+    rotation = _terms(Q_parent.T @ frame.placement.rotation)
+    translation = _vector_terms(Q_parent.T @ frame.placement.translation)
+    pose_calls = 20 + _compose_calls(rotation) + 2 * len(translation)  # the tan pass, the pose's entries
+    pose_calls += sum(
+        _compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 6) for s in steps
+    )
+    jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
+    return Chain(tuple(steps), rotation, translation, kin.dof, pose_calls, jacobian_calls)
+
+
+def compiled_chain(kin: Kinematics, fid: int) -> Chain:
+    """The chain to frame ``fid``, compiled once per robot and frame."""
+    return kin.memoized(("batch chain", fid), lambda: _compile(kin, fid))
 
 
 def checked_workers(workers: object) -> int | None:
