@@ -16,6 +16,7 @@ configurations (chunks run in parallel: see :mod:`kinengine.kinematics.batch`). 
 
 from __future__ import annotations
 
+import itertools
 import threading
 
 import numpy as np
@@ -207,11 +208,15 @@ def evaluate_chain(
         return
     if jac is not None:
         if reference == pin.LOCAL:  # [v; ω] in F: C_IFᵀ applied to both halves
-            for r in range(3):
-                for half in (0, 3):
-                    block = target[half : half + 3]
-                    a, b = R_f[r][0] * block[0] + R_f[r][1] * block[1], R_f[r][2] * block[2]
-                    np.add(a, b, out=jac[:, half + r, :].T)
+            t = memory[: 2 * dof].reshape(2, dof, n)  # within the cos and sin rows, done with
+            for r, half in itertools.product(range(3), (0, 3)):
+                block = target[half : half + 3]
+                np.add(
+                    np.multiply(R_f[r][0], block[0], out=t[0]),
+                    np.multiply(R_f[r][1], block[1], out=t[1]),
+                    out=t[0],
+                )
+                np.add(t[0], np.multiply(R_f[r][2], block[2], out=t[1]), out=jac[:, half + r, :].T)
         else:
             jac.transpose(1, 2, 0)[...] = target
     if analytic is not None:
