@@ -7,17 +7,25 @@ and threads.
 
 from __future__ import annotations
 
+import os
+import resource
+import tracemalloc
+
 import numpy as np
+import pinocchio as pin
 import pytest
 from custom_robots import mixed_chain_urdf
 from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from urdf_strategies import random_urdfs
 
 import kinengine
 from kinengine.analytic import evaluate as evaluate_module
-from kinengine.kinematics import batch
+from kinengine.kinematics import batch, chain
+from kinengine.reference import ReferenceKinematics
 
 REFERENCES = ("local_world_aligned", "local", "world")
+SPECIAL_ANGLES = (0.0, -0.0, np.pi, -np.pi, np.pi / 2, -np.pi / 2, 3 * np.pi, 2 * np.pi, 1e-300, 5e-324)
 ROBOTS = ("abb_irb120", "ur5", "panda", "kinova", "baxter")
 
 # Unaligned, negative and unnormalized axes; a continuous joint about an unaligned axis; a mimic
@@ -381,3 +389,78 @@ def test_kinematics_out_and_workers():
             robot.kinematics(Q, workers=bad)
     with pytest.raises(kinengine.OptionError):
         robot.kinematics(Q[0], out=out)
+
+
+# -- the throughput machinery: cos/sin from tan(q/2), strided Q, chunk sizes, reused scratch -------------
+@settings(max_examples=50, deadline=None)
+@given(
+    angles=st.lists(
+        st.floats(-1e4, 1e4, allow_nan=False) | st.sampled_from(SPECIAL_ANGLES), min_size=1, max_size=40
+    )
+)
+def test_cos_sin_from_the_half_angle_tangent_match_numpy(angles):
+    q = np.array(angles)
+    cos, sin = chain._cos_sin(q[None], np.empty((3, len(q))))  # q (dof, n): here one coordinate
+    np.testing.assert_allclose(cos[0], np.cos(q), rtol=0, atol=4.5e-16)  # 2 ulp of 1
+    np.testing.assert_allclose(sin[0], np.sin(q), rtol=0, atol=4.5e-16)
+
+
+@pytest.mark.parametrize("name", ["panda", "kinova", "ur5"])
+def test_large_threaded_batches_match_single_calls_and_the_reference(name):
+    """Default strategy (numpy chain, chunks over WORKERS threads): every frame kind, every reference,
+    sampled rows against Pinocchio's single calls and the independent reference."""
+    robot = kinengine.load(name)
+    ref = ReferenceKinematics.from_file(robot.source, joint_names=robot.joint_names)
+    Q = robot.random_configuration(21, size=20_000)
+    rows = np.random.default_rng(3).choice(len(Q), 15, replace=False)
+    frames = [robot.end_effector] + (["panda_leftfinger", "panda_rightfinger"] if name == "panda" else [])
+    for frame in frames:
+        for reference in REFERENCES:
+            T, J = robot.kinematics(Q, frame, reference)
+            T_ref, J_ref = _single(robot, Q[rows], frame, reference)
+            np.testing.assert_allclose(T[rows], T_ref, rtol=0, atol=1e-14, err_msg=f"{frame}")
+            np.testing.assert_allclose(J[rows], J_ref, rtol=0, atol=1e-14, err_msg=f"{frame} {reference}")
+            np.testing.assert_allclose(T[rows], ref.frame_pose(Q[rows], frame), rtol=0, atol=1e-12)
+            np.testing.assert_allclose(J[rows], ref.jacobian(Q[rows], frame, reference), rtol=0, atol=1e-12)
+
+
+def test_strided_batches_give_the_contiguous_answer_bit_for_bit():
+    robot = _load("abb_irb120")
+    Q = robot.random_configuration(5, size=9000)
+    T, J = robot.kinematics(Q, reference="world")
+    for variant in (np.asfortranarray(Q), np.repeat(Q, 2, axis=0)[::2], np.hstack([Q, Q])[:, :6]):
+        T2, J2 = robot.kinematics(variant, reference="world")
+        assert np.array_equal(T, T2) and np.array_equal(J, J2)
+
+
+def test_chunks_keep_the_scratch_within_its_share_of_the_output():
+    robot = _load("abb_irb120")
+    c = batch.compiled_chain(robot.engine, robot.frame_id("tool0"))
+    lwa = pin.LOCAL_WORLD_ALIGNED
+    per_row = 8 * chain.scratch_rows(c, True, True)  # bytes of scratch per row and thread
+    for n in (10_000, 100_000, 1_000_000):
+        rows = batch.chunk_rows(c, n, 2, True, True, None, lwa)
+        assert batch.MIN_CHUNK <= rows <= batch.CHUNK
+        if rows > batch.MIN_CHUNK:
+            assert 2 * rows * per_row <= batch.MEMORY_SHARE * n * 8 * (16 + 36)
+    assert batch.chunk_rows(c, 10**7, 2, True, True, None, lwa) == batch.CHUNK
+    assert len(os.sched_getaffinity(0)) == batch.WORKERS
+
+
+def test_a_repeated_batch_allocates_no_new_scratch():
+    """After one call the threads' scratch is reused: a second call into out= allocates only the chunks'
+    short-lived temporaries (a few % of the output) and touches almost no new pages."""
+    robot = _load("ur5")
+    n = 60_000
+    Q = robot.random_configuration(8, size=n)
+    out = (np.empty((n, 4, 4)), np.empty((n, 6, 6)))
+    robot.kinematics(Q, out=out)
+    faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    tracemalloc.start()
+    try:
+        robot.kinematics(Q, out=out)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults < 200  # 29 MB of output: 7000 pages
+    assert peak < 0.1 * (out[0].nbytes + out[1].nbytes)

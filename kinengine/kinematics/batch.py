@@ -28,10 +28,13 @@ from .engine import Kinematics
 if TYPE_CHECKING:  # imported when the first pool starts: concurrent.futures (and logging) cost ~5 ms
     from concurrent.futures import ThreadPoolExecutor
 
-MIN_CHUNK = 2048
-"""Fewest rows per chunk (unless CHUNK is smaller): below this numpy's ~1 µs per call dominates."""
+MIN_CHUNK = 4096
+"""Fewest rows per chunk (unless CHUNK is smaller): numpy's ~1 µs per call, and the GIL hand-over at
+every call, dominate shorter ones (ABB IRB 120, 10k rows on 2 threads: chunks of 1024 1.3, 2048 1.7,
+4096 2.2 M configs/s)."""
 MEMORY_SHARE = 0.1
-"""Chunks shrink (down to MIN_CHUNK) until the threads' scratch is within this share of the output."""
+"""Chunks shrink (down to MIN_CHUNK) until the threads' scratch is within this share of the output
+(ABB IRB 120, 100k rows: 2.6 M configs/s at 0.1, 2.9 at 0.16, measured interleaved)."""
 MIN_PER_WORKER = 4096
 """Batches are split over several threads only when each gets at least this many rows."""
 WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
