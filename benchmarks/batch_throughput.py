@@ -8,7 +8,9 @@ Per robot and N = 1k, 10k, 100k, 1M: configs/s (best of a few calls; a busy neig
 machine only slows a call, so the best one is the least disturbed) for ``robot.kinematics(Q, frame)``
 and for the same call with ``out=(T, J)`` preallocated, the minor page faults of one call
 (``ru_minflt`` delta) and its peak extra memory beyond the outputs (``tracemalloc``: numpy reports its
-allocations to it). The floor is the inline Pinocchio loop
+allocations to it), fresh and with ``out=``, after a first call; "scratch" is what the threads keep
+between calls (workers x MiB each, allocated by the first call of that size and reused). The floor is
+the inline Pinocchio loop
 
     for i, q in enumerate(Q):
         pin.forwardKinematics(model, data, q)
@@ -31,6 +33,11 @@ import pinocchio as pin
 
 import kinengine
 from kinengine.kinematics import batch
+
+try:
+    from kinengine.kinematics.chain import scratch_rows
+except ImportError:  # an older kinengine: no scratch column
+    scratch_rows = None  # type: ignore[assignment]
 
 ROBOTS = ("abb_irb120", "ur5", "panda", "kinova")
 SIZES = (1_000, 10_000, 100_000, 1_000_000)
@@ -85,6 +92,18 @@ def faults_and_memory(fn) -> tuple[int, float]:
     return faults, (peak - kept) / 2**20
 
 
+def _scratch(robot: kinengine.Robot, n: int) -> str:
+    """The threads' reused scratch [MiB] for a batch of n (kept between calls; not in "extra")."""
+    if not hasattr(batch, "chunk_rows"):
+        return "?"
+    c = batch.compiled_chain(robot.engine, robot.frame_id(robot.end_effector))
+    workers = max(1, min(batch.WORKERS, n // batch.MIN_PER_WORKER))
+    rows = batch.chunk_rows(c, n, workers, True, True, None, pin.LOCAL_WORLD_ALIGNED)
+    pieces = workers * -(-n // (workers * rows))
+    per_thread = -(-n // pieces) * 8 * scratch_rows(c, True, True)
+    return f"{workers}x{per_thread / 2**20:.2f}"
+
+
 def run(name: str, repeats: int) -> None:
     robot = kinengine.load(name)
     frame = robot.end_effector
@@ -97,7 +116,7 @@ def run(name: str, repeats: int) -> None:
     )
     print(
         f"{'N':>9} {'M/s':>7} {'x floor':>7} {'M/s out=':>9} {'x floor':>7} "
-        f"{'faults':>7} {'faults out=':>11} {'extra MiB':>9} {'out MiB':>8}"
+        f"{'faults':>7} {'faults out=':>11} {'extra MiB':>9} {'(out=)':>9} {'out MiB':>8} {'scratch':>10}"
     )
     for n in SIZES:
         Q = np.ascontiguousarray(Q_all[:n])
@@ -107,11 +126,12 @@ def run(name: str, repeats: int) -> None:
         fresh = n / _best(lambda Q=Q: robot.kinematics(Q, frame), reps)
         into = n / _best(lambda Q=Q, out=out: robot.kinematics(Q, frame, out=out), reps)
         faults, extra = faults_and_memory(lambda Q=Q: robot.kinematics(Q, frame))
-        faults_out, _ = faults_and_memory(lambda Q=Q, out=out: robot.kinematics(Q, frame, out=out))
+        faults_out, extra_out = faults_and_memory(lambda Q=Q, out=out: robot.kinematics(Q, frame, out=out))
         out_mib = (out[0].nbytes + out[1].nbytes) / 2**20
         print(
             f"{n:>9} {fresh / 1e6:7.3f} {fresh / floor:7.2f} {into / 1e6:9.3f} {into / floor:7.2f} "
-            f"{faults:>7} {faults_out:>11} {extra:9.2f} {out_mib:8.1f}"
+            f"{faults:>7} {faults_out:>11} {extra:9.2f} {extra_out:9.2f} {out_mib:8.1f} "
+            f"{_scratch(robot, n):>10}"
         )
         del out
 
