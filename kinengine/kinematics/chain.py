@@ -23,10 +23,10 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-CHUNK = 16384
+CHUNK = 8192
 """Most configurations per numpy pass: each call costs ~1 µs and hands the GIL to the other threads, so
-long passes win (ABB IRB 120, 100k rows on 2 cores: chunks of 2048 1.8, 4096 2.7, 16384 3.2 M configs/s)
-though their rows leave the L2 cache. Scratch: 8 · scratch_rows bytes per row and thread."""
+long passes win (ABB IRB 120 on 2 threads: 1.3 M configs/s in chunks of 1024, 2.2 in 4096, 3.0 in 8192),
+up to where two threads' scratch (8 · scratch_rows bytes per row each) crowds the shared L3 cache."""
 Terms = tuple[tuple[tuple[int, float], ...], ...]
 
 
