@@ -464,3 +464,36 @@ def test_a_repeated_batch_allocates_no_new_scratch():
         tracemalloc.stop()
     assert resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults < 200  # 29 MB of output: 7000 pages
     assert peak < 0.1 * (out[0].nbytes + out[1].nbytes)
+
+
+ROTATED_URDF = """<?xml version="1.0"?>
+<robot name="rotated"><link name="base"/><link name="a"/><link name="b"/><link name="tip"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/>
+    <origin xyz="0 0 0.3" rpy="1.5707963267948966 0 -1.5707963267948966"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/>
+    <origin xyz="0.2 0 0" rpy="{tilt} 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="f" type="fixed"><parent link="b"/><child link="tip"/><origin xyz="0.1 0 0"/></joint>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("tilt", ["3.141592653589793", "1e-9", "1.570796325"])
+def test_compiled_constants_drop_rounding_residue_only(tilt):
+    """rpy = ±π/2 leaves 6e-17 entries (cos π/2): compiled as exact zeros and ±1; a real 1e-9 rad tilt
+    (or a truncated π/2) is kept. Either way batches equal Pinocchio's single calls."""
+    robot = kinengine.load_urdf_string(ROTATED_URDF.format(tilt=tilt))
+    compiled = batch.compiled_chain(robot.engine, robot.frame_id("tip"))
+    entries = [len(column) for column in compiled.steps[0].rotation]
+    assert entries == [1, 1, 1]  # the first joint's K: a signed permutation
+    assert all(abs(value) == 1.0 for column in compiled.steps[0].rotation for _, value in column)
+    tilted = sum(len(column) for column in compiled.steps[1].rotation)
+    assert tilted == (3 if tilt == "3.141592653589793" else 5)
+    Q = robot.random_configuration(2, size=5000)
+    rows = np.arange(0, 5000, 499)
+    for reference in REFERENCES:
+        T, J = robot.kinematics(Q, "tip", reference)
+        T_ref, J_ref = _single(robot, Q[rows], "tip", reference)
+        np.testing.assert_allclose(T[rows], T_ref, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(J[rows], J_ref, rtol=0, atol=1e-14)
