@@ -99,7 +99,7 @@ def _scratch(robot: kinengine.Robot, n: int) -> str:
     c = batch.compiled_chain(robot.engine, robot.frame_id(robot.end_effector))
     workers = max(1, min(batch.WORKERS, n // batch.MIN_PER_WORKER))
     rows = batch.chunk_rows(c, n, workers, True, True, None, pin.LOCAL_WORLD_ALIGNED)
-    pieces = workers * -(-n // (workers * rows))
+    pieces = workers * max(1, round(n / (workers * rows)))  # as batch.run_chain splits
     per_thread = -(-n // pieces) * 8 * scratch_rows(c, True, True)
     return f"{workers}x{per_thread / 2**20:.2f}"
 
