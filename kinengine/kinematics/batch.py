@@ -5,10 +5,13 @@
 Same conventions as :mod:`kinengine.kinematics.engine`: T_IF in the root link frame I [m], J rows
 [linear; angular] in "local_world_aligned", "local" or "world", columns in ``joint_names`` order.
 
-How: the chain from the root to the frame is compiled once (:mod:`kinengine.kinematics.chain`)
-and evaluated over chunks of configurations on a thread pool of one thread per core this process may
-use (numpy releases the GIL; a forked child makes its own pool). Small
-batches loop over Pinocchio instead, which is faster there (see ``CALLS_PER_CONFIGURATION``).
+How: the chain from the root to the frame is compiled once (:func:`compiled_chain`) and evaluated by
+:mod:`kinengine.kinematics.chain` over chunks of configurations (:func:`chunk_rows`: long numpy passes,
+each thread's scratch reused from chunk to chunk and call to call) on a persistent pool of one thread
+per core this process may use (WORKERS, from ``os.sched_getaffinity``; ``workers=`` caps it; numpy
+releases the GIL in its loops; a forked child makes its own pool). Small batches loop over Pinocchio
+instead, which is faster there (see ``CALLS_PER_CONFIGURATION``). ``benchmarks/batch_throughput.py``
+measures configs/s, page faults and memory against the inline Pinocchio loop.
 """
 
 from __future__ import annotations
