@@ -23,6 +23,7 @@ timed on 10k rows (its rate does not depend on N); "x floor" is configs/s over t
 from __future__ import annotations
 
 import gc
+import math
 import resource
 import sys
 import time
@@ -99,7 +100,8 @@ def _scratch(robot: kinengine.Robot, n: int) -> str:
     c = batch.compiled_chain(robot.engine, robot.frame_id(robot.end_effector))
     workers = max(1, min(batch.WORKERS, n // batch.MIN_PER_WORKER))
     rows = batch.chunk_rows(c, n, workers, True, True, None, pin.LOCAL_WORLD_ALIGNED)
-    pieces = workers * max(1, round(n / (workers * rows)))  # as batch.run_chain splits
+    per = n / (workers * rows)  # as batch.run_chain splits
+    pieces = workers * max(1, math.ceil(per) if batch.MIN_CHUNK < rows < batch.CHUNK else round(per))
     per_thread = -(-n // pieces) * 8 * scratch_rows(c, True, True)
     return f"{workers}x{per_thread / 2**20:.2f}"
 

@@ -17,6 +17,7 @@ measures configs/s, page faults and memory against the inline Pinocchio loop.
 from __future__ import annotations
 
 import itertools
+import math
 import os
 import threading
 from typing import TYPE_CHECKING
@@ -92,7 +93,8 @@ def run_chain(
     threads, each reusing its own scratch from chunk to chunk."""
     workers = max(1, min(WORKERS if workers is None else workers, len(Q) // MIN_PER_WORKER))
     chunk = chunk_rows(chain, len(Q), workers, pose is not None, jac is not None, analytic, reference)
-    pieces = workers * max(1, round(len(Q) / (workers * chunk)))  # chunks of 2/3 to 3/2 × chunk rows
+    per = len(Q) / (workers * chunk)  # chunks per worker: rounded (2/3 to 3/2 × chunk rows), or up
+    pieces = workers * max(1, math.ceil(per) if MIN_CHUNK < chunk < CHUNK else round(per))  # if memory binds
     chunks = list(itertools.pairwise(len(Q) * i // pieces for i in range(pieces + 1)))
 
     def work(part: list[tuple[int, int]]) -> None:
