@@ -6,11 +6,13 @@ and as text (the ``FLOOR_*`` strings shown in the table). Floors return T_IF (4,
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
 
+from ...parameterizations import EULER_SEQUENCES
 from ...robot import Robot
 
 REFERENCES = ("local_world_aligned", "local", "world")
@@ -30,7 +32,22 @@ FLOOR_ANALYTIC = {
     "R = data.oMf[fid].rotation; J[3:] = pin.Jlog3(R) @ (R.T @ J[3:])",
     "quaternion": "J = pin.computeFrameJacobian(...); Q = pin.Quaternion(data.oMf[fid].rotation); "
     "E = ½[[-x,-y,-z],[w,z,-y],[-z,w,x],[y,-x,w]] (w >= 0); out[:3] = J[:3]; out[3:] = E @ J[3:]",
+    "angle_axis": "J = pin.computeFrameJacobian(...); φ = pin.log3(R); θ = |φ|; n = φ/θ; "
+    "E = [n^T; −½([n]x + cot(θ/2)(n n^T − I))]; out[:3] = J[:3]; out[3:] = E @ J[3:]",
+    "rotation_matrix": "J = pin.computeFrameJacobian(...); c_j = R[:, j]; "
+    "E = [row i of −[c_j]x for (i, j) row-major] (9x3); out[:3] = J[:3]; out[3:] = E @ J[3:]",
+    **{
+        f"euler_{seq}": "J = pin.computeFrameJacobian(...); R = data.oMf[fid].rotation.tolist(); "
+        f"χ1, χ2 = math.atan2(...) ({seq}); E = np.array(E_{seq}(χ1, χ2)); J[3:] = E @ J[3:]"
+        for seq in EULER_SEQUENCES
+        if seq != "zyx"
+    },
 }
+FLOOR_TASK = (
+    "J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED); M = data.oMf[fid]; "
+    "rpy = pin.rpy.matrixToRpy(M.rotation); χ = (M.translation, rpy[::-1]); "
+    "J[3:] = pin.rpy.computeRpyJacobianInverse(rpy, pin.LOCAL_WORLD_ALIGNED)[::-1] @ J[3:]"
+)
 FLOOR_GEOMETRIC = (
     "pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED) (Pinocchio has no E(χ))"
 )
@@ -94,7 +111,59 @@ def floors(robot: Robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], ob
     def geometric() -> np.ndarray:
         return fold(frame_jacobian(model, data, qp, fid, LWA))
 
+    log3, sqrt, tan, array = pin.log3, math.sqrt, math.tan, np.array
+
+    def angle_axis() -> np.ndarray:
+        J = fold(frame_jacobian(model, data, qp, fid, LWA))
+        x, y, z = log3(oMf[fid].rotation).tolist()
+        theta = sqrt(x * x + y * y + z * z)
+        x, y, z = x / theta, y / theta, z / theta
+        k = 0.5 / tan(0.5 * theta)  # E[1:] = −½[n]x − ½ cot(θ/2)(n nᵀ − I)
+        E = array(
+            [
+                [x, y, z],
+                [k - k * x * x, 0.5 * z - k * x * y, -0.5 * y - k * x * z],
+                [-0.5 * z - k * x * y, k - k * y * y, 0.5 * x - k * y * z],
+                [0.5 * y - k * x * z, -0.5 * x - k * y * z, k - k * z * z],
+            ]
+        )
+        out = np.empty((7, J.shape[1]))
+        out[:3] = J[:3]
+        out[3:] = E @ J[3:]
+        return out
+
+    def rotation_matrix() -> np.ndarray:
+        J = fold(frame_jacobian(model, data, qp, fid, LWA))
+        (a, b, c), (d, e, f), (g, h, i) = oMf[fid].rotation.tolist()
+        # Ċ = [ω]x C: row 3i + j of E is row i of −[C[:, j]]x,
+        # −[v]x = [[0, vz, −vy], [−vz, 0, vx], [vy, −vx, 0]]
+        E = array(
+            [
+                [0.0, g, -d], [0.0, h, -e], [0.0, i, -f],
+                [-g, 0.0, a], [-h, 0.0, b], [-i, 0.0, c],
+                [d, -a, 0.0], [e, -b, 0.0], [f, -c, 0.0],
+            ]
+        )  # fmt: skip
+        out = np.empty((12, J.shape[1]))
+        out[:3] = J[:3]
+        out[3:] = E @ J[3:]
+        return out
+
+    rpy = pin.rpy.matrixToRpy
+    translation = data.oMf[fid].translation
+
+    def task() -> tuple[np.ndarray, np.ndarray]:
+        J = fold(frame_jacobian(model, data, qp, fid, LWA))
+        angles = rpy(oMf[fid].rotation)
+        chi = np.concatenate((translation, angles[::-1]))
+        J[3:] = rpy_inverse(angles, LWA)[::-1] @ J[3:]
+        return chi, J
+
     return {
+        **{f"euler_{seq}": euler_floor(seq, model, data, qp, fid, fold) for seq in EULER_SEQUENCES},
+        "angle_axis": angle_axis,
+        "rotation_matrix": rotation_matrix,
+        "task": task,
         "frame_pose": pose,
         "kinematics": kinematics,
         **{f"jacobian[{r}]": jacobian(PIN_REFERENCES[r]) for r in REFERENCES},
@@ -103,6 +172,66 @@ def floors(robot: Robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], ob
         "quaternion": quat,
         "geometric": geometric,
     }
+
+
+def euler_floor(
+    seq: str,
+    model: pin.Model,
+    data: pin.Data,
+    qp: np.ndarray,
+    fid: int,
+    fold: Callable[[np.ndarray], np.ndarray],
+) -> Callable[[], np.ndarray]:
+    """The floor of intrinsic Euler angles ``seq`` = "abc" (C = R_a(χ1) R_b(χ2) R_c(χ3)), as a user writes
+    it for one sequence: χ1, χ2 by math.atan2 off C's entries (E does not depend on χ3), E(χ1, χ2) by
+    np.array, one @.
+
+    In the axes (a, b, t), t the remaining axis, ε = ε_abt, c_k = cos χk, s_k = sin χk, ω = B(χ)·χ̇ with
+    Tait–Bryan (c = t): B = [[1, 0, ε s2], [0, c1, −ε s1 c2], [0, ε s1, c1 c2]], E = B⁻¹ =
+    [[1, s1 s2/c2, −ε c1 s2/c2], [0, c1, ε s1], [0, −ε s1/c2, c1/c2]];
+    proper (c = a): B = [[1, 0, c2], [0, c1, s1 s2], [0, ε s1, −ε c1 s2]], E = B⁻¹ =
+    [[1, −s1 c2/s2, ε c1 c2/s2], [0, c1, ε s1], [0, s1/s2, −ε c1/s2]]; columns placed on axes a, b, t.
+    """
+    a, b, c = ("xyz".index(axis) for axis in seq)
+    t = 3 - a - b
+    e = float((a - b) * (b - t) * (t - a) // 2)
+    where = tuple((a, b, t).index(k) for k in range(3))  # column k of E is column where[k] in (a, b, t)
+    ka, kb, kt = where
+    frame_jacobian, LWA, oMf, atan2, hypot = (
+        pin.computeFrameJacobian,
+        pin.LOCAL_WORLD_ALIGNED,
+        data.oMf,
+        math.atan2,
+        math.hypot,
+    )
+    cos, sin, array = math.cos, math.sin, np.array
+
+    def proper() -> np.ndarray:
+        J = fold(frame_jacobian(model, data, qp, fid, LWA))
+        C = oMf[fid].rotation.tolist()
+        chi2 = atan2(hypot(C[a][b], C[a][t]), C[a][a])
+        chi1 = atan2(C[b][a], -e * C[t][a])
+        c1, s1, c2, s2 = cos(chi1), sin(chi1), cos(chi2), sin(chi2)
+        u = 1.0 / s2
+        k = c2 * u
+        rows = ((1.0, -s1 * k, e * c1 * k), (0.0, c1, e * s1), (0.0, s1 * u, -e * c1 * u))
+        J[3:] = array([(r[ka], r[kb], r[kt]) for r in rows]) @ J[3:]
+        return J
+
+    def tait_bryan() -> np.ndarray:
+        J = fold(frame_jacobian(model, data, qp, fid, LWA))
+        C = oMf[fid].rotation.tolist()
+        bt, tt = C[b][t], C[t][t]
+        chi2 = atan2(e * C[a][t], hypot(bt, tt))
+        chi1 = atan2(-e * bt, tt)
+        c1, s1, c2, s2 = cos(chi1), sin(chi1), cos(chi2), sin(chi2)
+        u = 1.0 / c2
+        k = s2 * u
+        rows = ((1.0, s1 * k, -e * c1 * k), (0.0, c1, e * s1), (0.0, -e * s1 * u, c1 * u))
+        J[3:] = array([(r[ka], r[kb], r[kt]) for r in rows]) @ J[3:]
+        return J
+
+    return proper if a == c else tait_bryan
 
 
 def analytic_loop(robot: Robot, frame: str, Q: np.ndarray, rot: str) -> Callable[[], np.ndarray]:
@@ -142,9 +271,11 @@ __all__ = [
     "FLOOR_KINEMATICS",
     "FLOOR_LOOP",
     "FLOOR_POSE",
+    "FLOOR_TASK",
     "PIN_NAMES",
     "PIN_REFERENCES",
     "REFERENCES",
     "analytic_loop",
+    "euler_floor",
     "floors",
 ]
