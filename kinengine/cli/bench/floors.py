@@ -126,13 +126,13 @@ def floors(robot: Robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], ob
         x, y, z = x / theta, y / theta, z / theta
         k = 0.5 / tan(0.5 * theta)  # E[1:] = −½[n]x − ½ cot(θ/2)(n nᵀ − I)
         E = array(
-            [
-                [x, y, z],
-                [k - k * x * x, 0.5 * z - k * x * y, -0.5 * y - k * x * z],
-                [-0.5 * z - k * x * y, k - k * y * y, 0.5 * x - k * y * z],
-                [0.5 * y - k * x * z, -0.5 * x - k * y * z, k - k * z * z],
-            ]
-        )
+            (
+                x, y, z,
+                k - k * x * x, 0.5 * z - k * x * y, -0.5 * y - k * x * z,
+                -0.5 * z - k * x * y, k - k * y * y, 0.5 * x - k * y * z,
+                0.5 * y - k * x * z, -0.5 * x - k * y * z, k - k * z * z,
+            )
+        ).reshape(4, 3)  # fmt: skip
         out = np.empty((7, J.shape[1]))
         out[:3] = J[:3]
         out[3:] = E.dot(J[3:])
@@ -144,12 +144,12 @@ def floors(robot: Robot, frame: str, q: np.ndarray) -> dict[str, Callable[[], ob
         # Ċ = [ω]x C: row 3i + j of E is row i of −[C[:, j]]x,
         # −[v]x = [[0, vz, −vy], [−vz, 0, vx], [vy, −vx, 0]]
         E = array(
-            [
-                [0.0, g, -d], [0.0, h, -e], [0.0, i, -f],
-                [-g, 0.0, a], [-h, 0.0, b], [-i, 0.0, c],
-                [d, -a, 0.0], [e, -b, 0.0], [f, -c, 0.0],
-            ]
-        )  # fmt: skip
+            (
+                0.0, g, -d, 0.0, h, -e, 0.0, i, -f,
+                -g, 0.0, a, -h, 0.0, b, -i, 0.0, c,
+                d, -a, 0.0, e, -b, 0.0, f, -c, 0.0,
+            )
+        ).reshape(9, 3)  # fmt: skip
         out = np.empty((12, J.shape[1]))
         out[:3] = J[:3]
         out[3:] = E.dot(J[3:])
