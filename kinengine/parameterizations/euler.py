@@ -138,6 +138,39 @@ class EulerAngles(RotationParameterization):
             return chi1, chi2, 0.0 if locked else chi3
         return chi1, chi2, np.where(locked, 0.0, chi3)
 
+    def _fast_E(self, *C: float) -> tuple[float, Entries] | None:
+        """(distance, E's entries) from C_IF's 9 entries (Python floats) for one regular pose, or None (gimbal
+        lock: the caller takes the general path). Exactly :meth:`_distance` and :meth:`_E` of
+        :meth:`_from_rotation`'s χ1, χ2 (E does not depend on χ3, which is not computed)."""
+        ab, at, aa, ba, ta, bt, tt, _, _ = self._index
+        e = self._eps
+        atan2 = math.atan2
+        if self._proper:
+            chi2 = atan2(math.hypot(C[ab], C[at]), C[aa])
+            if abs(chi2) <= GIMBAL_LOCK_TOLERANCE or abs(chi2 - math.pi) <= GIMBAL_LOCK_TOLERANCE:
+                return None
+            chi1 = atan2(C[ba], -e * C[ta])
+            c1, s1, c2, s2 = math.cos(chi1), math.sin(chi1), math.cos(chi2), math.sin(chi2)
+            if s2 == 0.0:
+                return None
+            u = 1.0 / s2
+            k = c2 * u
+            return abs(s2), self._to_columns(
+                (1.0, -s1 * k, e * c1 * k, 0.0, c1, e * s1, 0.0, s1 * u, -e * c1 * u)
+            )
+        chi2 = atan2(e * C[at], math.hypot(C[bt], C[tt]))
+        if abs(abs(chi2) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE:
+            return None
+        chi1 = atan2(-e * C[bt], C[tt])
+        c1, s1, c2, s2 = math.cos(chi1), math.sin(chi1), math.cos(chi2), math.sin(chi2)
+        if c2 == 0.0:
+            return None
+        u = 1.0 / c2
+        t = s2 * u
+        return abs(c2), self._to_columns(
+            (1.0, s1 * t, -e * c1 * t, 0.0, c1, e * s1, 0.0, -e * s1 * u, c1 * u)
+        )
+
     def _to_rotation(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         a, b, c = self._axes
         return _matmul(_matmul(_elementary(xp, a, chi1), _elementary(xp, b, chi2)), _elementary(xp, c, chi3))
