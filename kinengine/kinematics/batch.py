@@ -109,12 +109,11 @@ def run_chain(
             )
 
     per = pieces // workers
-    pool = _pool(workers - 1) if workers > 1 else None
     futures = []
     for i in range(per, pieces, per):
-        try:
-            futures.append(pool.submit(work, chunks[i : i + per]))  # type: ignore[union-attr]
-        except RuntimeError:  # no new work after interpreter shutdown (an atexit handler): do it here
+        try:  # after interpreter shutdown (an atexit handler) no pool starts or takes work: do it here
+            futures.append(_pool(workers - 1).submit(work, chunks[i : i + per]))
+        except RuntimeError:
             work(chunks[i : i + per])
     work(chunks[:per])  # the calling thread takes the first share
     for future in futures:
