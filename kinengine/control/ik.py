@@ -20,11 +20,14 @@ is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations makes way for t
 ``nullspace_target``) and the ``NEAREST_SEEDS`` configurations of a per-robot table
 (:mod:`.ik_seeds`: ``SEED_TABLE_SIZE`` random in-limit configurations, fixed seed) whose frame poses are
 nearest the target; then ``restarts`` uniformly random ones from ``rng``.
-The same algorithm runs vectorized over a batch of targets (N, 4, 4): :mod:`kinengine.control.ik_batch`.
+The same algorithm runs vectorized over a batch of targets (N, 4, 4): :mod:`kinengine.control.ik_batch`,
+and over several frames at once (a mapping {frame: T_IF}, errors and Jacobians stacked):
+:mod:`kinengine.control.ik_multi`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -42,7 +45,7 @@ if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
 
 def inverse_kinematics(
     robot: Robot,
-    target: npt.ArrayLike,
+    target: npt.ArrayLike | Mapping[str, npt.ArrayLike],
     frame: str | None = None,
     q0: object = None,
     *,
@@ -69,7 +72,31 @@ def inverse_kinematics(
     ``max_iterations``: per attempt; ``restarts``: random attempts after the seeded ones (``rng``).
     ``nullspace_target`` (dof,): preferred q, pursued with ``nullspace_gain`` [1/iteration] where the
     task leaves freedom. ``min_damping``: λ_min [1]. Every option is validated (OptionError).
+
+    Several frames at once: ``target`` a mapping {frame: T_IF (4, 4)} (``frame`` None); ``rows`` and
+    ``weights`` one spec for every frame or a mapping {frame: spec} (missing frames: all six rows, weight
+    1). Success when every frame is within the tolerances; the result's position_error / rotation_error
+    are the maxima over the frames, ``frame_errors`` each frame's (:mod:`kinengine.control.ik_multi`).
     """
+    if isinstance(target, Mapping):
+        if frame is not None or position is not None or rotation is not None:
+            raise OptionError(
+                "a mapping {frame: pose} names its frames and takes poses (4, 4): leave `frame`, "
+                "`position` and `rotation` None (or pass one pose with frame=...)"
+            )
+        from .ik_multi import Options, inverse_kinematics_frames
+
+        options = Options(
+            tol_position,
+            tol_rotation,
+            max_iterations,
+            restarts,
+            nullspace_target,
+            nullspace_gain,
+            min_damping,
+            q0 is not None,
+        )
+        return inverse_kinematics_frames(robot, target, q0, rows, weights, rng, options)
     batch = (
         position is None and rotation is None and np.ndim(target) == 3
         if not isinstance(target, str)

@@ -1,0 +1,276 @@
+"""Inverse kinematics for several frames at once: ``target`` a mapping {frame name: T_IF (4, 4)}.
+
+Frames and units: every target T_IF is the frame F's pose in the root frame I (p_d [m], C_d); each frame's
+error is the single-frame one (:mod:`kinengine.control.ik`): e_F = (p_d − p, log3(C_d Cᵀ)) [m, rad] in I,
+or, with ``rows=``/``weights=``, e_D = (C_dᵀ e_p, C_dᵀ e_R) in the frame's target frame D, kept rows only,
+each times √w. Its Jacobian is J_F = J_e0 ("local_world_aligned", folded with the coordinate map M for mimic
+robots), rotated and cut the same way. The solver stacks them, e = (e_F1, e_F2, ...), J = (J_F1; J_F2; ...),
+and takes the single-frame step: Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² I)⁻¹ e (+ the nullspace pull), λ² = ½|e|² + λ_min²,
+Chan & Dubey's limit weights W, every iterate clipped into the limits. Success: EVERY frame within
+``tol_position`` [m] and ``tol_rotation`` [rad]. Attempts are ranked by Σ_F (|e_p| + 0.2 m/rad·|e_R|).
+Seeds: ``q0`` if given (never gives up early), else the stored configurations (:mod:`.ik_seeds`) nearest
+each frame's target, ranked by that sum over every frame, and the middle of the ranges (or
+``nullspace_target``); then ``restarts`` random ones.
+The result's position_error / rotation_error are the maxima over the frames; ``frame_errors`` holds each
+frame's (position error [m], rotation error [rad]).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import OptionError, ParameterizationError
+from .ik_seeds import NEAREST_SEEDS, SEED_ROTATION_WEIGHT, first_seeds
+from .ik_solver import GIVE_UP, NULLSPACE_FADE, PROBE_ITERATIONS, IKResult, LimitWeights
+from .ik_target import Problem, RandomSource, checked_problem, single_target
+
+if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
+    from ..robot import Robot
+
+
+@dataclass(frozen=True)
+class MultiIKResult(IKResult):
+    """An :class:`IKResult` for several frames: position_error / rotation_error are the maxima over the
+    frames, ``frame_errors`` {frame: (position error [m], rotation error [rad])} each frame's own."""
+
+    frame_errors: dict[str, tuple[float, float]] | None = None
+
+
+@dataclass(frozen=True)
+class FrameGoal:
+    """One frame's validated options (its :class:`Problem`: fid, rows, weights), target p_d [m], C_d in I."""
+
+    problem: Problem
+    p_d: np.ndarray
+    C_d: np.ndarray
+
+
+@dataclass(frozen=True)
+class Options:
+    """The options shared by every frame, as given (checked by checked_problem for each frame)."""
+
+    tol_position: object
+    tol_rotation: object
+    max_iterations: object
+    restarts: object
+    nullspace_target: object
+    nullspace_gain: object
+    min_damping: object
+    has_q0: bool
+
+    def values(self) -> tuple[object, object, object, object, object, object, object, bool]:
+        return (
+            self.tol_position,
+            self.tol_rotation,
+            self.max_iterations,
+            self.restarts,
+            self.nullspace_target,
+            self.nullspace_gain,
+            self.min_damping,
+            self.has_q0,
+        )
+
+
+def _per_frame(name: str, value: object, frames: Mapping[str, object]) -> dict[str, object]:
+    """``rows``/``weights`` for each frame: one spec for all, or a mapping {frame: spec} (missing: None)."""
+    if not isinstance(value, Mapping):
+        return dict.fromkeys(frames, value)
+    if not value:
+        raise OptionError(
+            f"`{name}` is an empty mapping; give {{frame: spec}} for some of the target's frames, "
+            f"or None for all six rows of every frame"
+        )
+    unknown = [key for key in value if key not in frames]
+    if unknown:
+        raise OptionError(
+            f"`{name}` names {unknown[0]!r}, which is not a frame of the target {list(frames)}; "
+            f"name only frames of the target (the others keep all six rows, weight 1)"
+        )
+    return {frame: value.get(frame) for frame in frames}
+
+
+def checked_goals(
+    robot: Robot, target: Mapping[Any, Any], rows: object, weights: object, options: Options
+) -> list[FrameGoal]:
+    """Each frame's target and options checked (OptionError, FrameNotFoundError, ParameterizationError)."""
+    if not target:
+        raise OptionError(
+            "`target` is an empty mapping; give {frame name: pose (4, 4)} for at least one frame"
+        )
+    for name in target:
+        if not isinstance(name, str):
+            raise OptionError(f"`target`'s keys must be frame names (str), got {name!r}")
+    frames: dict[str, Any] = {str(name): pose for name, pose in target.items()}
+    frame_rows, frame_weights = _per_frame("rows", rows, frames), _per_frame("weights", weights, frames)
+    goals = []
+    for frame, pose in frames.items():
+        problem = checked_problem(robot, frame, frame_rows[frame], frame_weights[frame], *options.values())
+        try:
+            pose_shaped = not isinstance(pose, (str, bytes)) and np.shape(pose) == (4, 4)
+        except ValueError:  # ragged nesting
+            pose_shaped = False
+        if not pose_shaped:
+            raise ParameterizationError(
+                f"`target[{frame!r}]` must be a pose (4, 4), got {pose!r:.60}; several frames take one "
+                "pose T_IF each (for parameters χ or a batch, solve one frame at a time)"
+            )
+        try:
+            p_d, C_d = single_target(pose, None, None)
+        except ParameterizationError as error:
+            raise ParameterizationError(f"`target[{frame!r}]`: {error}") from None
+        assert p_d is not None and C_d is not None  # a (4, 4) pose fixes both
+        goals.append(FrameGoal(problem, p_d, C_d))
+    return goals
+
+
+def _seeds(robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None) -> np.ndarray:
+    """The seeded attempts' starts (S, dof): q0, or the stored seeds nearest any frame's target ranked by
+    Σ_F (|Δp| + 0.2·angle) over the frames' kept rows, then the middle of the ranges (or nullspace target)."""
+    if q0 is not None:
+        return first_seeds(robot, goals[0].problem, goals[0].p_d[None], goals[0].C_d[None], q0)[0]
+    per_frame = [first_seeds(robot, g.problem, g.p_d[None], g.C_d[None], None)[0] for g in goals]
+    if len(goals) == 1:
+        return per_frame[0]
+    candidates = np.concatenate([seeds[:-1] for seeds in per_frame])
+    score = np.zeros(len(candidates))
+    for g in goals:
+        T = robot.frame_pose(candidates, g.problem.frame)
+        rows = np.arange(6) if g.problem.rows is None else g.problem.rows
+        kept_p = rows[rows < 3]
+        if len(kept_p):
+            dp = (g.p_d - T[:, :3, 3]) @ (g.C_d if g.problem.rows is not None else np.eye(3))
+            score += np.linalg.norm(dp[:, kept_p], axis=1)
+        if (rows >= 3).any():
+            cos = (np.einsum("ij,nij->n", g.C_d, T[:, :3, :3]) - 1.0) / 2.0
+            score += SEED_ROTATION_WEIGHT * np.arccos(np.clip(cos, -1.0, 1.0))
+    best = np.argsort(score, kind="stable")[:NEAREST_SEEDS]
+    return np.concatenate((candidates[best], per_frame[0][-1:]))
+
+
+def solve_frames(
+    robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None, generator: RandomSource
+) -> MultiIKResult:
+    """Attempts from each seed, then ``restarts`` random ones; the first that brings every frame within
+    the tolerances (or the best by Σ_F score) wins."""
+    kin = robot.engine
+    joints = kin.coordinates
+    model, data = kin.model, kin.data()
+    lower, upper = joints.lower, joints.upper
+    shared = goals[0].problem
+    tol_p, tol_r, max_iterations = shared.tol_position, shared.tol_rotation, shared.max_iterations
+    damping_sq, q_ns, gain = shared.damping_sq, shared.q_ns, shared.gain
+    seeds = _seeds(robot, goals, q0)
+    attempts = len(seeds) + shared.restarts
+    pinocchio_q, fold, identity = kin.pinocchio_q, joints.fold, joints.identity
+    jacobians, get_jacobian, place, log3, LWA = (
+        pin.computeJointJacobians,
+        pin.getFrameJacobian,
+        pin.updateFramePlacement,
+        pin.log3,
+        pin.LOCAL_WORLD_ALIGNED,
+    )
+    solve, maximum, minimum, hypot, sqrt = np.linalg.solve, np.maximum, np.minimum, math.hypot, math.sqrt
+    m = sum(6 if g.problem.rows is None else len(g.problem.rows) for g in goals)
+    eye = np.eye(m)
+    limits = LimitWeights(lower, upper)
+    e = np.zeros(6)
+    best, total = None, 0
+    for attempt in range(attempts):
+        q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
+        last = attempt == attempts - 1 or (attempt == 0 and shared.patient_first)
+        iteration, previous = 0, None
+        while True:
+            jacobians(model, data, q if identity else pinocchio_q(q))
+            errors, blocks, per_frame = [], [], []
+            score, done = 0.0, True
+            for g in goals:
+                p, fid, rows, sqrt_w = g.problem, g.problem.fid, g.problem.rows, g.problem.sqrt_weights
+                M = place(model, data, fid)
+                e[:3] = g.p_d - M.translation
+                e[3:] = log3(g.C_d @ M.rotation.T)
+                if rows is None:
+                    e0, e1, e2, e3, e4, e5 = e.tolist()
+                    ep, er = hypot(e0, e1, e2), hypot(e3, e4, e5)
+                    errors.append(e.copy())
+                else:
+                    e_d = np.concatenate((g.C_d.T @ e[:3], g.C_d.T @ e[3:]))[rows]
+                    ep = sqrt(float(e_d[p.position_rows] @ e_d[p.position_rows]))
+                    er = sqrt(float(e_d[~p.position_rows] @ e_d[~p.position_rows]))
+                    errors.append(e_d if sqrt_w is None else e_d * sqrt_w)
+                per_frame.append((ep, er))
+                score += ep + SEED_ROTATION_WEIGHT * er
+                done = done and ep <= tol_p and er <= tol_r
+                J = get_jacobian(model, data, fid, LWA).reshape(6, -1)
+                if not identity:
+                    J = fold(J)
+                if rows is not None:
+                    J = np.vstack((g.C_d.T @ J[:3], g.C_d.T @ J[3:]))[rows]
+                    if sqrt_w is not None:
+                        J = J * sqrt_w[:, None]
+                blocks.append(J)
+            if (
+                done
+                or iteration == max_iterations
+                or (iteration == PROBE_ITERATIONS and score > GIVE_UP and not last)
+            ):
+                break
+            iteration += 1
+            err = np.concatenate(errors)
+            J = np.vstack(blocks)
+            if limits.any:
+                w, previous = limits.inverse_weights_one(q, previous)
+                JW = J * w
+            else:
+                JW = J
+            A = JW @ J.T
+            A += (0.5 * float(err @ err) + damping_sq) * eye
+            if q_ns is None:
+                q += JW.T @ solve(A, err)
+            else:
+                z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
+                y = solve(A, np.column_stack((err, J @ z)))
+                q += JW.T @ (y[:, 0] - y[:, 1]) + z
+            minimum(maximum(q, lower, out=q), upper, out=q)
+        total += iteration
+        if best is None or score < best[2]:
+            best = (q, per_frame, score, attempt, done)
+        if done:
+            break
+    assert best is not None  # attempts >= 1: the seeds hold at least one start
+    q, per_frame, _, attempt, done = best
+    q[joints.continuous] = np.remainder(q[joints.continuous] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)
+    errors_by_frame = {g.problem.frame: pe for g, pe in zip(goals, per_frame, strict=True)}
+    ep, er = max(pe[0] for pe in per_frame), max(pe[1] for pe in per_frame)
+    return MultiIKResult(q, bool(done), total, ep, er, attempt, errors_by_frame)
+
+
+def inverse_kinematics_frames(
+    robot: Robot,
+    target: Mapping[Any, Any],
+    q0: object,
+    rows: object,
+    weights: object,
+    rng: object,
+    options: Options,
+) -> MultiIKResult:
+    """:func:`kinengine.control.ik.inverse_kinematics` for a mapping {frame: T_IF (4, 4)} (module doc)."""
+    goals = checked_goals(robot, target, rows, weights, options)
+    generator = RandomSource(rng)
+    start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=False)
+    return solve_frames(robot, goals, start, generator)
+
+
+__all__ = [
+    "FrameGoal",
+    "MultiIKResult",
+    "Options",
+    "checked_goals",
+    "inverse_kinematics_frames",
+    "solve_frames",
+]
