@@ -8,9 +8,10 @@ robots), rotated and cut the same way. The solver stacks them, e = (e_F1, e_F2, 
 and takes the single-frame step: Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² I)⁻¹ e (+ the nullspace pull), λ² = ½|e|² + λ_min²,
 Chan & Dubey's limit weights W, every iterate clipped into the limits. Success: EVERY frame within
 ``tol_position`` [m] and ``tol_rotation`` [rad]. Attempts are ranked by Σ_F (|e_p| + 0.2 m/rad·|e_R|).
-Seeds: ``q0`` if given (never gives up early), else the stored configurations (:mod:`.ik_seeds`) nearest
-each frame's target, ranked by that sum over every frame, and the middle of the ranges (or
-``nullspace_target``); then ``restarts`` random ones.
+Seeds: ``q0`` if given (never gives up early), else the ``NEAREST_SEEDS`` stored configurations
+(:mod:`.ik_seeds`) nearest each frame's target, all of them ranked by that sum over every frame (an attempt
+that is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations makes way for the next), and the
+middle of the ranges (or ``nullspace_target``); then ``restarts`` random ones.
 The result's position_error / rotation_error are the maxima over the frames; ``frame_errors`` holds each
 frame's (position error [m], rotation error [rad]).
 """
@@ -26,7 +27,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError, ParameterizationError
-from .ik_seeds import NEAREST_SEEDS, SEED_ROTATION_WEIGHT, first_seeds
+from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
 from .ik_solver import GIVE_UP, NULLSPACE_FADE, PROBE_ITERATIONS, IKResult, LimitWeights
 from .ik_target import Problem, RandomSource, checked_problem, single_target
 
@@ -149,8 +150,7 @@ def _seeds(robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None) -> np.nd
         if (rows >= 3).any():
             cos = (np.einsum("ij,nij->n", g.C_d, T[:, :3, :3]) - 1.0) / 2.0
             score += SEED_ROTATION_WEIGHT * np.arccos(np.clip(cos, -1.0, 1.0))
-    best = np.argsort(score, kind="stable")[:NEAREST_SEEDS]
-    return np.concatenate((candidates[best], per_frame[0][-1:]))
+    return np.concatenate((candidates[np.argsort(score, kind="stable")], per_frame[0][-1:]))
 
 
 def solve_frames(
