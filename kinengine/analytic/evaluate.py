@@ -5,6 +5,7 @@ batches, the single path row by row for small ones). q is checked by the caller.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 
 import numpy as np
@@ -64,6 +65,28 @@ def analytic_single(
     views, jacobian = kin.per_thread(("analytic", fid), lambda: _single_path(kin, fid))
     J = jacobian(q, "local_world_aligned")  # also places the frame: the views show T_IF at q
     return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, None, nan)
+
+
+def analytic_function(
+    kin: Kinematics, fid: int, pmap: PoseMap, threshold: float
+) -> Callable[[np.ndarray], npt.NDArray[np.float64]]:
+    """``J_A(q)`` for one frame and fixed options: :func:`analytic_single` with the lookups done once (each
+    thread binds its own Data views and unchecked frame handle on its first call). q is checked by the
+    caller; singular poses raise RepresentationSingularityError."""
+    if kin.dof == 0:
+        return lambda q: analytic_single(kin, q, fid, pmap, threshold)
+    local = threading.local()
+    jacobian_single = pmap.jacobian_single
+
+    def evaluate(q: np.ndarray) -> npt.NDArray[np.float64]:
+        try:
+            (C, p), jacobian = local.path
+        except AttributeError:
+            (C, p), jacobian = local.path = _single_path(kin, fid)
+        J = jacobian(q, "local_world_aligned")  # also places the frame: C and p show T_IF at q
+        return jacobian_single(C.tolist(), p.tolist(), J, threshold)
+
+    return evaluate
 
 
 def _single_path(

@@ -5,14 +5,20 @@ layers."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, analytic_batch, analytic_single, pose_map
+from ..analytic import (
+    DEFAULT_SINGULARITY_THRESHOLD,
+    analytic_batch,
+    analytic_function,
+    analytic_single,
+    pose_map,
+)
 from ..analytic.evaluate import analytic_relative
 from ..analytic.pose_map import check_on_singularity
 from ..arrays import ArrayLike, FloatArray
@@ -23,6 +29,32 @@ from ..kinematics.options import checked_flag, checked_frames, checked_parameter
 
 if TYPE_CHECKING:
     from ..robot import Robot
+
+
+def _fast_path(
+    robot: Robot,
+    frame: object,
+    position: object,
+    rotation: object,
+    rows: object,
+    threshold: object,
+    on_singularity: object,
+) -> Callable[[object], FloatArray | None] | None:
+    """For these options (each checked here: an error is raised, not kept), ``J_A(q)`` that answers a
+    float64 (dof,) array q (CoordinateMap.ready) and returns None for any other q (the general path
+    checks it); None where the general path is needed (on_singularity other than "raise")."""
+    pmap = pose_map(*checked_parameterization(position, rotation, rows))
+    threshold = checked_threshold(threshold)
+    fid = robot.engine.frame_id(robot.end_effector if frame is None else frame)
+    if on_singularity != "raise":
+        check_on_singularity(on_singularity)
+        return None
+    ready, single = robot.engine.coordinates.ready, analytic_function(robot.engine, fid, pmap, threshold)
+
+    def evaluate(q: object) -> FloatArray | None:
+        return single(q) if ready(q) else None  # type: ignore[arg-type]  # ready: a float64 (dof,) array
+
+    return evaluate
 
 
 class AnalyticMethods:
@@ -96,18 +128,38 @@ class AnalyticMethods:
         Jacobian of χ(T_BA), E(χ)·J_rel with J_rel = :meth:`relative_jacobian` expressed in B.
         """
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
+        if relative_to is None and check_limits is False:
+            key = (frame, position, rotation, rows, singularity_threshold, on_singularity)
+            evaluate, found = None, True
+            try:  # options seen before (checked then): J_A(q) for them, looked up once
+                evaluate = self._analytic_paths[key]
+            except AttributeError:  # the first call on this Robot
+                self._analytic_paths: dict[tuple, Callable[[object], FloatArray | None] | None] = {}
+                found = False
+            except KeyError:
+                found = False
+            except TypeError:  # unhashable options (e.g. rows as a list): the general path checks them
+                pass
+            if not found:  # checked here (outside the handlers above, so that an error reads plainly)
+                evaluate = _fast_path(robot, *key)
+                if len(self._analytic_paths) < 256:
+                    self._analytic_paths[key] = evaluate
+            if evaluate is not None:
+                JA = evaluate(q)
+                if JA is not None:
+                    return JA
+        kin = robot.engine
         pmap = pose_map(*checked_parameterization(position, rotation, rows))
         singularity_threshold = checked_threshold(singularity_threshold)
-        fid = robot.engine.frame_id(robot.end_effector if frame is None else frame)
+        fid = kin.frame_id(robot.end_effector if frame is None else frame)
         nan = on_singularity != "raise" and check_on_singularity(on_singularity)
-        qc: FloatArray = robot.engine.coordinates.check(q, check_limits=check_limits)
+        qc: FloatArray = kin.coordinates.check(q, check_limits=check_limits)
         if relative_to is not None:
-            return analytic_relative(
-                robot.engine, qc, fid, robot.engine.frame_id(relative_to), pmap, singularity_threshold, nan
-            )
+            fb = kin.frame_id(relative_to)
+            return analytic_relative(kin, qc, fid, fb, pmap, singularity_threshold, nan)
         if qc.ndim == 2:
-            return analytic_batch(robot.engine, qc, fid, pmap, singularity_threshold, nan)
-        return analytic_single(robot.engine, qc, fid, pmap, singularity_threshold, nan)
+            return analytic_batch(kin, qc, fid, pmap, singularity_threshold, nan)
+        return analytic_single(kin, qc, fid, pmap, singularity_threshold, nan)
 
     def task(
         self,
