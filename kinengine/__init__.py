@@ -4,15 +4,15 @@
 >>> robot = kinengine.load("abb_irb120")
 >>> T = robot.frame_pose(robot.neutral(), "tool0")            # (4, 4) in the root link frame
 >>> J = robot.jacobian(robot.neutral(), "tool0")              # (6, 6), rows [linear; angular]
+
+The control layer's public names (Task, DifferentialIK, IKResult, ...) are imported on first use
+(PEP 562 ``__getattr__``), so ``import kinengine; kinengine.load(...)`` does not pay for inverse
+kinematics or the QP solver; ``from kinengine import Task`` works as ever.
 """
 
-from .control.frame_task import FrameTask
-from .control.ik import IKResult
-from .control.ik_batch import IKBatchResult
-from .control.manipulability import SingularityReport
-from .control.pose_error import pose_error
-from .control.qp import DifferentialIK, PoseTarget, PostureTarget
-from .control.task import Task
+from importlib import import_module
+from typing import TYPE_CHECKING
+
 from .errors import (
     ConfigurationError,
     FrameNotFoundError,
@@ -29,7 +29,29 @@ from .loading import load, load_urdf_string
 from .model import available_robots
 from .robot import Robot
 
+if TYPE_CHECKING:
+    from .control.frame_task import FrameTask
+    from .control.ik import IKResult
+    from .control.ik_batch import IKBatchResult
+    from .control.manipulability import SingularityReport
+    from .control.pose_error import pose_error
+    from .control.qp import DifferentialIK, PoseTarget, PostureTarget
+    from .control.task import Task
+
 __version__ = "0.1.0"
+
+# Public name -> the module (below kinengine) that defines it, imported on first access.
+_LAZY = {
+    "DifferentialIK": "control.qp",
+    "FrameTask": "control.frame_task",
+    "IKBatchResult": "control.ik_batch",
+    "IKResult": "control.ik",
+    "PoseTarget": "control.qp",
+    "PostureTarget": "control.qp",
+    "SingularityReport": "control.manipulability",
+    "Task": "control.task",
+    "pose_error": "control.pose_error",
+}
 
 __all__ = [
     "ConfigurationError",
@@ -57,3 +79,17 @@ __all__ = [
     "load_urdf_string",
     "pose_error",
 ]
+
+
+def __getattr__(name: str) -> object:
+    """A lazily imported public name (see the module doc), then cached in the module."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -19,12 +19,11 @@ from pathlib import Path
 from typing import TypeVar
 
 from .errors import OptionError, URDFError
-from .model import available_robots, catalog_entry
+from .model import catalog_entry, find_entry
 from .model.floating_base import floating_base_note
 from .robot import Robot
 from .urdf import LIMITS, Limits, RobotDescription, parse_urdf
 from .urdf.source import decode_xml, read_bytes_once
-from .urdf.xacro import expand_xacro
 
 _WARNINGS_LOCK = threading.Lock()  # catch_warnings swaps process-wide state: two loads must not interleave it
 
@@ -58,8 +57,8 @@ def load(
     is_xacro = text_target.lower().endswith(".xacro")
     if xacro_args is not None and not is_xacro:
         raise URDFError(f"xacro_args= is for .xacro files; {text_target!r} is not one (drop xacro_args=)")
-    if isinstance(target, str) and text_target in available_robots():
-        entry = catalog_entry(text_target)
+    entry = find_entry(text_target) if isinstance(target, str) else None
+    if entry is not None:
         description, text = _warn_once(lambda: _read(entry.path, limits))
         robot = Robot(
             description,
@@ -81,6 +80,8 @@ def load(
         as_text = (
             {k: str(v) for k, v in xacro_args.items()} if isinstance(xacro_args, Mapping) else xacro_args
         )
+        from .urdf.xacro import expand_xacro  # here: xacro and xml.dom are imported for .xacro files only
+
         text = expand_xacro(path, args=as_text, packages=packages)
         description, _ = _warn_once(lambda: (parse_urdf(text, source=text_target, limits=limits), None))
     else:
@@ -111,7 +112,8 @@ def load_urdf_string(
 def extra_coordinates(name: str) -> tuple[str, ...]:
     """The coordinates of catalog robot ``name`` that move a gripper rather than the arm (e.g. the Panda's
     ``panda_finger_joint1``); lock them with ``robot.locked({joint: value})``. Empty for other robots."""
-    return catalog_entry(name).extra_coordinates if name in available_robots() else ()
+    entry = find_entry(name)
+    return entry.extra_coordinates if entry is not None else ()
 
 
 def _packages(packages: object, source: str) -> dict[str, str]:

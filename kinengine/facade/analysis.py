@@ -12,17 +12,20 @@ import numpy as np
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, pose_map
 from ..analytic.hessian import analytic_hessian as _analytic_hessian
 from ..arrays import ArrayLike, FloatArray, Reference
-from ..control import ik as _ik
+from ..control import LazyModule
 from ..control import manipulability as _manipulability
-from ..control.ik import IKResult
-from ..control.ik_batch import IKBatchResult
 from ..control.manipulability import DEFAULT_TOLERANCE, Rows, SingularityReport, VelocityEllipsoid
 from ..kinematics import derivatives as _derivatives
 from ..kinematics import resolve_reference
 from ..kinematics.options import checked_parameterization, checked_threshold
 
 if TYPE_CHECKING:
+    from ..control import ik as _ik
+    from ..control.ik import IKResult
+    from ..control.ik_batch import IKBatchResult
     from ..robot import Robot
+else:
+    _ik = LazyModule("kinengine.control.ik")  # inverse kinematics is imported on its first call
 
 
 class AnalysisMethods:

@@ -1,5 +1,6 @@
 """The Robot's model-editing methods: each returns a new Robot built once from an edited description
-(see :mod:`kinengine.model.editing`); nothing is paid per call afterwards."""
+(see :mod:`kinengine.model.editing`); nothing is paid per call afterwards. :mod:`kinengine.model.editing`
+(lxml tree edits, XML quoting) is imported by the first edit, not by ``import kinengine``."""
 
 from __future__ import annotations
 
@@ -7,7 +8,6 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, cast
 
 from ..arrays import ArrayLike
-from ..model.editing import add_frame, edited_urdf_text, lock_joints
 from ..urdf import RobotDescription
 
 if TYPE_CHECKING:
@@ -23,6 +23,8 @@ class EditingMethods:
         T_parent,name as a (4, 4) homogeneous transform [m], or a pair (xyz [m], rpy [rad]). The frame is a
         new link on a fixed joint ``<name>_joint``; it is in ``frame_names``, ``urdf_text`` (edited alike)
         and everything else. See :func:`kinengine.model.editing.add_frame`."""
+        from ..model.editing import add_frame
+
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         return _edited(robot, add_frame(robot.description, name, parent, placement))
 
@@ -31,12 +33,16 @@ class EditingMethods:
         multiplier·value + offset); the other coordinates keep their order. Its poses and Jacobians equal
         this robot's at those values with the locked columns removed. ConfigurationError for a value
         outside the limits. See :func:`kinengine.model.editing.lock_joints`."""
+        from ..model.editing import lock_joints
+
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         return _edited(robot, lock_joints(robot.description, values))
 
 
 def _edited(robot: Robot, description: RobotDescription) -> Robot:
     """The Robot of an edited description: same name, end effector and packages; URDF text edited alike."""
+    from ..model.editing import edited_urdf_text
+
     return type(robot)(
         description,
         edited_urdf_text(robot.urdf_text, description),

@@ -10,11 +10,13 @@ Some entries are another entry with joints locked (``panda_arm``: the Panda with
 held at 0, 7 coordinates): :func:`kinengine.load` applies :meth:`Robot.locked` with
 ``CatalogEntry.locked``. ``CatalogEntry.extra_coordinates`` names the coordinates of a robot
 that are not arm joints (gripper fingers), which a user usually wants to lock.
+
+example-robot-data is looked up (with ``importlib.metadata``, slow to import) only for a name it may
+provide or for the whole list: loading a shipped robot does not pay for it.
 """
 
 from __future__ import annotations
 
-import importlib.metadata
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -93,13 +95,21 @@ def shipped_robots_dir() -> Path:
 
 
 @lru_cache(maxsize=1)
-def _entries() -> dict[str, CatalogEntry]:
+def _shipped() -> dict[str, CatalogEntry]:
     entries: dict[str, CatalogEntry] = {}
     for urdf in sorted(shipped_robots_dir().glob("*/*.urdf")):
         if urdf.stem == urdf.parent.name:
             entries[urdf.stem] = CatalogEntry(
                 urdf.stem, urdf, _SHIPPED_END_EFFECTORS.get(urdf.stem), "kinengine"
             )
+    return entries
+
+
+@lru_cache(maxsize=1)
+def _entries() -> dict[str, CatalogEntry]:
+    import importlib.metadata  # here, not at the top: ~15 ms of imports (email, zipfile, csv)
+
+    entries = dict(_shipped())
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError:
@@ -121,11 +131,17 @@ def available_robots() -> list[str]:
     return sorted(_entries())
 
 
+def find_entry(name: str) -> CatalogEntry | None:
+    """The catalog entry of a short robot name, None if there is none. Only a name that example-robot-data
+    may provide (and that it then provides instead of a shipped file) makes it look for example-robot-data."""
+    return _entries().get(name) if name in _ERD_ROBOTS else _shipped().get(name)
+
+
 def catalog_entry(name: str) -> CatalogEntry:
     """The catalog entry of a short robot name; URDFError listing the known names otherwise."""
-    try:
-        return _entries()[name]
-    except KeyError:
+    entry = find_entry(name)
+    if entry is None:
         raise URDFError(
             f"unknown robot {name!r}: pass a path to a .urdf file or one of {', '.join(available_robots())}"
-        ) from None
+        )
+    return entry

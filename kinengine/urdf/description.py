@@ -10,7 +10,6 @@ it: that text, and only that text, is what Pinocchio's C++ parser ever sees.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from xml.sax.saxutils import quoteattr
 
 Vector3 = tuple[float, float, float]
 
@@ -135,3 +134,26 @@ class RobotDescription:
 
 def _v(v: Vector3) -> str:
     return " ".join(repr(float(x)) for x in v)
+
+
+def quoteattr(value: str) -> str:
+    """``value`` escaped and quoted as an XML attribute value, exactly as ``xml.sax.saxutils.quoteattr``
+    does it (written out here: importing xml.sax.saxutils imports urllib.request, http, ssl and email)."""
+    for raw, entity in _ATTRIBUTE_ENTITIES:
+        value = value.replace(raw, entity)
+    if '"' not in value:
+        return f'"{value}"'
+    if "'" not in value:
+        return f"'{value}'"
+    return '"' + value.replace('"', "&quot;") + '"'
+
+
+# In this order: "&" first, so that the other entities are not escaped twice.
+_ATTRIBUTE_ENTITIES = (
+    ("&", "&amp;"),
+    (">", "&gt;"),
+    ("<", "&lt;"),
+    ("\n", "&#10;"),
+    ("\r", "&#13;"),
+    ("\t", "&#9;"),
+)
