@@ -20,6 +20,10 @@ if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
 PROBE_ITERATIONS = 10
 GIVE_UP = 1e-2
 """[m] score |e_p| + 0.2 m/rad·|e_R| above which an attempt gives way after PROBE_ITERATIONS iterations."""
+STALL_FROM, STALL_SPAN, STALL_RATIO = 6, 3, 0.8
+"""From iteration STALL_FROM on, an attempt whose score is above STALL_RATIO × its score STALL_SPAN iterations
+earlier gives way (stuck on a joint limit or in a local minimum: such attempts crawl for max_iterations,
+and on 1,000 random targets they cost the ABB IRB 120 more iterations than the converging ones)."""
 NULLSPACE_FADE = 5e-2
 """[m] the nullspace pull is gain · min(1, score / this): full strength far from the target, fading with
 the error so that its second-order effect on the task (∝ |z|²) vanishes and the solve converges."""
@@ -130,6 +134,7 @@ def solve_one(
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
         last = attempt == attempts - 1 or (attempt == 0 and problem.patient_first)
         iteration, previous = 0, None
+        history: list[float] = []  # the score at each iteration
         while True:
             J = frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, LWA)
             M = place(model, data, fid)
@@ -151,12 +156,13 @@ def solve_one(
                 squared = float(err @ err)
             score = ep + SEED_ROTATION_WEIGHT * er
             done = ep <= tol_p and er <= tol_r
-            if (
-                done
-                or iteration == max_iterations
-                or (iteration == PROBE_ITERATIONS and score > GIVE_UP and not last)
-            ):
+            gives_way = not last and (
+                (iteration == PROBE_ITERATIONS and score > GIVE_UP)
+                or (iteration >= STALL_FROM and score > STALL_RATIO * history[iteration - STALL_SPAN])
+            )
+            if done or iteration == max_iterations or gives_way:
                 break
+            history.append(score)
             iteration += 1
             if not identity or J.ndim == 1:
                 J = fold(J.reshape(6, -1))
@@ -196,4 +202,14 @@ def solve_one(
     return IKResult(q, bool(ep <= tol_p and er <= tol_r), total, ep, er, attempt)
 
 
-__all__ = ["GIVE_UP", "NULLSPACE_FADE", "PROBE_ITERATIONS", "IKResult", "LimitWeights", "solve_one"]
+__all__ = [
+    "GIVE_UP",
+    "NULLSPACE_FADE",
+    "PROBE_ITERATIONS",
+    "STALL_FROM",
+    "STALL_RATIO",
+    "STALL_SPAN",
+    "IKResult",
+    "LimitWeights",
+    "solve_one",
+]
