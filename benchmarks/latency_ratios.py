@@ -121,8 +121,14 @@ def mimic_overhead() -> None:
             },
             rounds=ROUNDS // 2,
         )
-        mapped = panda.engine.frame_path(panda.frame_id(frame)).mapped
-        how = "moved by the mimic joint: mapped" if mapped else "not moved by a mimic joint"
+        path = panda.engine.frame_path(panda.frame_id(frame))
+        moved = frame == "panda_rightfinger"  # panda_finger_joint2, the mimic joint, moves it alone
+        how = (
+            "moved by the mimic joint: "
+            + ("mapped" if path.mapped else "a model of its own joints, q untouched")
+            if moved
+            else "not moved by a mimic joint"
+        )
         print(f"  {frame} ({how}):")
         for what in ("pose", "jacobian", "pose unchecked", "jacobian unchecked"):
             print(

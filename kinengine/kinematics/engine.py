@@ -156,13 +156,17 @@ class Kinematics:
         With mimic joints, for a frame that no mimic joint moves (an arm's flange and hand, not the
         mimicking finger): Pinocchio's reduced model with the mimic joints locked, whose nq = dof joints are
         q's coordinates in q's order — the frame's pose and Jacobian there equal the full model's at
-        q_pin = M q + b (its J_pin columns of mimic joints are zero), so again q passes untouched. Only frames
-        that a mimic joint moves take the map (``mapped``)."""
+        q_pin = M q + b (its J_pin columns of mimic joints are zero), so again q passes untouched. A frame
+        that a mimic joint moves gets a model of its own joints alone when they are q's coordinates one for
+        one (:meth:`_frame_joints_only`); only the others take the map (``mapped``)."""
         if self.coordinates.identity:
             return FramePath(self.model, fid, self.data, False)
         model, independent = self.model, self.coordinates.names
-        locked = self.memoized("mimic joints locked", self._locked_mimics)
-        if locked is None or any(model.names[k] not in independent for k in self._supports(fid)):
+        if any(model.names[k] not in independent for k in self._supports(fid)):
+            locked = self.memoized(("frame's joints only", fid), lambda: self._frame_joints_only(fid))
+        else:
+            locked = self.memoized("mimic joints locked", self._locked_mimics)
+        if locked is None:
             return FramePath(model, fid, self.data, True)
         reduced, reduced_data = locked
         frame = model.frames[fid]
@@ -180,6 +184,32 @@ class Kinematics:
         reduced = pin.buildReducedModel(model, mimic_joints, np.zeros(model.nq))
         if tuple(reduced.names)[1:] != self.coordinates.names or reduced.nq != self.dof:
             return None
+        return reduced, self._data_of(reduced)
+
+    def _frame_joints_only(self, fid: int) -> tuple[pin.Model, Callable[[], pin.Data]] | None:
+        """For a frame that a mimic joint moves: Pinocchio's model with every joint that does not move the
+        frame locked, when its joints are q's coordinates one for one — the k-th is coordinate k itself or
+        a mimic of it with multiplier 1 and offset 0 (the Panda's right finger: the arm and the mimicking
+        finger joint, whose leader moves only the other finger). The frame's q_pin is then q and its J_pin
+        is J: no map at all. None when the frame needs the map (another multiplier or offset, a leader and
+        its mimic both moving the frame, coordinates that do not move it)."""
+        model, coords = self.model, self.coordinates
+        supports = self._supports(fid)
+        if len(supports) != self.dof:
+            return None
+        position = {name: k for k, name in enumerate(coords.pinocchio_names)}
+        for k, joint in enumerate(supports):
+            i = position[model.names[joint]]
+            if coords.leader[i] != k or coords.multiplier[i] != 1.0 or coords.offset[i] != 0.0:
+                return None
+        others = [k for k in range(1, model.njoints) if k not in supports]  # their value moves no support
+        reduced = pin.buildReducedModel(model, others, np.zeros(model.nq))
+        if reduced.nq != self.dof:
+            return None
+        return reduced, self._data_of(reduced)
+
+    def _data_of(self, reduced: pin.Model) -> Callable[[], pin.Data]:
+        """``data()``: this thread's Data of a reduced model."""
         local = threading.local()
 
         def data() -> pin.Data:
@@ -189,7 +219,7 @@ class Kinematics:
                 local.data = create_data(reduced, f"robot {self.description.name!r}")
                 return local.data
 
-        return reduced, data
+        return data
 
     def pinocchio_q(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio's configuration (nq,) for a checked q (dof,): q itself without mimic joints, else
