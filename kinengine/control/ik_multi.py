@@ -10,7 +10,8 @@ Chan & Dubey's limit weights W, every iterate clipped into the limits. Success: 
 ``tol_position`` [m] and ``tol_rotation`` [rad]. Attempts are ranked by Σ_F (|e_p| + 0.2 m/rad·|e_R|).
 Seeds: ``q0`` if given (never gives up early), else the ``NEAREST_SEEDS`` stored configurations
 (:mod:`.ik_seeds`) nearest each frame's target, all of them ranked by that sum over every frame (an attempt
-that is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations makes way for the next), and the
+gives way to the next by the single-frame rules: still above ``GIVE_UP`` after ``PROBE_ITERATIONS``
+iterations, or stalled), and the
 middle of the ranges (or ``nullspace_target``); then ``restarts`` random ones.
 The result's position_error / rotation_error are the maxima over the frames; ``frame_errors`` holds each
 frame's (position error [m], rotation error [rad]).
@@ -28,7 +29,16 @@ import pinocchio as pin
 
 from ..errors import OptionError, ParameterizationError
 from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
-from .ik_solver import GIVE_UP, NULLSPACE_FADE, PROBE_ITERATIONS, IKResult, LimitWeights
+from .ik_solver import (
+    GIVE_UP,
+    NULLSPACE_FADE,
+    PROBE_ITERATIONS,
+    STALL_FROM,
+    STALL_RATIO,
+    STALL_SPAN,
+    IKResult,
+    LimitWeights,
+)
 from .ik_target import Problem, RandomSource, checked_problem, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -153,11 +163,32 @@ def _seeds(robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None) -> np.nd
     return np.concatenate((candidates[np.argsort(score, kind="stable")], per_frame[0][-1:]))
 
 
+def _layout(goals: list[FrameGoal]) -> list[tuple]:
+    """Per frame: (fid, p_d, C_d, rows slice start, stop, S or None, √w or None, kept position rows), S the
+    kept rows of blockdiag(C_dᵀ, C_dᵀ) (k, 6): e_D = S e, J_D = S J."""
+    layout, start = [], 0
+    for g in goals:
+        rows = g.problem.rows
+        if rows is None:
+            S, stop = None, start + 6
+        else:
+            S, stop = np.zeros((6, 6)), start + len(rows)
+            S[:3, :3] = S[3:, 3:] = g.C_d.T
+            S = np.ascontiguousarray(S[rows])
+        prows = g.problem.position_rows
+        layout.append((g.problem.fid, g.p_d, g.C_d, start, stop, S, g.problem.sqrt_weights, prows))
+        start = stop
+    return layout
+
+
 def solve_frames(
     robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None, generator: RandomSource
 ) -> MultiIKResult:
     """Attempts from each seed, then ``restarts`` random ones; the first that brings every frame within
-    the tolerances (or the best by Σ_F score) wins."""
+    the tolerances (or the best by Σ_F score) wins. The linear algebra is the single-frame solver's
+    (Cholesky, LAPACK ``dposv``, least squares if that fails), so one frame gives its iterates."""
+    from scipy.linalg.lapack import dposv
+
     kin = robot.engine
     joints = kin.coordinates
     model, data = kin.model, kin.data()
@@ -175,67 +206,82 @@ def solve_frames(
         pin.log3,
         pin.LOCAL_WORLD_ALIGNED,
     )
-    solve, maximum, minimum, hypot, sqrt = np.linalg.solve, np.maximum, np.minimum, math.hypot, math.sqrt
-    m = sum(6 if g.problem.rows is None else len(g.problem.rows) for g in goals)
-    eye = np.eye(m)
-    limits = LimitWeights(lower, upper)
-    e = np.zeros(6)
+    dot, subtract, maximum, minimum, hypot, sqrt = (
+        np.dot,
+        np.subtract,
+        np.maximum,
+        np.minimum,
+        math.hypot,
+        math.sqrt,
+    )
+    layout = _layout(goals)
+    m = layout[-1][4]
+    err, J, e, A = np.empty(m), np.empty((m, robot.dof)), np.empty(6), np.empty((m, m))
+    e_p, e_r, diagonal = e[:3], e[3:], A.reshape(-1)[:: m + 1]  # views; diagonal: A's
+    limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper))
     best, total = None, 0
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
         last = attempt == attempts - 1 or (attempt == 0 and shared.patient_first)
         iteration, previous = 0, None
+        history: list[float] = []  # the score at each iteration
         while True:
             jacobians(model, data, q if identity else pinocchio_q(q))
-            errors, blocks, per_frame = [], [], []
-            score, done = 0.0, True
-            for g in goals:
-                p, fid, rows, sqrt_w = g.problem, g.problem.fid, g.problem.rows, g.problem.sqrt_weights
+            per_frame = []
+            score, squared, done = 0.0, 0.0, True
+            for fid, p_d, C_d, start, stop, S, sqrt_w, position_rows in layout:
                 M = place(model, data, fid)
-                e[:3] = g.p_d - M.translation
-                e[3:] = log3(g.C_d @ M.rotation.T)
-                if rows is None:
+                subtract(p_d, M.translation, out=e_p)
+                e_r[:] = log3(C_d @ M.rotation.T)
+                if S is None:
+                    err[start:stop] = e
                     e0, e1, e2, e3, e4, e5 = e.tolist()
                     ep, er = hypot(e0, e1, e2), hypot(e3, e4, e5)
-                    errors.append(e.copy())
+                    squared += e0 * e0 + e1 * e1 + e2 * e2 + e3 * e3 + e4 * e4 + e5 * e5
                 else:
-                    e_d = np.concatenate((g.C_d.T @ e[:3], g.C_d.T @ e[3:]))[rows]
-                    ep = sqrt(float(e_d[p.position_rows] @ e_d[p.position_rows]))
-                    er = sqrt(float(e_d[~p.position_rows] @ e_d[~p.position_rows]))
-                    errors.append(e_d if sqrt_w is None else e_d * sqrt_w)
+                    e_d = S @ e
+                    ep = sqrt(float(e_d[position_rows] @ e_d[position_rows]))
+                    er = sqrt(float(e_d[~position_rows] @ e_d[~position_rows]))
+                    kept = err[start:stop]
+                    kept[:] = e_d if sqrt_w is None else e_d * sqrt_w
+                    squared += float(kept @ kept)
                 per_frame.append((ep, er))
                 score += ep + SEED_ROTATION_WEIGHT * er
                 done = done and ep <= tol_p and er <= tol_r
-                J = get_jacobian(model, data, fid, LWA).reshape(6, -1)
-                if not identity:
-                    J = fold(J)
-                if rows is not None:
-                    J = np.vstack((g.C_d.T @ J[:3], g.C_d.T @ J[3:]))[rows]
-                    if sqrt_w is not None:
-                        J = J * sqrt_w[:, None]
-                blocks.append(J)
-            if (
-                done
-                or iteration == max_iterations
-                or (iteration == PROBE_ITERATIONS and score > GIVE_UP and not last)
-            ):
+            gives_way = not last and (
+                (iteration == PROBE_ITERATIONS and score > GIVE_UP)
+                or (iteration >= STALL_FROM and score > STALL_RATIO * history[iteration - STALL_SPAN])
+            )
+            if done or iteration == max_iterations or gives_way:
                 break
+            history.append(score)
             iteration += 1
-            err = np.concatenate(errors)
-            J = np.vstack(blocks)
+            for fid, _, _, start, stop, S, sqrt_w, _ in layout:
+                J_F = get_jacobian(model, data, fid, LWA).reshape(6, -1)
+                if not identity:
+                    J_F = fold(J_F)
+                if S is None:
+                    J[start:stop] = J_F
+                elif sqrt_w is None:
+                    J[start:stop] = S @ J_F
+                else:
+                    J[start:stop] = (S @ J_F) * sqrt_w[:, None]
             if limits.any:
                 w, previous = limits.inverse_weights_one(q, previous)
                 JW = J * w
             else:
                 JW = J
-            A = JW @ J.T
-            A += (0.5 * float(err @ err) + damping_sq) * eye
+            dot(JW, J.T, out=A)
+            diagonal += 0.5 * squared + damping_sq
             if q_ns is None:
-                q += JW.T @ solve(A, err)
+                y = dposv(A, err)[1:]
+                q += dot(JW.T, y[0] if y[1] == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
             else:
                 z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
-                y = solve(A, np.column_stack((err, J @ z)))
-                q += JW.T @ (y[:, 0] - y[:, 1]) + z
+                b = np.column_stack((err, J @ z))
+                y = dposv(A, b)[1:]
+                x = y[0] if y[1] == 0 else np.linalg.lstsq(A, b, rcond=None)[0]
+                q += JW.T @ (x[:, 0] - x[:, 1]) + z
             minimum(maximum(q, lower, out=q), upper, out=q)
         total += iteration
         if best is None or score < best[2]:
