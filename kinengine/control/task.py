@@ -33,6 +33,8 @@ How: one ``computeForwardKinematicsDerivatives`` fills Pinocchio's world-frame j
 J̇_w (no array is returned, so nothing is allocated); per frame :mod:`kinengine.control.task_frame` does
 the rest. Pinocchio's model has plain joints only; with mimic joints q_pin = M q + b and q̇_pin = M q̇
 are written into preallocated arrays and J_w, J̇_w are folded, J_w·M (see :mod:`kinengine.model.coordinates`).
+``update(q)`` of one absolute frame with all rows, Cartesian position and a rotation takes the fast path of
+:mod:`kinengine.control.task_fast` (the same floats, one product for J and J_A) wherever χ is regular.
 
 A Task owns its own Pinocchio Data: use one Task per thread. The attributes are read-only
 views that the next update overwrites; copy what you keep.
@@ -53,6 +55,7 @@ from ..errors import OptionError
 from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
 from .frame_task import FrameTask, as_frame_tasks
+from .task_fast import fast_update
 from .task_frame import FrameBlock, FrameKinematics
 
 
@@ -125,10 +128,21 @@ class Task:
         self._qp, self._vp = np.empty(model.nq), np.empty(model.nv)
         self._pose = np.zeros((k, 4, 4))
         self._pose[:, 3, 3] = 1.0
-        self._J, self._Jdot = np.zeros((k, 6, n)), np.zeros((k, 6, n))
+        spec0, pm0 = specs[0], pmaps[0]
+        fast = (
+            k == 1
+            and spec0.relative_to is None
+            and pm0.rows is None
+            and pm0.position is not None
+            and pm0.position.name == "cartesian"
+            and pm0.rotation is not None
+        )
+        # J_e0 and J_A in one buffer: the fast path writes both with one product (see task_fast)
+        stacked = np.zeros((6 * k + M, n))
+        self._J, self._JA = stacked[: 6 * k].reshape(k, 6, n), stacked[6 * k :]
+        self._Jdot, self._JAdot = np.zeros((k, 6, n)), np.zeros((M, n))
         self._twist = np.zeros((k, 6))
         self._chi, self._chi_dot = np.zeros(M), np.zeros(M)
-        self._JA, self._JAdot = np.zeros((M, n)), np.zeros((M, n))
         self._weights = np.concatenate(
             [np.full(pm.size, f.weight) for f, pm in zip(specs, pmaps, strict=False)]
         )
@@ -162,6 +176,11 @@ class Task:
             self._blocks.append(block)
             row, part = row + pm.size, part + len(pm.parts)
         self._kinematics = tuple(kinematics.values())
+        self._fast = (
+            fast_update(self._kinematics[0], self._blocks[0], stacked, self._chi, self._distances)
+            if fast
+            else None
+        )
         single = isinstance(frames, (str, FrameTask))
         self.pose = _readonly(self._pose[0] if single else self._pose)
         self.jacobian = _readonly(self._J.reshape(6 * k, n))
@@ -193,6 +212,14 @@ class Task:
         set: NaN rows (``on_singularity="nan"``) or, after every attribute is written,
         RepresentationSingularityError (see the module doc).
         """
+        fast = self._fast
+        if (
+            qdot is None
+            and fast is not None
+            and not self._rates_valid
+            and fast(q, self.check_inputs, self.singularity_threshold, self.continuous)
+        ):
+            return
         coords = self._coords
         if self.check_inputs:
             q = coords.check(q, allow_batch=False)
