@@ -1,5 +1,6 @@
 """analytic_jacobian's looked-up path (options seen before, q a float64 (dof,) array) against the general path
-(the same call with q as a list, or rows as a list): bitwise equal, errors raised every time, threads apart."""
+(the same call with q as a list, or rows as a list): bitwise equal (within 1e-14 where E_R comes from
+Pinocchio's C++ helpers), errors raised every time, threads apart."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import numpy as np
 import pytest
 
 import kinengine
+from kinengine.analytic.native import NATIVE_E, NATIVE_MAX_SQ
 from kinengine.errors import FrameNotFoundError, KinematicsError, RepresentationSingularityError
 from kinengine.parameterizations import ROTATION_PARAMETERIZATIONS
 
@@ -25,10 +27,12 @@ def test_the_looked_up_path_equals_the_general_path(robot, position, rotation):
         pytest.skip("no rows")
     q = np.array([0.1, -0.3, 0.2, 0.5, 0.4, 0.6])
     fast = [robot.analytic_jacobian(q, "tool0", position, rotation) for _ in range(2)]  # made, then looked up
-    general = robot.analytic_jacobian(
-        q.tolist(), "tool0", position, rotation
-    )  # a list: checked, general path
-    assert np.array_equal(fast[0], general) and np.array_equal(fast[1], general)
+    general = robot.analytic_jacobian(q.tolist(), "tool0", position, rotation)  # a list: the general path
+    assert np.array_equal(fast[0], fast[1])
+    if rotation in NATIVE_E and position in (None, "cartesian"):  # E_R from Pinocchio's C++ helpers
+        np.testing.assert_allclose(fast[0], general, rtol=0, atol=1e-14 * np.abs(general).max())
+    else:
+        assert np.array_equal(fast[0], general)
 
 
 def test_rows_as_tuple_and_as_list_agree_and_options_do_not_mix(robot):
@@ -95,3 +99,26 @@ def test_threads_evaluate_their_own_configurations(robot):
     for thread in threads:
         thread.join()
     assert len(errors) == 300 * len(Q) and max(errors) == 0.0
+
+
+@pytest.mark.parametrize("position", ["cartesian", None])
+@pytest.mark.parametrize("rotation", sorted(NATIVE_E))
+def test_native_rotation_rows_equal_the_scalar_formulas_everywhere(robot, rotation, position):
+    """Random q (rotation vectors of every length up to π, so both sides of NATIVE_MAX_SQ) and q walked into
+    ZYX gimbal lock: within 1e-14 of the general path relative to J_A's size, or the same error."""
+    kin = robot.engine
+    home = np.zeros(6)  # tool0's ZYX angles at gimbal lock (χ2 = -π/2); q5 tilts the tool out of it
+    walk = [home + np.array([0, 0, 0, 0, d, 0]) for d in (1e-9, 1e-7, 1e-6, 1e-5, 1e-3, 0.1)]
+    thetas = []
+    for q in [*robot.random_configuration(8, 400), *walk]:
+        T = robot.frame_pose(q)
+        thetas.append(float(np.linalg.norm(kinengine.pose_error(np.eye(4), T, "local")[3:])))
+        try:
+            general = robot.analytic_jacobian(q.tolist(), "tool0", position, rotation)
+        except RepresentationSingularityError:
+            with pytest.raises(RepresentationSingularityError):
+                robot.analytic_jacobian(q, "tool0", position, rotation)
+            continue
+        fast = robot.analytic_jacobian(q, "tool0", position, rotation)
+        np.testing.assert_allclose(fast, general, rtol=0, atol=1e-14 * np.abs(general).max())
+    assert kin.dof == 6 and min(thetas) ** 2 < NATIVE_MAX_SQ < max(thetas) ** 2

@@ -15,6 +15,7 @@ import pinocchio as pin
 from ..kinematics import batch, relative
 from ..kinematics.engine import Kinematics
 from ..kinematics.handle import FrameHandle
+from .native import NATIVE_E
 from .pose_map import PoseMap
 
 ANALYTIC_CALLS = 100
@@ -77,6 +78,8 @@ def analytic_function(
         return lambda q: analytic_single(kin, q, fid, pmap, threshold)
     local = threading.local()
     jacobian_single = pmap.jacobian_single
+    plain = pmap.rows is None and (pmap.position is None or pmap.position.name == "cartesian")
+    make_native = NATIVE_E.get(pmap.rotation.name) if pmap.rotation is not None and plain else None
 
     def evaluate(q: np.ndarray) -> npt.NDArray[np.float64]:
         try:
@@ -86,7 +89,26 @@ def analytic_function(
         J = jacobian(q, "local_world_aligned")  # also places the frame: C and p show T_IF at q
         return jacobian_single(C.tolist(), p.tolist(), J, threshold)
 
-    return evaluate
+    if make_native is None:
+        return evaluate
+    native, rotation_only = make_native(), pmap.position is None
+
+    def evaluate_native(q: np.ndarray) -> npt.NDArray[np.float64]:
+        """E_R from Pinocchio's C++ (:mod:`.native`) at regular poses; anything else takes ``evaluate``."""
+        try:
+            (C, p), jacobian = local.path
+        except AttributeError:
+            (C, p), jacobian = local.path = _single_path(kin, fid)
+        J = jacobian(q, "local_world_aligned")
+        found = native(C)
+        if found is None or not found[0] >= threshold or found[0] == 0.0:  # singular: the general path
+            return jacobian_single(C.tolist(), p.tolist(), J, threshold)
+        if rotation_only:
+            return found[1].dot(J[3:])
+        J[3:] = found[1].dot(J[3:])  # J is this call's own array
+        return J
+
+    return evaluate_native
 
 
 def _single_path(
