@@ -7,15 +7,16 @@ With ``rows=`` or ``weights=`` both halves are expressed in the target frame D (
 blockwise) and only the named rows count: rows=("x", "y", "z", "rx", "ry") is a 5-D target, position plus
 tool axis (D's z axis): rotation about it is left free. ``weights`` (w ≥ 0, one per kept row) minimize
 Σ w_i e_i² instead of |e|².
-Step (λ² = ½|e|² + λ_min², Sugihara's Levenberg–Marquardt rule: strong damping far from the target or
-near a singularity, Gauss–Newton speed close to it):
+Step (λ² = 0.2·|e|² + λ_min² (``DAMPING_SCALE``), Sugihara's Levenberg–Marquardt rule: strong damping
+far from the target or near a singularity, Gauss–Newton speed close to it):
     Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e  +  (I − Jᵀ (J Jᵀ + λ² I)⁻¹ J)·z,   q ← clip(q + Δq, lower, upper),
 with z = gain·min(1, score/NULLSPACE_FADE) · (q_ns − q) pulling towards ``nullspace_target`` in the
 (damped) nullspace of J.
 Joint limits: every iterate is clipped into them, and Chan & Dubey's weights (:class:`LimitWeights`)
 slow joints that approach a limit (Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² I)⁻¹ e).
 Seeds, in order, one attempt each of at most ``max_iterations`` iterations (an attempt whose error
-is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations makes way for the next seed):
+is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations, or from iteration ``STALL_FROM`` on above
+``STALL_RATIO`` × its error ``STALL_SPAN`` iterations earlier, makes way for the next seed):
 ``q0`` if given (its attempt never gives up early), else the middle of the joint ranges (or
 ``nullspace_target``) and the ``NEAREST_SEEDS`` configurations of a per-robot table
 (:mod:`.ik_seeds`: ``SEED_TABLE_SIZE`` random in-limit configurations, fixed seed) whose frame poses are

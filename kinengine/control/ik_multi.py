@@ -3,15 +3,15 @@
 Frames and units: every target T_IF is the frame F's pose in the root frame I (p_d [m], C_d); each frame's
 error is the single-frame one (:mod:`kinengine.control.ik`): e_F = (p_d − p, log3(C_d Cᵀ)) [m, rad] in I,
 or, with ``rows=``/``weights=``, e_D = (C_dᵀ e_p, C_dᵀ e_R) in the frame's target frame D, kept rows only,
-each times √w. Its Jacobian is J_F = J_e0 ("local_world_aligned", folded with the coordinate map M for mimic
-robots), rotated and cut the same way. The solver stacks them, e = (e_F1, e_F2, ...), J = (J_F1; J_F2; ...),
-and takes the single-frame step: Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² I)⁻¹ e (+ the nullspace pull), λ² = ½|e|² + λ_min²,
-Chan & Dubey's limit weights W, every iterate clipped into the limits. Success: EVERY frame within
-``tol_position`` [m] and ``tol_rotation`` [rad]. Attempts are ranked by Σ_F (|e_p| + 0.2 m/rad·|e_R|).
+each times √w. Its Jacobian is J_F = J_e0 ("local_world_aligned", folded with the coordinate map M for
+mimic robots), rotated and cut the same way. The solver stacks them, e = (e_F1, e_F2, ...),
+J = (J_F1; J_F2; ...), and takes the single-frame step: Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² I)⁻¹ e (+ the nullspace
+pull), λ² = 0.2·|e|² + λ_min², Chan & Dubey's limit weights W, every iterate clipped into the limits.
+Success: EVERY frame within ``tol_position`` [m] and ``tol_rotation`` [rad]. Attempts are ranked by
+Σ_F (|e_p| + 0.2 m/rad·|e_R|) and give way to the next by the single-frame rules (still above ``GIVE_UP``
+after ``PROBE_ITERATIONS`` iterations, or stalled).
 Seeds: ``q0`` if given (never gives up early), else the ``NEAREST_SEEDS`` stored configurations
-(:mod:`.ik_seeds`) nearest each frame's target, all of them ranked by that sum over every frame (an attempt
-gives way to the next by the single-frame rules: still above ``GIVE_UP`` after ``PROBE_ITERATIONS``
-iterations, or stalled), and the
+(:mod:`.ik_seeds`) nearest each frame's target, all of them ranked by that sum over every frame, and the
 middle of the ranges (or ``nullspace_target``); then ``restarts`` random ones.
 The result's position_error / rotation_error are the maxima over the frames; ``frame_errors`` holds each
 frame's (position error [m], rotation error [rad]).
@@ -30,6 +30,7 @@ import pinocchio as pin
 from ..errors import OptionError, ParameterizationError
 from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
 from .ik_solver import (
+    DAMPING_SCALE,
     GIVE_UP,
     NULLSPACE_FADE,
     PROBE_ITERATIONS,
@@ -272,7 +273,7 @@ def solve_frames(
             else:
                 JW = J
             dot(JW, J.T, out=A)
-            diagonal += 0.5 * squared + damping_sq
+            diagonal += DAMPING_SCALE * squared + damping_sq
             if q_ns is None:
                 y = dposv(A, err)[1:]
                 q += dot(JW.T, y[0] if y[1] == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
