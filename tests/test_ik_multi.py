@@ -88,6 +88,19 @@ def test_three_frames_of_the_abb(abb):
         _check(abb, result, targets)
 
 
+def test_a_frame_moved_by_a_mimic_joint_sets_its_leader(panda):
+    """panda_rightfinger moves with finger_joint2, a mimic of q[7]: its position (with the hand's pose)
+    fixes q[7] only through the folded Jacobian column."""
+    rng = np.random.default_rng(17)
+    rows = {"panda_rightfinger": ("x", "y", "z")}
+    for i, q in enumerate(panda.random_configuration(rng, size=8)):
+        targets = {f: panda.frame_pose(q, f) for f in ("panda_hand", "panda_rightfinger")}
+        result = panda.inverse_kinematics(targets, rows=rows, rng=i)
+        assert result.success
+        _check(panda, result, targets, rows)
+        assert result.q[7] == pytest.approx(q[7], abs=1e-5)
+
+
 def test_rows_per_frame_hand_pose_and_link4_xy(panda):
     """rows={"panda_link4": ("x", "y")}: link4's x, y in its target frame D; the hand keeps six rows."""
     rng = np.random.default_rng(13)
