@@ -143,24 +143,24 @@ def checked_goals(
 
 def _seeds(robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None) -> np.ndarray:
     """The seeded attempts' starts (S, dof): q0, or the stored seeds nearest any frame's target ranked by
-    Σ_F (|Δp| + 0.2·angle) over the frames' kept rows, then the middle of the ranges (or nullspace target)."""
+    Σ_F (|Δp| + 0.2·‖ΔC‖_F/√2) over the frames' kept rows (‖ΔC‖_F/√2 = 2 sin(θ/2) ≈ θ, the seed tables'
+    metric), then the middle of the ranges (or the nullspace target)."""
     if q0 is not None:
         return first_seeds(robot, goals[0].problem, goals[0].p_d[None], goals[0].C_d[None], q0)[0]
     per_frame = [first_seeds(robot, g.problem, g.p_d[None], g.C_d[None], None)[0] for g in goals]
     if len(goals) == 1:
         return per_frame[0]
     candidates = np.concatenate([seeds[:-1] for seeds in per_frame])
-    score = np.zeros(len(candidates))
+    score, n = np.zeros(len(candidates)), len(candidates)
     for g in goals:
-        T = robot.frame_pose(candidates, g.problem.frame)
-        rows = np.arange(6) if g.problem.rows is None else g.problem.rows
-        kept_p = rows[rows < 3]
-        if len(kept_p):
-            dp = (g.p_d - T[:, :3, 3]) @ (g.C_d if g.problem.rows is not None else np.eye(3))
-            score += np.linalg.norm(dp[:, kept_p], axis=1)
-        if (rows >= 3).any():
-            cos = (np.einsum("ij,nij->n", g.C_d, T[:, :3, :3]) - 1.0) / 2.0
-            score += SEED_ROTATION_WEIGHT * np.arccos(np.clip(cos, -1.0, 1.0))
+        T, rows = robot.frame_pose(candidates, g.problem.frame), g.problem.rows
+        d = g.p_d - T[:, :3, 3]
+        if rows is not None:
+            d = (d @ g.C_d)[:, rows[rows < 3]]  # C_dᵀ Δp, kept rows
+        score += np.sqrt(np.einsum("ij,ij->i", d, d))
+        if rows is None or rows[-1] >= 3:  # rows are sorted: a rotation row is kept
+            dC = (T[:, :3, :3] - g.C_d).reshape(n, 9)
+            score += SEED_ROTATION_WEIGHT / math.sqrt(2.0) * np.sqrt(np.einsum("ij,ij->i", dC, dC))
     return np.concatenate((candidates[np.argsort(score, kind="stable")], per_frame[0][-1:]))
 
 
