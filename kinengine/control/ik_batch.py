@@ -1,13 +1,18 @@
-"""Inverse kinematics for a batch of targets (N, 4, 4), vectorized over every unconverged target at once.
+"""Inverse kinematics for a batch of targets (N, 4, 4), vectorized over every running attempt at once.
 
-The algorithm of :mod:`kinengine.control.ik` (same error, damping, seeds, attempts, give-up rule and
-tolerances), each iteration done for all targets still running: poses and Jacobians J_e0 (N, 6, dof)
-from the batch chain (:mod:`kinengine.kinematics.batch`), the rotation errors log(C_d Cᵀ) in closed
-form, and the damped least-squares systems (N, m, m) solved by one ``np.linalg.solve``. A target
-leaves the batch when it converges or runs out of attempts; one that gives up on an attempt moves to
-its next seed while the others go on; the last ``TAIL`` stragglers finish on the single-target solver.
-Its floating point differs from the single solver's (Pinocchio's Jacobian vs the batch chain's), so the
-two agree in convergence and tolerance, not bit for bit.
+The algorithm of :mod:`kinengine.control.ik` (same error, damping, limit weights, seeds, attempts,
+give-up rule and tolerances), each iteration done for every attempt still running, held column-wise
+(q (dof, r), J (6, dof, r), ...: every numpy call runs over r contiguous entries): poses and
+Jacobians J_e0 from the batch chain (:mod:`kinengine.kinematics.batch`, written straight into reused
+column buffers), the rotation errors log(C_d Cᵀ) in closed form, and the damped least-squares systems
+(m, m, r) by a column-wise Cholesky factorization. Attempts that end (converged, given up, out of
+iterations) are compacted away, and the target's next attempt starts (its seed looked up only then:
+:class:`~kinengine.control.ik_seeds.BatchSeeds`). When few attempts are left running (SPECULATE), each
+target runs several of its next attempts at the same time; every target's outcome is then taken from
+its attempts in order (:func:`_resolve`): the same q, success, iteration count and restarts as if the
+attempts had run one after another. Its floating point differs from the single solver's (Pinocchio's
+Jacobian vs the batch chain's, Cholesky vs LU), so the two agree in convergence and tolerance, not
+bit for bit; random restarts draw from ``rng`` in a different order.
 
 The result is an :class:`IKBatchResult`: arrays over the batch (``q`` (N, dof), ``success`` (N,), ...),
 and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``list(result)``).
@@ -16,23 +21,24 @@ and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``li
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
 from ..kinematics import batch
-from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
-from .ik_solver import GIVE_UP, NULLSPACE_FADE, PROBE_ITERATIONS, IKResult, LimitWeights, solve_one
+from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
+from .ik_solver import GIVE_UP, NULLSPACE_FADE, PROBE_ITERATIONS, IKResult, LimitWeights
 from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from ..robot import Robot
 
-TAIL = 16
-"""When no more than this many targets are left running, each finishes on the single-target solver (one
-target costs it ~20 numpy calls per iteration against ~150 for a batch iteration)."""
+SPECULATE = 1024
+"""When no more than this many attempts are running, targets run their next attempts at the same time
+(up to this many rows in all): a batch iteration costs about the same for one row as for a few hundred,
+and the outcomes are taken in attempt order, as if the attempts had run one after another."""
 
 
 @dataclass(frozen=True)
@@ -97,119 +103,218 @@ def solve_batch(
     """Solve every target (p_d (N, 3), C_d (N, 3, 3)) vectorized; see the module doc."""
     kin, joints, dof = robot.engine, robot.engine.coordinates, robot.dof
     n = len(p_d)
-    seeds = first_seeds(robot, problem, p_d, C_d, q0)
-    attempts = seeds.shape[1] + problem.restarts
-    q = seeds[:, 0].copy()
-    attempt, iteration, total = (np.zeros(n, dtype=np.intp) for _ in range(3))
-    best_q, best = q.copy(), np.full((n, 3), np.inf)  # best score, ep, er
-    best_attempt = np.zeros(n, dtype=np.intp)
+    seeds = BatchSeeds(robot, problem, p_d, C_d, q0)
+    attempts = seeds.count + problem.restarts
     rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
     tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
-    lower, upper = joints.lower, joints.upper
-    limits = LimitWeights(lower, upper)
-    previous = np.full((n, dof), -1.0)  # |∂φ/∂q| at each target's last iteration (-1: none yet)
-    active = np.arange(n)
-    while len(active) > TAIL or (len(active) and len(active) == n):
-        qa = np.ascontiguousarray(q[active])
-        T, J = batch.evaluate(kin, qa, problem.fid, pin.LOCAL_WORLD_ALIGNED)
-        assert T is not None and J is not None  # both asked for
-        Cd = C_d[active]
-        e = np.empty((len(active), 6))
-        e[:, :3] = p_d[active] - T[:, :3, 3]
-        e[:, 3:] = log3(Cd @ T[:, :3, :3].transpose(0, 2, 1))
+    lower, upper = joints.lower[:, None], joints.upper[:, None]
+    limits = LimitWeights(joints.lower, joints.upper)
+    winner = np.full(n, attempts, dtype=np.intp)  # each target's first converged attempt (none yet)
+    launched = np.ones(n, dtype=np.intp)  # attempts started so far
+    log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
+    # one column per running attempt (compacted as they end): its target, attempt, iterations so far,
+    # q (dof, r), |∂φ/∂q| at its last iteration (-1: none yet), the target p_d (3, r), C_d (3, 3, r)
+    tid = np.arange(n)
+    att, it = np.zeros(n, dtype=np.intp), np.zeros(n, dtype=np.intp)
+    q = np.ascontiguousarray(seeds.starts(tid, att).T)
+    previous = np.full((dof, n), -1.0)
+    pd, Cd = np.ascontiguousarray(p_d.T), np.ascontiguousarray(C_d.transpose(1, 2, 0))
+    space = _Workspace(max(n, SPECULATE), dof)
+    while len(tid):
+        r = len(tid)
+        if r > space.capacity:
+            space = _Workspace(r, dof)
+        T, J = space.pose[..., :r], space.jac[..., :r]  # (4, 4, r), (6, dof, r): the chain writes rows
+        batch.evaluate(
+            kin, q.T, problem.fid, pin.LOCAL_WORLD_ALIGNED, out=(T.transpose(2, 0, 1), J.transpose(2, 0, 1))
+        )
+        e = np.empty((6, r))
+        np.subtract(pd, T[:3, 3], out=e[:3])
+        _log3_columns(Cd, T[:3, :3], e[3:])
         if rows is None:
             err = e
             ep, er = (
-                np.sqrt(np.einsum("ni,ni->n", e[:, :3], e[:, :3])),
-                np.sqrt(np.einsum("ni,ni->n", e[:, 3:], e[:, 3:])),
+                np.sqrt(np.einsum("in,in->n", e[:3], e[:3])),
+                np.sqrt(np.einsum("in,in->n", e[3:], e[3:])),
             )
         else:
-            CdT = Cd.transpose(0, 2, 1)
-            e_d = np.concatenate(
-                (np.einsum("nij,nj->ni", CdT, e[:, :3]), np.einsum("nij,nj->ni", CdT, e[:, 3:])), axis=1
-            )[:, rows]
-            ep = np.sqrt(np.einsum("ni,ni->n", e_d[:, position_rows], e_d[:, position_rows]))
-            er = np.sqrt(np.einsum("ni,ni->n", e_d[:, ~position_rows], e_d[:, ~position_rows]))
-            err = e_d if sqrt_w is None else e_d * sqrt_w
+            e_d = np.concatenate((np.einsum("kin,kn->in", Cd, e[:3]), np.einsum("kin,kn->in", Cd, e[3:])))[
+                rows
+            ]
+            ep = np.sqrt(np.einsum("in,in->n", e_d[position_rows], e_d[position_rows]))
+            er = np.sqrt(np.einsum("in,in->n", e_d[~position_rows], e_d[~position_rows]))
+            err = e_d if sqrt_w is None else e_d * sqrt_w[:, None]
         score = ep + SEED_ROTATION_WEIGHT * er
-        it = iteration[active]
         done = (ep <= tol_p) & (er <= tol_r)
-        last = attempt[active] == attempts - 1
-        patient = last | ((attempt[active] == 0) & problem.patient_first)
+        patient = (att == attempts - 1) | ((att == 0) & problem.patient_first)
         end = done | (it == max_iterations) | ((it == PROBE_ITERATIONS) & (score > GIVE_UP) & ~patient)
+        ended = np.empty(0, dtype=np.intp)
         if end.any():
-            ended = active[end]
-            total[ended] += it[end]
-            better = score[end] < best[ended, 0]
-            improved = ended[better]
-            best_q[improved] = qa[end][better]
-            best[improved] = np.column_stack((score[end][better], ep[end][better], er[end][better]))
-            best_attempt[improved] = attempt[improved]
-            again = ended[~(done[end] | last[end])]
-            if len(again):  # next seed, then random configurations
-                attempt[again] += 1
-                iteration[again] = 0
-                previous[again] = -1.0  # the first iteration of an attempt weights every joint
-                seeded = attempt[again] < seeds.shape[1]
-                q[again[seeded]] = seeds[again[seeded], attempt[again[seeded]]]
-                if (~seeded).any():
-                    q[again[~seeded]] = generator.configurations(robot, int((~seeded).sum()))
-        step = ~end
-        if step.any():
-            J = J[step]
-            err = err[step]
+            log.append((tid[end], att[end], it[end], score[end], ep[end], er[end], q[:, end].T))
+            converged = end & done
+            np.minimum.at(winner, tid[converged], att[converged])
+            ended = tid[end & ~done]
+            keep = ~end & (att < winner[tid])  # attempts after a converged one are dropped
+            tid, att, it, score = tid[keep], att[keep], it[keep], score[keep]
+            q, previous, pd, Cd, err = (a[..., keep] for a in (q, previous, pd, Cd, err))
+            J = space.compact(J, keep)
+        if len(tid):
             if rows is not None:
-                CdT = Cd[step].transpose(0, 2, 1)
-                J = np.concatenate((CdT @ J[:, :3], CdT @ J[:, 3:]), axis=1)[:, rows]
-                if sqrt_w is not None:
-                    J = J * sqrt_w[:, None]
-            moving = active[step]
+                J = np.concatenate(
+                    (np.einsum("kin,kjn->ijn", Cd, J[:3]), np.einsum("kin,kjn->ijn", Cd, J[3:]))
+                )
+                J = J[rows] if sqrt_w is None else J[rows] * sqrt_w[:, None, None]
+            w = None
             if limits.any:
-                w, previous[moving] = limits.inverse_weights(q[moving], previous[moving])
-            else:
-                w = None
-            q[moving] = _step(J, w, err, score[step], q[moving], problem)
-            q[moving] = np.clip(q[moving], lower, upper)
-            iteration[moving] += 1
-        active = np.concatenate((active[step], again)) if end.any() else active
-        active.sort()
-    for i in active:  # the last few stragglers: the single-target solver, from their current attempt on
-        a, S = int(attempt[i]), seeds.shape[1]
-        rest = replace(
-            problem,
-            restarts=problem.restarts - (a - S) if a >= S else problem.restarts,
-            patient_first=problem.patient_first and a == 0,
-        )
-        result = solve_one(
-            robot, rest, p_d[i], C_d[i], seeds[i, a:] if a < S else seeds[i, :0], generator, wrap=False
-        )
-        total[i] += result.iterations
-        score = result.position_error + SEED_ROTATION_WEIGHT * result.rotation_error
-        if score < best[i, 0]:
-            best_q[i], best[i] = result.q, (score, result.position_error, result.rotation_error)
-            best_attempt[i] = a + result.restarts
-    best_q[:, joints.continuous] = np.remainder(best_q[:, joints.continuous] + np.pi, 2 * np.pi) - np.pi
-    success = (best[:, 1] <= tol_p) & (best[:, 2] <= tol_r)
-    return IKBatchResult(best_q, success, total, best[:, 1].copy(), best[:, 2].copy(), best_attempt)
+                w, previous = _inverse_weights(limits, q, previous)
+            q = np.clip(_step(J, w, err, score, q, problem, space), lower, upper)
+            it += 1
+        # next attempts: one per target that needs one; when few columns run, several at once per target
+        # (_resolve takes the outcomes in attempt order, as if the attempts had run one after another)
+        speculate = len(tid) + len(ended) <= SPECULATE
+        candidates = np.unique(np.concatenate((tid, ended)) if speculate else ended)
+        if not len(candidates):
+            continue
+        running = np.bincount(tid, minlength=n)[candidates]
+        share = max(1, SPECULATE // len(candidates)) if speculate else 1
+        open_ = (winner[candidates] == attempts) & (launched[candidates] < attempts)
+        extra = np.where(open_, np.minimum(share - running, attempts - launched[candidates]), 0)
+        candidates, extra = candidates[extra > 0], extra[extra > 0]
+        if len(candidates):
+            new_tid = np.repeat(candidates, extra)
+            new_att = np.repeat(launched[candidates], extra) + (
+                np.arange(len(new_tid)) - np.repeat(np.cumsum(extra) - extra, extra)
+            )
+            launched[candidates] += extra
+            seeded = new_att < seeds.count
+            new_q = np.empty((len(new_tid), dof))
+            new_q[seeded] = seeds.starts(new_tid[seeded], new_att[seeded])
+            if (~seeded).any():
+                new_q[~seeded] = generator.configurations(robot, int((~seeded).sum()))
+            tid, att = np.concatenate((tid, new_tid)), np.concatenate((att, new_att))
+            it = np.concatenate((it, np.zeros(len(new_tid), dtype=np.intp)))
+            q = np.concatenate((q, new_q.T), axis=1)
+            previous = np.concatenate((previous, np.full((dof, len(new_tid)), -1.0)), axis=1)
+            pd = np.concatenate((pd, p_d[new_tid].T), axis=1)
+            Cd = np.concatenate((Cd, C_d[new_tid].transpose(1, 2, 0)), axis=2)
+    return _resolve(log, winner, n, joints.continuous, tol_p, tol_r)
+
+
+def _resolve(
+    log: list[tuple[np.ndarray, ...]],
+    winner: np.ndarray,
+    n: int,
+    continuous: np.ndarray,
+    tol_p: float,
+    tol_r: float,
+) -> IKBatchResult:
+    """Each target's outcome from its finished attempts, as the single solver takes them one after
+    another: the attempts up to the first converged one count (iterations summed), and the best score
+    among them wins (the earliest on a tie)."""
+    tid, att, it, score, ep, er, q = (np.concatenate(column) for column in zip(*log, strict=True))
+    counted = att <= winner[tid]
+    tid, att, it, score, ep, er, q = (a[counted] for a in (tid, att, it, score, ep, er, q))
+    total = np.bincount(tid, weights=it, minlength=n).astype(np.intp)
+    order = np.lexsort((att, score, tid))
+    first = order[np.r_[True, tid[order][1:] != tid[order][:-1]]]  # best per target, targets ascending
+    best_q = q[first]
+    best_q[:, continuous] = np.remainder(best_q[:, continuous] + np.pi, 2 * np.pi) - np.pi
+    success = (ep[first] <= tol_p) & (er[first] <= tol_r)
+    return IKBatchResult(best_q, success, total, ep[first], er[first], att[first])
+
+
+def _log3_columns(Cd: np.ndarray, C: np.ndarray, out: np.ndarray) -> None:
+    """log(C_d Cᵀ) (3, r) into ``out`` for columns of rotations Cd, C (3, 3, r), as :func:`log3`: with c_k,
+    d_k the k-th columns of C and C_d, vee(C_d Cᵀ − C C_dᵀ) = Σ_k c_k × d_k and tr(C_d Cᵀ) = Σ C_d∘C."""
+    roll, back = [1, 2, 0], [2, 0, 1]
+    w = np.einsum("ikn,ikn->in", Cd[back], C[roll]) - np.einsum("ikn,ikn->in", Cd[roll], C[back])
+    norm = np.sqrt(np.einsum("in,in->n", w, w))
+    cos = 0.5 * (np.einsum("ikn,ikn->n", Cd, C) - 1.0)
+    theta = np.arctan2(0.5 * norm, cos)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.multiply(w, np.where(norm > 1e-12, theta / norm, 0.5), out=out)
+    for i in np.flatnonzero(cos < -0.988).tolist():  # near π the axis from w is inaccurate
+        out[:, i] = pin.log3(Cd[..., i] @ C[..., i].T)
+
+
+def _inverse_weights(
+    limits: LimitWeights, q: np.ndarray, previous: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:meth:`LimitWeights.inverse_weights` for columns q (dof, r), previous (dof, r) (-1: first
+    iteration, every joint weighted)."""
+    lower, upper = limits.lower[:, None], limits.upper[:, None]
+    distances = np.maximum(upper - q, 1e-12) * np.maximum(q - lower, 1e-12)
+    grad = (
+        limits.quarter_span_sq[:, None]
+        * np.abs(2 * q - limits.middle_twice[:, None])
+        / (distances * distances)
+    )
+    return np.where(grad > previous, 1.0 / (1.0 + grad), 1.0), grad
+
+
+class _Workspace:
+    """Buffers for up to ``capacity`` columns, reused from iteration to iteration (fresh arrays of a few
+    MiB cost a page fault per 4 KiB on every use): poses, two Jacobians (compacted from one into the
+    other), J W⁻¹ and A."""
+
+    def __init__(self, capacity: int, dof: int) -> None:
+        self.capacity = capacity
+        self.pose = np.empty((4, 4, capacity))
+        self.jac, self.spare = np.empty((6, dof, capacity)), np.empty((6, dof, capacity))
+        self.weighted, self.normal = np.empty((6, dof, capacity)), np.empty((6, 6, capacity))
+
+    def compact(self, J: np.ndarray, keep: np.ndarray) -> np.ndarray:
+        """J's kept columns, in the spare Jacobian buffer (which becomes the next iteration's)."""
+        out = np.compress(keep, J, axis=2, out=self.spare[..., : int(keep.sum())])
+        self.jac, self.spare = self.spare, self.jac
+        return out
 
 
 def _step(
-    J: np.ndarray, w: np.ndarray | None, err: np.ndarray, score: np.ndarray, q: np.ndarray, problem: Problem
+    J: np.ndarray,
+    w: np.ndarray | None,
+    err: np.ndarray,
+    score: np.ndarray,
+    q: np.ndarray,
+    problem: Problem,
+    space: _Workspace,
 ) -> np.ndarray:
-    """q + Δq for every row: weighted damped least squares with λ² = ½|e|² + λ_min² (and the nullspace
-    pull)."""
-    JW = J if w is None else J * w[:, None, :]  # J W⁻¹
-    A = JW @ J.transpose(0, 2, 1)
-    JT = JW.transpose(0, 2, 1)
-    m = A.shape[1]
-    diagonal = A.reshape(len(A), m * m)[:, :: m + 1]
-    diagonal += (0.5 * np.einsum("ni,ni->n", err, err) + problem.damping_sq)[:, None]
+    """q + Δq for every column (J (m, dof, r), err (m, r), q (dof, r)): weighted damped least squares with
+    λ² = ½|e|² + λ_min² (and the nullspace pull), A = J W⁻¹ Jᵀ + λ² I solved by Cholesky column-wise."""
+    m, r = len(J), J.shape[2]
+    JW = J if w is None else np.multiply(J, w, out=space.weighted[:m, :, :r])  # J W⁻¹
+    A = np.einsum("ikn,jkn->ijn", JW, J, out=space.normal[:m, :m, :r])
+    damping = 0.5 * np.einsum("in,in->n", err, err) + problem.damping_sq
+    for i in range(len(A)):
+        A[i, i] += damping
     if problem.q_ns is None:
-        y = np.linalg.solve(A, err[..., None])
-        return q + (JT @ y)[..., 0]
-    z = (problem.gain * np.minimum(1.0, score / NULLSPACE_FADE))[:, None] * (problem.q_ns - q)
-    y = np.linalg.solve(A, np.stack((err, (J @ z[..., None])[..., 0]), axis=2))
-    return q + (JT @ (y[..., 0] - y[..., 1])[..., None])[..., 0] + z
+        return q + np.einsum("ijn,in->jn", JW, _cholesky_solve(A, err))
+    z = (problem.gain * np.minimum(1.0, score / NULLSPACE_FADE)) * (problem.q_ns[:, None] - q)
+    y = _cholesky_solve(A, err - np.einsum("ijn,jn->in", J, z))
+    return q + np.einsum("ijn,in->jn", JW, y) + z
+
+
+def _cholesky_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """x with A x = b for columns of symmetric positive definite A (m, m, r), b (m, r): A = L Lᵀ (L
+    overwrites A's lower triangle), then the two triangular solves, each step over every column at once
+    (pivots floored at 1e-300)."""
+    m, L = len(A), A
+    inverse = np.empty_like(b)  # 1 / L_jj
+    for j in range(m):
+        pivot = A[j, j] - np.einsum("kn,kn->n", L[j, :j], L[j, :j]) if j else A[j, j]
+        inverse[j] = 1.0 / np.sqrt(np.maximum(pivot, 1e-300))
+        if j + 1 < m:
+            column = A[j + 1 :, j] - np.einsum("ikn,kn->in", L[j + 1 :, :j], L[j, :j]) if j else A[1:, 0]
+            L[j + 1 :, j] = column * inverse[j]
+    x = np.empty_like(b)  # y of L y = b, then overwritten from the bottom up by x of Lᵀ x = y
+    for i in range(m):
+        x[i] = (b[i] - np.einsum("kn,kn->n", L[i, :i], x[:i]) if i else b[i]) * inverse[i]
+    for i in range(m - 1, -1, -1):
+        if i + 1 < m:
+            x[i] = (x[i] - np.einsum("kn,kn->n", L[i + 1 :, i], x[i + 1 :])) * inverse[i]
+        else:
+            x[i] *= inverse[i]
+    return x
 
 
 __all__ = ["IKBatchResult", "log3", "solve_batch"]

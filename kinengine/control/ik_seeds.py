@@ -98,6 +98,54 @@ def first_seeds(
     return seeds
 
 
+class BatchSeeds:
+    """The seeded starts of :func:`first_seeds` for a batch, looked up when an attempt starts: most targets
+    converge from their first seed, so the k-th nearest table entry is only searched for the targets that
+    reach attempt k. ``count`` seeded attempts per target; :meth:`starts` gives (m, dof) for (target,
+    attempt) pairs, equal to ``first_seeds(...)[target, attempt]``."""
+
+    def __init__(
+        self,
+        robot: Robot,
+        problem: Problem,
+        p_d: np.ndarray,
+        C_d: np.ndarray,
+        q0: np.ndarray | None,
+    ) -> None:
+        joints, n = robot.engine.coordinates, len(p_d)
+        self.given = (
+            None if q0 is None else np.broadcast_to(np.clip(q0, joints.lower, joints.upper), (n, robot.dof))
+        )
+        if self.given is not None:
+            self.count = 1
+            return
+        bounded = np.isfinite(joints.lower) & np.isfinite(joints.upper)
+        middle = (np.where(bounded, joints.lower, 0.0) + np.where(bounded, joints.upper, 0.0)) / 2
+        self.first = middle if problem.q_ns is None else np.clip(problem.q_ns, joints.lower, joints.upper)
+        tables = robot.engine.memoized("ik seed tables", SeedTables)
+        self.configs, self.tree = tables.get(
+            (problem.frame, True, True), lambda: _seed_table(robot, problem.frame, True, True)
+        )
+        self.k = min(NEAREST_SEEDS, len(self.configs))
+        self.count = self.k + 1
+        self.points = _embed(p_d, C_d, n)
+
+    def starts(self, targets: np.ndarray, attempts: np.ndarray) -> np.ndarray:
+        """Starts (m, dof) of attempts ``attempts`` (m,) (each < count) of targets ``targets`` (m,)."""
+        if self.given is not None:
+            return self.given[targets].copy()
+        out = np.empty((len(targets), self.configs.shape[1]))
+        for a in np.unique(attempts).tolist():
+            rows = np.flatnonzero(attempts == a)
+            if a == self.k:
+                out[rows] = self.first
+                continue
+            points = self.points[targets[rows]]
+            _, index = self.tree.query(points, k=[a + 1], workers=-1 if len(rows) > 256 else 1)
+            out[rows] = self.configs[np.asarray(index).reshape(-1)]
+        return out
+
+
 __all__ = [
     "NEAREST_SEEDS",
     "SEED_ROTATION_WEIGHT",
@@ -105,6 +153,7 @@ __all__ = [
     "SEED_TABLE_BYTES",
     "SEED_TABLE_RNG",
     "SEED_TABLE_SIZE",
+    "BatchSeeds",
     "SeedTables",
     "first_seeds",
 ]
