@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 import numpy as np
 
@@ -19,6 +19,8 @@ if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
 MAX_TARGET_DISTANCE = 1e9
 """[m] a target position farther than this from the root is refused (its squared error would overflow)."""
 ROW_NAMES = ("x", "y", "z", "rx", "ry", "rz")
+_SIX_ROWS_POSITION = np.arange(6) < 3  # Problem.position_rows of a full target (shared, read-only)
+_SIX_ROWS_POSITION.flags.writeable = False
 
 
 @dataclass(frozen=True)
@@ -92,7 +94,7 @@ def checked_problem(
                     f"`weights` must hold one number per kept row ({len(kept)}), got shape {w.shape}"
                 )
             sqrt_w = np.sqrt([_number("weights[i]", v, 0.0, 1e12) for v in w])
-    position_rows = (kept if kept is not None else np.arange(6)) < 3
+    position_rows = _SIX_ROWS_POSITION if kept is None else kept < 3
     return Problem(
         fid,
         frame,
@@ -147,24 +149,32 @@ class RandomSource:
         return robot.random_configuration(self.generator, size=size)
 
 
-def _rotation_ok(C: np.ndarray) -> bool:
-    """CᵀC = I to 1e-6 and det C > 0 (in plain floats: cheaper than numpy for one 3x3)."""
-    (a, b, c), (d, e, f), (g, h, i) = C.tolist()
-    columns = ((a, d, g), (b, e, h), (c, f, i))
-    for j in range(3):
-        for k in range(j, 3):
-            u, v = columns[j], columns[k]
-            if not abs(u[0] * v[0] + u[1] * v[1] + u[2] * v[2] - (j == k)) <= 1e-6:
-                return False
-    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0
+def _rotation_ok(
+    a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float, i: float
+) -> bool:
+    """C = [[a, b, c], [d, e, f], [g, h, i]] (row by row): CᵀC = I to 1e-6 and det C > 0 (False for NaN), in
+    plain floats (cheaper than numpy for one 3x3)."""
+    return (
+        abs(a * a + d * d + g * g - 1.0) <= 1e-6
+        and abs(b * b + e * e + h * h - 1.0) <= 1e-6
+        and abs(c * c + f * f + i * i - 1.0) <= 1e-6
+        and abs(a * b + d * e + g * h) <= 1e-6
+        and abs(a * c + d * f + g * i) <= 1e-6
+        and abs(b * c + e * f + h * i) <= 1e-6
+        and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0
+    )
 
 
 def _position_ok(p: np.ndarray) -> None:
     if not float(np.max(np.abs(p), initial=0.0)) <= MAX_TARGET_DISTANCE:
-        raise ParameterizationError(
-            f"`target`'s position is farther than {MAX_TARGET_DISTANCE:g} m from the "
-            "root: no robot reaches it; give a target in metres within reach"
-        )
+        _too_far()
+
+
+def _too_far() -> NoReturn:
+    raise ParameterizationError(
+        f"`target`'s position is farther than {MAX_TARGET_DISTANCE:g} m from the "
+        "root: no robot reaches it; give a target in metres within reach"
+    )
 
 
 def single_target(
@@ -178,19 +188,21 @@ def single_target(
             f"Expected `target` to be a (4, 4) pose or parameters χ, got {target!r:.80}"
         ) from None
     if position is None and rotation is None:
-        if value.shape != (4, 4) or not np.isfinite(value).all():
+        flat = value.ravel().tolist() if value.shape == (4, 4) else [math.nan]
+        if not all(map(math.isfinite, flat)):
             raise ParameterizationError(
                 f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got "
                 f"{value.shape}; "
                 "for parameters χ name their position= and/or rotation= parameterization"
             )
-        C = value[:3, :3]
-        if not _rotation_ok(C):
+        a, b, c, x, d, e, f, y, g, h, i, z = flat[:12]
+        if not _rotation_ok(a, b, c, d, e, f, g, h, i):
             raise ParameterizationError(
                 "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
             )
-        _position_ok(value[:3, 3])
-        return value[:3, 3].copy(), C.copy()
+        if not max(abs(x), abs(y), abs(z)) <= MAX_TARGET_DISTANCE:
+            _too_far()
+        return np.array((x, y, z)), value[:3, :3].copy()
     P = get_position(position) if position is not None else None
     R = get_rotation(rotation) if rotation is not None else None
     m = (P.size if P else 0) + (R.size if R else 0)
@@ -212,7 +224,11 @@ def single_target(
         if not np.isfinite(p_d).all():
             raise ParameterizationError(f"`target` {value.tolist()} gives no finite position for {position}")
         _position_ok(p_d)
-    if R is not None and C_d is not None and not (np.isfinite(C_d).all() and _rotation_ok(C_d)):
+    if (
+        R is not None
+        and C_d is not None
+        and not (np.isfinite(C_d).all() and _rotation_ok(*C_d.ravel().tolist()))
+    ):
         raise ParameterizationError(
             f"`target`'s {rotation} parameters {value[m - R.size :].tolist()} describe no "
             "rotation (e.g. a zero quaternion or matrix); give a valid one"
