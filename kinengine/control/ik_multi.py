@@ -143,8 +143,8 @@ def checked_goals(
 
 def _seeds(robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None) -> np.ndarray:
     """The seeded attempts' starts (S, dof): q0, or the stored seeds nearest any frame's target ranked by
-    Σ_F (|Δp| + 0.2·‖ΔC‖_F/√2) over the frames' kept rows (‖ΔC‖_F/√2 = 2 sin(θ/2) ≈ θ, the seed tables'
-    metric), then the middle of the ranges (or the nullspace target)."""
+    Σ_F (|Δp| + 0.2·‖ΔC‖_F/√2) over the frames' kept rows (‖ΔC‖_F/√2 = 2 sin(θ/2) ≈ θ, the metric of
+    the stored tables), then the middle of the ranges (or the nullspace target)."""
     if q0 is not None:
         return first_seeds(robot, goals[0].problem, goals[0].p_d[None], goals[0].C_d[None], q0)[0]
     per_frame = [first_seeds(robot, g.problem, g.p_d[None], g.C_d[None], None)[0] for g in goals]
