@@ -287,3 +287,67 @@ def test_batched_ik_rows_and_nullspace(abb):
     assert np.mean([r.success for r in singles]) >= 0.9
     with pytest.raises(kinengine.OptionError):
         abb.inverse_kinematics(targets, q0=np.zeros((3, 6)))
+
+
+def test_every_entry_of_a_pose_target_is_checked(abb):
+    """A (4, 4) target is refused for a non-finite entry anywhere, a rotation block off orthonormal by more
+    than 1e-6 or with det < 0, and a position beyond MAX_TARGET_DISTANCE; within those bounds it is solved."""
+    T = abb.frame_pose(abb.random_configuration(np.random.default_rng(21)))
+    for i in range(4):
+        for j in range(4):
+            for bad in (np.nan, np.inf, -np.inf):
+                U = T.copy()
+                U[i, j] = bad
+                with pytest.raises(kinengine.ParameterizationError, match="finite pose"):
+                    inverse_kinematics(abb, U)
+    with pytest.raises(kinengine.ParameterizationError, match=r"got \(3, 4\)"):
+        inverse_kinematics(abb, T[:3])
+    flipped = T.copy()
+    flipped[:3, 2] *= -1.0  # orthonormal columns, det = -1: a reflection
+    with pytest.raises(kinengine.ParameterizationError, match="not a rotation matrix"):
+        inverse_kinematics(abb, flipped)
+    for off, accepted in ((3e-6, False), (1e-7, True)):
+        U = T.copy()
+        U[0, 1] += off  # columns 0 and 1 no longer orthogonal (to ~off), column 1 no longer unit
+        if accepted:
+            assert inverse_kinematics(abb, U.tolist(), rng=0).position_error <= 1e-6
+        else:
+            with pytest.raises(kinengine.ParameterizationError, match="not a rotation matrix"):
+                inverse_kinematics(abb, U)
+    for axis in range(3):
+        far = np.eye(4)
+        far[axis, 3] = -2e9
+        with pytest.raises(kinengine.ParameterizationError, match="farther"):
+            inverse_kinematics(abb, far)
+
+
+def test_stalled_attempts_give_way_after_stall_from_iterations(abb):
+    """A target 5 m away (the IRB 120 reaches 0.58 m): no attempt's error shrinks by 20 % in 3 iterations, so
+    each one but the last gives way after STALL_FROM iterations and the last runs out max_iterations."""
+    from kinengine.control import ik_solver
+    from kinengine.control.ik_seeds import first_seeds
+    from kinengine.control.ik_target import checked_problem
+
+    T = np.eye(4)
+    T[:3, 3] = [5.0, 0.0, 0.5]
+    result = inverse_kinematics(abb, T, rng=0, restarts=2, max_iterations=50)
+    problem = checked_problem(abb, None, None, None, 1e-6, 1e-6, 50, 2, None, 0.1, 1e-6, False)
+    attempts = first_seeds(abb, problem, T[None, :3, 3], T[None, :3, :3], None).shape[1] + 2
+    assert not result.success
+    assert result.iterations == (attempts - 1) * ik_solver.STALL_FROM + 50
+    ep, _ = _pose_errors(abb, result.q, "tool0", T)
+    assert ep == pytest.approx(result.position_error, rel=1e-9) and ep > 4.0
+
+
+def test_a_singular_damped_matrix_falls_back_to_least_squares(abb):
+    """Zero tolerances and zero damping at a wrist singularity (q5 = 0): once the error is at rounding level
+    J W⁻¹Jᵀ + λ² I is singular to working precision and Cholesky fails; the step is then the least-squares
+    solution, so the solve ends with a finite q on the target, not with a LinAlgError."""
+    q_true = np.array([0.3, 0.2, 0.1, 0.0, 0.0, 0.0])
+    T = abb.frame_pose(q_true)
+    result = inverse_kinematics(
+        abb, T, q0=q_true + 0.01, tol_position=0, tol_rotation=0, min_damping=0, max_iterations=30, restarts=0
+    )
+    assert np.isfinite(result.q).all() and _within_limits(abb, result.q)
+    ep, er = _pose_errors(abb, result.q, "tool0", T)
+    assert ep <= 1e-12 and er <= 1e-12
