@@ -126,8 +126,6 @@ class Task:
         self._Jw, self._dJw = data.J.reshape(6, model.nv), data.dJ.reshape(6, model.nv)
         self._zero = np.zeros(model.nv)
         self._qp, self._vp = np.empty(model.nq), np.empty(model.nv)
-        self._pose = np.zeros((k, 4, 4))
-        self._pose[:, 3, 3] = 1.0
         spec0, pm0 = specs[0], pmaps[0]
         fast = (
             k == 1
@@ -142,11 +140,17 @@ class Task:
         self._J, self._JA = stacked[: 6 * k].reshape(k, 6, n), stacked[6 * k :]
         self._Jdot, self._JAdot = np.zeros((k, 6, n)), np.zeros((M, n))
         self._twist = np.zeros((k, 6))
-        self._chi, self._chi_dot = np.zeros(M), np.zeros(M)
+        # χ, the distances, the poses (and [X; E·X] of the fast path) in one buffer: one struct write fills it
+        P = len(self.singularity_labels)
+        flat = np.zeros(M + P + 16 * k + (6 * (6 + M) if fast else 0))
+        self._chi, self._distances = flat[:M], flat[M : M + P]
+        self._distances.fill(np.inf)
+        self._pose = flat[M + P : M + P + 16 * k].reshape(k, 4, 4)
+        self._pose[:, 3, 3] = 1.0
+        self._chi_dot = np.zeros(M)
         self._weights = np.concatenate(
             [np.full(pm.size, f.weight) for f, pm in zip(specs, pmaps, strict=False)]
         )
-        self._distances = np.full(len(self.singularity_labels), np.inf)
         kinematics: dict[int, FrameKinematics] = {}
 
         def frame_kinematics(name: str) -> FrameKinematics:
@@ -176,11 +180,7 @@ class Task:
             self._blocks.append(block)
             row, part = row + pm.size, part + len(pm.parts)
         self._kinematics = tuple(kinematics.values())
-        self._fast = (
-            fast_update(self._kinematics[0], self._blocks[0], stacked, self._chi, self._distances)
-            if fast
-            else None
-        )
+        self._fast = fast_update(self._kinematics[0], self._blocks[0], stacked, flat) if fast else None
         single = isinstance(frames, (str, FrameTask))
         self.pose = _readonly(self._pose[0] if single else self._pose)
         self.jacobian = _readonly(self._J.reshape(6 * k, n))

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from operator import itemgetter
 from typing import Any
 
@@ -30,38 +30,53 @@ from ..parameterizations.euler import GIMBAL_LOCK_TOLERANCE, EulerAngles
 from .continuity import Rule, continuity_rule
 from .task_frame import FrameBlock, FrameKinematics
 
-Found = tuple[Sequence[float], float, tuple[float, ...]] | None
-"""(χ_R, its distance to the singular set, E_R's row-major entries), or None: not a regular pose."""
-RotationFunction = Callable[[list[float], float, "list[float] | None"], Found]
-"""(C_IF's entries column-major, threshold, previous full χ or None) -> Found."""
+Write = Callable[[list[float], float, float, float, float, "list[float] | None"], "list[float] | None"]
+"""(C_IF's entries column-major, p, threshold, previous χ or None) -> χ (3 + m) written with everything else
+into the Task's buffer (see :func:`fast_update`), or None (not a regular pose: nothing written)."""
 
 _ROW_MAJOR = itemgetter(0, 3, 6, 1, 4, 7, 2, 5, 8)
 """Row-major entries of a 3x3 matrix from its column-major list."""
-_POSE_ROWS = struct.Struct("12d")
+_INF = math.inf
 
 
-def rotation_function(param: RotationParameterization, rule: Rule) -> RotationFunction:
-    """χ_R (continuous w.r.t. the previous χ through ``rule``), distance and E_R for a regular pose."""
+def rotation_function(
+    param: RotationParameterization, rule: Rule, pack: Callable[..., None], buffer: Any
+) -> Write:
+    """χ_R (continuous w.r.t. the previous χ through ``rule``), its distance and E_R for a regular pose,
+    written by one ``pack(buffer, 0, px, py, pz, *χ_R, inf, distance, C_IF row-major with p, 1.0,
+    [X; E·X]'s entries)`` (the order of :func:`fast_update`'s buffer)."""
     if isinstance(param, EulerAngles):
-        return _euler(param, rule)
+        return _euler(param, rule, pack, buffer)
     from_rotation, distance_of, E_of = param._from_rotation, param._distance, param._E
     size = param.size
 
-    def generic(C: list[float], threshold: float, previous: list[float] | None) -> Found:
+    def generic(
+        C: list[float], px: float, py: float, pz: float, threshold: float, previous: list[float] | None
+    ) -> list[float] | None:
         chi = list(from_rotation(math, False, *_ROW_MAJOR(C)))
         if previous is not None:
             chi = rule(chi, previous[3 : 3 + size])
         distance = distance_of(math, *chi)
         if not distance >= threshold or distance == 0.0:
             return None
-        return chi, distance, E_of(math, *chi)
+        E = E_of(math, *chi)
+        c00, c10, c20, c01, c11, c21, c02, c12, c22 = C
+        # fmt: off
+        pack(buffer, 0, px, py, pz, *chi, _INF, distance,
+             c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz, 1.0,
+             1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, 1.0, 1.0, 1.0,
+             1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, *E)
+        # fmt: on
+        return [px, py, pz, *chi]
 
     return generic
 
 
-def _euler(param: EulerAngles, rule: Rule) -> RotationFunction:
+def _euler(param: EulerAngles, rule: Rule, pack: Callable[..., None], buffer: Any) -> Write:
     """EulerAngles._from_rotation, the continuity rule, _distance and _E inlined (the same expressions,
-    so the same floats), with cos χ1, sin χ1 and cos χ2 computed once."""
+    so the same floats), with cos χ1, sin χ1 and cos χ2 computed once. The rule keeps χ as it is when
+    every angle is within 1 rad of the previous one (the other solution, χ1 and χ3 shifted by π, is then
+    farther than π − 1 in both): only then is it skipped."""
     # column-major positions of C[a][b], C[a][t], C[a][a], C[b][a], C[t][a], C[b][t], C[t][t], C[t][b],
     # C[b][b]
     pick = itemgetter(*(3 * (i % 3) + i // 3 for i in param._index))
@@ -75,26 +90,32 @@ def _euler(param: EulerAngles, rule: Rule) -> RotationFunction:
         GIMBAL_LOCK_TOLERANCE,
     )
     half_pi = 0.5 * math.pi
+    proper = param._proper
 
-    def near(chi1: float, chi2: float, chi3: float, previous: list[float]) -> bool:
-        """The rule keeps χ as it is: every angle within 1 rad of the previous one (then the other
-        solution, χ1 and χ3 shifted by π, is farther than π − 1 in both)."""
-        _, _, _, p1, p2, p3 = previous
-        return abs(chi1 - p1) < 1.0 and abs(chi2 - p2) < 1.0 and abs(chi3 - p3) < 1.0
-
-    if param._proper:
-
-        def proper(C: list[float], threshold: float, previous: list[float] | None) -> Found:
-            Cab, Cat, Caa, Cba, Cta, Cbt, Ctt, Ctb, Cbb = pick(C)
+    def euler(
+        C: list[float], px: float, py: float, pz: float, threshold: float, previous: list[float] | None
+    ) -> list[float] | None:
+        Cab, Cat, Caa, Cba, Cta, Cbt, Ctt, Ctb, Cbb = pick(C)
+        if proper:
             chi2 = atan2(hypot(Cab, Cat), Caa)
             if abs(chi2) <= tol or abs(chi2 - pi) <= tol:
                 return None
             chi1 = atan2(Cba, -e * Cta)
             c1, s1 = cos(chi1), sin(chi1)
             chi3 = atan2(-e * c1 * Cbt - s1 * Ctt, c1 * Cbb + e * s1 * Ctb)
-            if previous is not None and not near(chi1, chi2, chi3, previous):
-                chi1, chi2, chi3 = rule([chi1, chi2, chi3], previous[3:6])
+        else:
+            chi2 = atan2(e * Cat, hypot(Cbt, Ctt))
+            if abs(abs(chi2) - half_pi) <= tol:
+                return None
+            chi1 = atan2(-e * Cbt, Ctt)
+            c1, s1 = cos(chi1), sin(chi1)
+            chi3 = atan2(e * c1 * Cba + s1 * Cta, c1 * Cbb + e * s1 * Ctb)
+        if previous is not None:
+            _, _, _, p1, p2, p3 = previous
+            if not (abs(chi1 - p1) < 1.0 and abs(chi2 - p2) < 1.0 and abs(chi3 - p3) < 1.0):
+                chi1, chi2, chi3 = rule([chi1, chi2, chi3], [p1, p2, p3])
                 c1, s1 = cos(chi1), sin(chi1)
+        if proper:
             s2 = sin(chi2)
             distance = abs(s2)
             if not distance >= threshold or distance == 0.0:
@@ -102,66 +123,55 @@ def _euler(param: EulerAngles, rule: Rule) -> RotationFunction:
             u = 1.0 / s2
             k = cos(chi2) * u
             E = to_columns((1.0, -s1 * k, e * c1 * k, 0.0, c1, e * s1, 0.0, s1 * u, -e * c1 * u))
-            return (chi1, chi2, chi3), distance, E
+        else:
+            c2 = cos(chi2)
+            distance = abs(c2)
+            if not distance >= threshold or distance == 0.0:
+                return None
+            u = 1.0 / c2
+            t = sin(chi2) * u
+            E = to_columns((1.0, s1 * t, -e * c1 * t, 0.0, c1, e * s1, 0.0, -e * s1 * u, c1 * u))
+        c00, c10, c20, c01, c11, c21, c02, c12, c22 = C
+        # fmt: off
+        pack(buffer, 0, px, py, pz, chi1, chi2, chi3, _INF, distance,
+             c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz, 1.0,
+             1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, 1.0, 1.0, 1.0,
+             1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, *E)
+        # fmt: on
+        return [px, py, pz, chi1, chi2, chi3]
 
-        return proper
-
-    def tait_bryan(C: list[float], threshold: float, previous: list[float] | None) -> Found:
-        _, Cat, _, Cba, Cta, Cbt, Ctt, Ctb, Cbb = pick(C)
-        chi2 = atan2(e * Cat, hypot(Cbt, Ctt))
-        if abs(abs(chi2) - half_pi) <= tol:
-            return None
-        chi1 = atan2(-e * Cbt, Ctt)
-        c1, s1 = cos(chi1), sin(chi1)
-        chi3 = atan2(e * c1 * Cba + s1 * Cta, c1 * Cbb + e * s1 * Ctb)
-        if previous is not None and not near(chi1, chi2, chi3, previous):
-            chi1, chi2, chi3 = rule([chi1, chi2, chi3], previous[3:6])
-            c1, s1 = cos(chi1), sin(chi1)
-        c2 = cos(chi2)
-        distance = abs(c2)
-        if not distance >= threshold or distance == 0.0:
-            return None
-        u = 1.0 / c2
-        t = sin(chi2) * u
-        E = to_columns((1.0, s1 * t, -e * c1 * t, 0.0, c1, e * s1, 0.0, -e * s1 * u, c1 * u))
-        return (chi1, chi2, chi3), distance, E
-
-    return tait_bryan
+    return euler
 
 
 def fast_update(
-    a: FrameKinematics,
-    block: FrameBlock,
-    stacked: np.ndarray,
-    chi_out: np.ndarray,
-    distances: np.ndarray,
+    a: FrameKinematics, block: FrameBlock, stacked: np.ndarray, flat: np.ndarray
 ) -> Callable[[np.ndarray, bool, float, bool], bool]:
     """``update(q, check, threshold, continuous) -> bool``: True when it wrote every attribute but the
     rates (which the Task keeps NaN); False, having written nothing, where the general path must run.
 
-    ``stacked`` (6 + 3 + m, dof) C-contiguous: rows 0-5 are the block's J_e0, the rest its J_A.
+    ``stacked`` (6 + 3 + m, dof) C-contiguous: rows 0-5 are the block's J_e0, the rest its J_A. ``flat``
+    holds χ (3 + m), the two distances, the pose (4, 4) and [X; E·X] (9 + m, 6), in this order: one
+    struct call writes them all.
     """
     model, data, fid, coords = a.model, a.data, a.fid, a.coords
     rotation = block.pmap.rotation
     assert rotation is not None
-    chi_rotation = rotation_function(rotation, continuity_rule(rotation.name))
     m = rotation.size
     rows = 9 + m
-    # [X; E·X] (rows, 6), X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]: one struct write per update
-    # from entry (0, 4) on (struct writes zeros into its pad bytes, so the ones after it are written too)
-    S = np.zeros((rows, 6))
-    S[0, 0] = 1.0
-    places = [4, 5, 7, 9, 11, 14, 15, 16, 21, 28, 35]  # rows 0-5: pz, −py, 1, −pz, px, 1, py, −px, 1, 1, 1
-    places += [36, 40, 41, 43, 45, 47, 50, 51, 52]  # rows 6-8: 1, pz, −py, 1, −pz, px, 1, py, −px
-    places += [6 * (9 + r) + 3 + c for r in range(m) for c in range(3)]
-    fmt, last = "<", places[0] - 1  # packed from byte 8·places[0]: S[0, 0] = 1 stays
+    start = 3 + m + 2 + 16  # [X; E·X], X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]
+    S = flat[start:].reshape(rows, 6)
+    places = list(range(3 + m + 2 + 12)) + [3 + m + 2 + 15]  # χ, distances, pose rows 0-2, pose[3, 3]
+    places += [start + k for k in (0, 4, 5, 7, 9, 11, 14, 15, 16, 21, 28, 35)]  # 1, pz, −py, 1, −pz, px,
+    # 1, py, −px, 1, 1, 1 (rows 0-5); rows 6-8: 1, pz, −py, 1, −pz, px, 1, py, −px; E_R in rows 9-
+    places += [start + k for k in (36, 40, 41, 43, 45, 47, 50, 51, 52)]
+    places += [start + 6 * (9 + r) + 3 + c for r in range(m) for c in range(3)]
+    fmt, last = "<", -1  # struct writes zeros into the pad bytes: every other entry written is a constant 0
     for k in places:
         fmt += f"{8 * (k - last - 1)}xd"
         last = k
-    pack_S = struct.Struct(fmt).pack_into
-    write_chi = struct.Struct(f"{3 + m}d").pack_into
-    pack_pose = _POSE_ROWS.pack_into
-    pose = block.pose
+    assert last == flat.size - 1 or m == 0
+    buffer: Any = flat  # an ndarray is a buffer (numpy declares __buffer__ for Python >= 3.12 only)
+    write = rotation_function(rotation, continuity_rule(rotation.name), struct.Struct(fmt).pack_into, buffer)
     Rflat = a.R.T.reshape(9)  # column-major entries of C_IF: a view into data, follows every update
     p = a.p
     Jw = data.J.reshape(6, model.nv)
@@ -189,19 +199,10 @@ def fast_update(
             q = qp
         fkd(model, data, q, zero, zero)
         place(model, data, fid)
-        C = Rflat.tolist()
-        found = chi_rotation(C, threshold, block.previous)
-        if found is None:
-            return False
-        chi, distance, E = found
         px, py, pz = p.tolist()
-        c00, c10, c20, c01, c11, c21, c02, c12, c22 = C
-        buffer: Any = pose  # an ndarray is a buffer (numpy declares __buffer__ for Python >= 3.12 only)
-        pack_pose(buffer, 0, c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
-        # fmt: off
-        pack_S(S, 32, pz, -py, 1.0, -pz, px, 1.0, py, -px, 1.0, 1.0, 1.0,  # type: ignore[arg-type]
-               1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, *E)
-        # fmt: on
+        chi = write(Rflat.tolist(), px, py, pz, threshold, block.previous)
+        if chi is None:
+            return False
         if fold is not None:
             Jw.dot(fold, G)
             product(G, stacked)
@@ -210,10 +211,8 @@ def fast_update(
             product(G, stacked)
         else:
             product(Jw, stacked)
-        write_chi(chi_out, 0, px, py, pz, *chi)  # type: ignore[arg-type]
-        distances[1] = distance
         if continuous:
-            block.previous = [px, py, pz, *chi]
+            block.previous = chi
         return True
 
     return update
