@@ -24,6 +24,11 @@ SEED_TABLE_BYTES = 1 << 21
 SEED_TABLES = 16
 """At most this many seed tables (frames × target kinds) are kept per robot, least recently used dropped."""
 SEED_TABLE_RNG = 0x5EED_7AB1E
+BATCH_SEED_TABLE_SIZE = 32768
+BATCH_SEED_TABLE_BYTES = 1 << 23
+"""The batched solver's seed table (one per robot and frame): up to 8 MiB."""
+BATCH_SEED_EPS = 1.0
+"""Approximate nearest entries for batches: within (1 + this) of the nearest distance (cKDTree's eps)."""
 SEED_ROTATION_WEIGHT = 0.2
 """[m/rad]: pose distance |Δp| + 0.2·angle used to rank attempts and pick the stored seeds nearest a
 target."""
@@ -52,11 +57,19 @@ class SeedTables:
         return table
 
 
-def _seed_table(robot: Robot, frame: str, use_p: bool, use_R: bool) -> SeedTable:
-    """(configurations (K, dof), a KD-tree over [p, w·vec(C)/√2] of ``frame`` at them)."""
+def _seed_table(
+    robot: Robot,
+    frame: str,
+    use_p: bool,
+    use_R: bool,
+    most: int = SEED_TABLE_SIZE,
+    bound: int = SEED_TABLE_BYTES,
+) -> SeedTable:
+    """(configurations (K, dof), a KD-tree over [p, w·vec(C)/√2] of ``frame`` at them), K <= ``most``
+    within ``bound`` bytes."""
     from scipy.spatial import cKDTree
 
-    size = max(64, min(SEED_TABLE_SIZE, SEED_TABLE_BYTES // (8 * (robot.dof + 12))))
+    size = max(64, min(most, bound // (8 * (robot.dof + 12))))
     configs = robot.random_configuration(np.random.default_rng(SEED_TABLE_RNG), size=size)
     poses = robot.frame_pose(configs, frame)
     return configs, cKDTree(
@@ -99,54 +112,65 @@ def first_seeds(
 
 
 class BatchSeeds:
-    """The seeded starts of :func:`first_seeds` for a batch, looked up when an attempt starts: most targets
-    converge from their first seed, so the k-th nearest table entry is only searched for the targets that
-    reach attempt k. ``count`` seeded attempts per target; :meth:`starts` gives (m, dof) for (target,
-    attempt) pairs, equal to ``first_seeds(...)[target, attempt]``."""
+    """The seeded starts for a batch (N targets), as :func:`first_seeds` orders them (the nearest table
+    entries, then the middle of the ranges; or ``q0``), from a larger table (BATCH_SEED_TABLE_SIZE) searched
+    approximately (BATCH_SEED_EPS) and only when needed: every target's nearest entry at once, its
+    further ones when the target first needs a second attempt. :meth:`starts` gives (m, dof) for
+    (target, attempt) pairs, each attempt < ``count``."""
 
     def __init__(
-        self,
-        robot: Robot,
-        problem: Problem,
-        p_d: np.ndarray,
-        C_d: np.ndarray,
-        q0: np.ndarray | None,
+        self, robot: Robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None
     ) -> None:
         joints, n = robot.engine.coordinates, len(p_d)
         self.given = (
             None if q0 is None else np.broadcast_to(np.clip(q0, joints.lower, joints.upper), (n, robot.dof))
         )
+        self.count = 1
         if self.given is not None:
-            self.count = 1
             return
         bounded = np.isfinite(joints.lower) & np.isfinite(joints.upper)
         middle = (np.where(bounded, joints.lower, 0.0) + np.where(bounded, joints.upper, 0.0)) / 2
         self.first = middle if problem.q_ns is None else np.clip(problem.q_ns, joints.lower, joints.upper)
-        tables = robot.engine.memoized("ik seed tables", SeedTables)
-        self.configs, self.tree = tables.get(
-            (problem.frame, True, True), lambda: _seed_table(robot, problem.frame, True, True)
+        self.configs, self.tree = robot.engine.memoized(
+            ("ik batch seed table", problem.frame),
+            lambda: _seed_table(
+                robot, problem.frame, True, True, BATCH_SEED_TABLE_SIZE, BATCH_SEED_TABLE_BYTES
+            ),
         )
         self.k = min(NEAREST_SEEDS, len(self.configs))
         self.count = self.k + 1
         self.points = _embed(p_d, C_d, n)
+        self.index = np.zeros((n, self.k), dtype=np.intp)
+        self.depth = np.zeros(n, dtype=np.intp)  # table entries found so far, nearest first
+
+    def _find(self, targets: np.ndarray, k: int) -> None:
+        _, index = self.tree.query(
+            self.points[targets], k=k, eps=BATCH_SEED_EPS, workers=-1 if len(targets) > 2048 else 1
+        )
+        self.index[targets, :k] = np.asarray(index).reshape(len(targets), k)
+        self.depth[targets] = k
 
     def starts(self, targets: np.ndarray, attempts: np.ndarray) -> np.ndarray:
-        """Starts (m, dof) of attempts ``attempts`` (m,) (each < count) of targets ``targets`` (m,)."""
+        """Starts (m, dof) of attempts ``attempts`` (m,) of targets ``targets`` (m,)."""
         if self.given is not None:
             return self.given[targets].copy()
+        table = attempts < self.k
+        need = table & (self.depth[targets] <= attempts)
+        first = need & (attempts == 0)  # depth 0: every target's nearest entry, found once
+        if first.any():
+            self._find(targets[first], 1)
+        if (need & ~first).any():
+            self._find(np.unique(targets[need & ~first]), self.k)
         out = np.empty((len(targets), self.configs.shape[1]))
-        for a in np.unique(attempts).tolist():
-            rows = np.flatnonzero(attempts == a)
-            if a == self.k:
-                out[rows] = self.first
-                continue
-            points = self.points[targets[rows]]
-            _, index = self.tree.query(points, k=[a + 1], workers=-1 if len(rows) > 256 else 1)
-            out[rows] = self.configs[np.asarray(index).reshape(-1)]
+        out[table] = self.configs[self.index[targets[table], attempts[table]]]
+        out[~table] = self.first
         return out
 
 
 __all__ = [
+    "BATCH_SEED_EPS",
+    "BATCH_SEED_TABLE_BYTES",
+    "BATCH_SEED_TABLE_SIZE",
     "NEAREST_SEEDS",
     "SEED_ROTATION_WEIGHT",
     "SEED_TABLES",
