@@ -29,7 +29,17 @@ import pinocchio as pin
 
 from ..kinematics import batch
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
-from .ik_solver import GIVE_UP, NULLSPACE_FADE, PROBE_ITERATIONS, IKResult, LimitWeights
+from .ik_solver import (
+    DAMPING_SCALE,
+    GIVE_UP,
+    NULLSPACE_FADE,
+    PROBE_ITERATIONS,
+    STALL_FROM,
+    STALL_RATIO,
+    STALL_SPAN,
+    IKResult,
+    LimitWeights,
+)
 from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -110,20 +120,35 @@ def solve_batch(
     lower, upper = joints.lower[:, None], joints.upper[:, None]
     limits = LimitWeights(joints.lower, joints.upper)
     winner = np.full(n, attempts, dtype=np.intp)  # each target's first converged attempt (none yet)
-    launched = np.ones(n, dtype=np.intp)  # attempts started so far
+    launched = np.zeros(n, dtype=np.intp)  # attempts started so far
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
-    # one column per running attempt (compacted as they end): its target, attempt, iterations so far,
-    # q (dof, r), |∂φ/∂q| at its last iteration (-1: none yet), the target p_d (3, r), C_d (3, 3, r)
-    tid = np.arange(n)
-    att, it = np.zeros(n, dtype=np.intp), np.zeros(n, dtype=np.intp)
-    q = np.ascontiguousarray(seeds.starts(tid, att).T)
-    previous = np.full((dof, n), -1.0)
-    pd, Cd = np.ascontiguousarray(p_d.T), np.ascontiguousarray(C_d.transpose(1, 2, 0))
+    # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
+    # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
+    # iterations (by iteration % span), the target's p_d (3) and C_d (9)
+    meta, state = np.empty((3, 0), dtype=np.intp), np.empty((2 * dof + STALL_SPAN + 12, 0))
+    H, P = 2 * dof, 2 * dof + STALL_SPAN  # first rows of the history and of p_d
     space = _Workspace(max(n, SPECULATE), dof)
-    while len(tid):
-        r = len(tid)
+    new = np.arange(n)
+    while True:
+        if len(new):  # start the next attempt of these targets (np.repeat-ed for several at once)
+            new_meta = np.stack((new, launched[new], np.zeros(len(new), dtype=np.intp)))
+            new_meta[1] += np.arange(len(new)) - np.searchsorted(new, new)  # several of one target
+            np.maximum.at(launched, new, new_meta[1] + 1)
+            block = np.empty((len(state), len(new)))
+            seeded = new_meta[1] < seeds.count
+            block[:dof, seeded] = seeds.starts(new[seeded], new_meta[1][seeded]).T
+            if (~seeded).any():
+                block[:dof, ~seeded] = generator.configurations(robot, int((~seeded).sum())).T
+            block[dof:H] = -1.0
+            block[P : P + 3], block[P + 3 :] = p_d[new].T, C_d[new].reshape(-1, 9).T
+            meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
+        r = meta.shape[1]
+        if not r:
+            break
         if r > space.capacity:
             space = _Workspace(r, dof)
+        tid, att, it = meta
+        q, history, pd, Cd = state[:dof], state[H:P], state[P : P + 3], state[P + 3 :].reshape(3, 3, r)
         T, J = space.pose[..., :r], space.jac[..., :r]  # (4, 4, r), (6, dof, r): the chain writes rows
         batch.evaluate(
             kin, q.T, problem.fid, pin.LOCAL_WORLD_ALIGNED, out=(T.transpose(2, 0, 1), J.transpose(2, 0, 1))
@@ -132,8 +157,8 @@ def solve_batch(
         np.subtract(pd, T[:3, 3], out=e[:3])
         _log3_columns(Cd, T[:3, :3], e[3:])
         if rows is None:
-            err = e
-            ep, er = (
+            err, ep, er = (
+                e,
                 np.sqrt(np.einsum("in,in->n", e[:3], e[:3])),
                 np.sqrt(np.einsum("in,in->n", e[3:], e[3:])),
             )
@@ -147,18 +172,24 @@ def solve_batch(
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
         patient = (att == attempts - 1) | ((att == 0) & problem.patient_first)
-        end = done | (it == max_iterations) | ((it == PROBE_ITERATIONS) & (score > GIVE_UP) & ~patient)
+        slot = (it % STALL_SPAN, np.arange(r))
+        stalled = (it >= STALL_FROM) & (score > STALL_RATIO * history[slot])
+        end = (
+            done
+            | (it == max_iterations)
+            | (((it == PROBE_ITERATIONS) & (score > GIVE_UP) | stalled) & ~patient)
+        )
+        history[slot] = score
         ended = np.empty(0, dtype=np.intp)
         if end.any():
             log.append((tid[end], att[end], it[end], score[end], ep[end], er[end], q[:, end].T))
-            converged = end & done
-            np.minimum.at(winner, tid[converged], att[converged])
+            np.minimum.at(winner, tid[end & done], att[end & done])
             ended = tid[end & ~done]
             keep = ~end & (att < winner[tid])  # attempts after a converged one are dropped
-            tid, att, it, score = tid[keep], att[keep], it[keep], score[keep]
-            q, previous, pd, Cd, err = (a[..., keep] for a in (q, previous, pd, Cd, err))
-            J = space.compact(J, keep)
-        if len(tid):
+            meta, state, err, score = meta[:, keep], state[:, keep], err[:, keep], score[keep]
+            J, r = space.compact(J, keep), len(score)
+            tid, q, Cd = meta[0], state[:dof], state[P + 3 :].reshape(3, 3, r)
+        if r:
             if rows is not None:
                 J = np.concatenate(
                     (np.einsum("kin,kjn->ijn", Cd, J[:3]), np.einsum("kin,kjn->ijn", Cd, J[3:]))
@@ -166,47 +197,23 @@ def solve_batch(
                 J = J[rows] if sqrt_w is None else J[rows] * sqrt_w[:, None, None]
             w = None
             if limits.any:
-                w, previous = _inverse_weights(limits, q, previous)
-            q = np.clip(_step(J, w, err, score, q, problem, space), lower, upper)
-            it += 1
+                w, state[dof:H] = _inverse_weights(limits, q, state[dof:H])
+            np.clip(_step(J, w, err, score, q, problem, space), lower, upper, out=q)
+            meta[2] += 1
         # next attempts: one per target that needs one; when few columns run, several at once per target
         # (_resolve takes the outcomes in attempt order, as if the attempts had run one after another)
-        speculate = len(tid) + len(ended) <= SPECULATE
+        speculate = r + len(ended) <= SPECULATE
         candidates = np.unique(np.concatenate((tid, ended)) if speculate else ended)
-        if not len(candidates):
-            continue
         running = np.bincount(tid, minlength=n)[candidates]
-        share = max(1, SPECULATE // len(candidates)) if speculate else 1
-        open_ = (winner[candidates] == attempts) & (launched[candidates] < attempts)
-        extra = np.where(open_, np.minimum(share - running, attempts - launched[candidates]), 0)
-        candidates, extra = candidates[extra > 0], extra[extra > 0]
-        if len(candidates):
-            new_tid = np.repeat(candidates, extra)
-            new_att = np.repeat(launched[candidates], extra) + (
-                np.arange(len(new_tid)) - np.repeat(np.cumsum(extra) - extra, extra)
-            )
-            launched[candidates] += extra
-            seeded = new_att < seeds.count
-            new_q = np.empty((len(new_tid), dof))
-            new_q[seeded] = seeds.starts(new_tid[seeded], new_att[seeded])
-            if (~seeded).any():
-                new_q[~seeded] = generator.configurations(robot, int((~seeded).sum()))
-            tid, att = np.concatenate((tid, new_tid)), np.concatenate((att, new_att))
-            it = np.concatenate((it, np.zeros(len(new_tid), dtype=np.intp)))
-            q = np.concatenate((q, new_q.T), axis=1)
-            previous = np.concatenate((previous, np.full((dof, len(new_tid)), -1.0)), axis=1)
-            pd = np.concatenate((pd, p_d[new_tid].T), axis=1)
-            Cd = np.concatenate((Cd, C_d[new_tid].transpose(1, 2, 0)), axis=2)
-    return _resolve(log, winner, n, joints.continuous, tol_p, tol_r)
+        share = max(1, SPECULATE // max(1, len(candidates))) if speculate else 1
+        extra = np.minimum(share - running, attempts - launched[candidates])
+        extra[winner[candidates] < attempts] = 0
+        new = np.repeat(candidates, np.maximum(extra, 0))
+    return _resolve(log, winner, joints.continuous, (tol_p, tol_r))
 
 
 def _resolve(
-    log: list[tuple[np.ndarray, ...]],
-    winner: np.ndarray,
-    n: int,
-    continuous: np.ndarray,
-    tol_p: float,
-    tol_r: float,
+    log: list[tuple[np.ndarray, ...]], winner: np.ndarray, continuous: np.ndarray, tol: tuple
 ) -> IKBatchResult:
     """Each target's outcome from its finished attempts, as the single solver takes them one after
     another: the attempts up to the first converged one count (iterations summed), and the best score
@@ -214,12 +221,12 @@ def _resolve(
     tid, att, it, score, ep, er, q = (np.concatenate(column) for column in zip(*log, strict=True))
     counted = att <= winner[tid]
     tid, att, it, score, ep, er, q = (a[counted] for a in (tid, att, it, score, ep, er, q))
-    total = np.bincount(tid, weights=it, minlength=n).astype(np.intp)
+    total = np.bincount(tid, weights=it, minlength=len(winner)).astype(np.intp)
     order = np.lexsort((att, score, tid))
     first = order[np.r_[True, tid[order][1:] != tid[order][:-1]]]  # best per target, targets ascending
     best_q = q[first]
     best_q[:, continuous] = np.remainder(best_q[:, continuous] + np.pi, 2 * np.pi) - np.pi
-    success = (ep[first] <= tol_p) & (er[first] <= tol_r)
+    success = (ep[first] <= tol[0]) & (er[first] <= tol[1])
     return IKBatchResult(best_q, success, total, ep[first], er[first], att[first])
 
 
@@ -253,9 +260,8 @@ def _inverse_weights(
 
 
 class _Workspace:
-    """Buffers for up to ``capacity`` columns, reused from iteration to iteration (fresh arrays of a few
-    MiB cost a page fault per 4 KiB on every use): poses, two Jacobians (compacted from one into the
-    other), J W⁻¹ and A."""
+    """Buffers for up to ``capacity`` columns reused from iteration to iteration (fresh arrays of a few MiB
+    cost a page fault per 4 KiB): poses, two Jacobians (compacted one into the other), J W⁻¹ and A."""
 
     def __init__(self, capacity: int, dof: int) -> None:
         self.capacity = capacity
@@ -279,12 +285,12 @@ def _step(
     problem: Problem,
     space: _Workspace,
 ) -> np.ndarray:
-    """q + Δq for every column (J (m, dof, r), err (m, r), q (dof, r)): weighted damped least squares with
-    λ² = ½|e|² + λ_min² (and the nullspace pull), A = J W⁻¹ Jᵀ + λ² I solved by Cholesky column-wise."""
+    """q + Δq for every column (J (m, dof, r), err (m, r), q (dof, r)): weighted damped least squares,
+    λ² = DAMPING_SCALE·|e|² + λ_min² (and the nullspace pull), A = J W⁻¹ Jᵀ + λ² I by Cholesky."""
     m, r = len(J), J.shape[2]
     JW = J if w is None else np.multiply(J, w, out=space.weighted[:m, :, :r])  # J W⁻¹
     A = np.einsum("ikn,jkn->ijn", JW, J, out=space.normal[:m, :m, :r])
-    damping = 0.5 * np.einsum("in,in->n", err, err) + problem.damping_sq
+    damping = DAMPING_SCALE * np.einsum("in,in->n", err, err) + problem.damping_sq
     for i in range(len(A)):
         A[i, i] += damping
     if problem.q_ns is None:
