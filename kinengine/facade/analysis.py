@@ -4,7 +4,7 @@ their inputs once and call the kinematics, analytic and control layers (see thos
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
@@ -128,14 +128,14 @@ class AnalysisMethods:
 
     def inverse_kinematics(
         self,
-        target: ArrayLike,
+        target: ArrayLike | Mapping[str, ArrayLike],
         frame: str | None = None,
         q0: ArrayLike | None = None,
         *,
         position: str | None = None,
         rotation: str | None = None,
-        rows: Sequence[str | int] | None = None,
-        weights: Sequence[float] | None = None,
+        rows: Sequence[str | int] | Mapping[str, Sequence[str | int]] | None = None,
+        weights: Sequence[float] | Mapping[str, Sequence[float]] | None = None,
         tol_position: float = 1e-6,
         tol_rotation: float = 1e-6,
         max_iterations: int = 100,
@@ -146,7 +146,9 @@ class AnalysisMethods:
         min_damping: float = 1e-6,
     ) -> IKResult | IKBatchResult:
         """Differential IK (damped least squares) to a 4x4 pose, a batch of poses (N, 4, 4) (an IKBatchResult
-        of N results, solved vectorized) or a parameter target χ. See
+        of N results, solved vectorized), a parameter target χ, or a mapping {frame: T_IF (4, 4)} solved for
+        every frame at once (``frame`` None; ``rows``/``weights`` one spec or {frame: spec}; a MultiIKResult
+        whose errors are the maxima over the frames, ``frame_errors`` per frame). See
         :func:`kinengine.control.ik.inverse_kinematics` for the options."""
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         return _ik.inverse_kinematics(
