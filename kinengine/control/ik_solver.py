@@ -55,16 +55,19 @@ class IKResult:
 class LimitWeights:
     """Chan & Dubey's weighted least norm: w_i = 1 + |∂φ/∂q_i| while joint i approaches a limit (|∂φ/∂q_i|
     grew since the last iteration), else 1, with φ = Σ (u−l)² / (4 (u−q)(q−l)), so
-    ∂φ/∂q = (u−l)² (2q − u − l) / (4 (u−q)² (q−l)²); unbounded joints: 1. Works on q (dof,) or (n, dof)."""
+    ∂φ/∂q = (u−l)² (2q − u − l) / (4 (u−q)² (q−l)²); unbounded joints: 1. Works on q (dof,) or (n, dof).
+    ``continuous`` (dof,) bool, optional: kept as the indices of the joints a solution wraps into [-π, π)
+    (None if there are none)."""
 
-    def __init__(self, lower: np.ndarray, upper: np.ndarray) -> None:
+    def __init__(self, lower: np.ndarray, upper: np.ndarray, continuous: np.ndarray | None = None) -> None:
         self.bounded = np.isfinite(lower) & np.isfinite(upper)
         self.any = bool(self.bounded.any())
         self.lower, self.upper = np.where(self.bounded, lower, -1.0), np.where(self.bounded, upper, 1.0)
         self.middle_twice = self.lower + self.upper
         self.quarter_span_sq = np.where(self.bounded, self.upper - self.lower, 0.0) ** 2 / 4  # 0: unbounded
-        self._lower, self._upper = self.lower.tolist(), self.upper.tolist()
-        self._mid2, self._quarter = self.middle_twice.tolist(), self.quarter_span_sq.tolist()
+        columns = (self.lower, self.upper, self.middle_twice, self.quarter_span_sq)
+        self._rows = np.column_stack(columns).tolist()  # per joint (l, u, l + u, (u − l)²/4)
+        self.continuous = np.flatnonzero(continuous) if continuous is not None and continuous.any() else None
 
     def inverse_weights(self, q: np.ndarray, previous: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """(1 / w, |∂φ/∂q|) at q, given |∂φ/∂q| of the last iteration (None: the first). Distances to the
@@ -79,13 +82,12 @@ class LimitWeights:
     def inverse_weights_one(self, q: np.ndarray, previous: list | None) -> tuple[np.ndarray, list]:
         """:meth:`inverse_weights` for one q (dof,) in plain floats (a dozen numpy calls on a 6-vector cost
         more than the arithmetic); ``previous`` and the returned gradient are lists."""
-        grad = []
-        for qi, lo, hi, mid2, quarter in zip(
-            q.tolist(), self._lower, self._upper, self._mid2, self._quarter, strict=True
-        ):
+        grad: list[float] = []
+        append = grad.append
+        for qi, (lo, hi, mid2, quarter) in zip(q.tolist(), self._rows, strict=True):
             du, dl = hi - qi, qi - lo
             d = (du if du > 1e-12 else 1e-12) * (dl if dl > 1e-12 else 1e-12)
-            grad.append(quarter * abs(2.0 * qi - mid2) / (d * d))
+            append(quarter * abs(2.0 * qi - mid2) / (d * d))
         if previous is None:
             return np.array([1.0 / (1.0 + g) for g in grad]), grad
         inverse = [1.0 / (1.0 + g) if g > p else 1.0 for g, p in zip(grad, previous, strict=True)]
@@ -131,7 +133,7 @@ def solve_one(
     m = len(rows) if rows is not None else part.stop - part.start
     A = np.empty((m, m))
     diagonal = A.reshape(-1)[:: m + 1]  # a view: A's diagonal
-    limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper))
+    limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper, joints.continuous))
     weigh = limits.inverse_weights_one if limits.any else None
     best, total = None, 0
     for attempt in range(attempts):
@@ -185,13 +187,14 @@ def solve_one(
             dot(JW, J.T, out=A)
             diagonal += DAMPING_SCALE * squared + damping_sq
             if q_ns is None:
-                y = dposv(A, err)[1:]
-                q += dot(JW.T, y[0] if y[1] == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
+                _, x, info = dposv(A, err)
+                q += dot(JW.T, x if info == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
             else:
                 z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
                 b = np.column_stack((err, J @ z))
-                y = dposv(A, b)[1:]
-                x = y[0] if y[1] == 0 else np.linalg.lstsq(A, b, rcond=None)[0]
+                _, x, info = dposv(A, b)
+                if info:
+                    x = np.linalg.lstsq(A, b, rcond=None)[0]
                 q += JW.T @ (x[:, 0] - x[:, 1]) + z
             minimum(maximum(q, lower, out=q), upper, out=q)
         total += iteration
@@ -201,8 +204,9 @@ def solve_one(
             break
     assert best is not None  # attempts >= 1: the seeds hold at least one start
     q, ep, er, _, attempt = best
-    if wrap:
-        q[joints.continuous] = np.remainder(q[joints.continuous] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)
+    if wrap and limits.continuous is not None:
+        turns = limits.continuous
+        q[turns] = np.remainder(q[turns] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)
     return IKResult(q, bool(ep <= tol_p and er <= tol_r), total, ep, er, attempt)
 
 
