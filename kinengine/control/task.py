@@ -140,12 +140,12 @@ class Task:
         self._J, self._JA = stacked[: 6 * k].reshape(k, 6, n), stacked[6 * k :]
         self._Jdot, self._JAdot = np.zeros((k, 6, n)), np.zeros((M, n))
         self._twist = np.zeros((k, 6))
-        # χ, the distances, the poses (and [X; E·X] of the fast path) in one buffer: one struct write fills it
-        P = len(self.singularity_labels)
-        flat = np.zeros(M + P + 16 * k + (6 * (6 + M) if fast else 0))
-        self._chi, self._distances = flat[:M], flat[M : M + P]
+        # ([X; E·X] of the fast path,) χ, the distances and the poses in one buffer: one struct call fills it
+        P, lead = len(self.singularity_labels), 6 * (6 + M) if fast else 0
+        flat = np.zeros(lead + M + P + 16 * k)
+        self._chi, self._distances = flat[lead : lead + M], flat[lead + M : lead + M + P]
         self._distances.fill(np.inf)
-        self._pose = flat[M + P : M + P + 16 * k].reshape(k, 4, 4)
+        self._pose = flat[lead + M + P :].reshape(k, 4, 4)
         self._pose[:, 3, 3] = 1.0
         self._chi_dot = np.zeros(M)
         self._weights = np.concatenate(

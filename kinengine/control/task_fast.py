@@ -30,9 +30,10 @@ from ..parameterizations.euler import GIMBAL_LOCK_TOLERANCE, EulerAngles
 from .continuity import Rule, continuity_rule
 from .task_frame import FrameBlock, FrameKinematics
 
-Write = Callable[[list[float], float, float, float, float, "list[float] | None"], "list[float] | None"]
-"""(C_IF's entries column-major, p, threshold, previous χ or None) -> χ (3 + m) written with everything else
-into the Task's buffer (see :func:`fast_update`), or None (not a regular pose: nothing written)."""
+Write = Callable[[list[float], float, "list[float] | None"], "list[float] | None"]
+"""(C_IF's entries column-major then p, threshold, previous χ or None) -> χ (3 + m), written with
+everything else into the Task's buffer (see :func:`fast_update`), or None (not a regular pose: nothing
+written)."""
 
 _ROW_MAJOR = itemgetter(0, 3, 6, 1, 4, 7, 2, 5, 8)
 """Row-major entries of a 3x3 matrix from its column-major list."""
@@ -43,29 +44,27 @@ def rotation_function(
     param: RotationParameterization, rule: Rule, pack: Callable[..., None], buffer: Any
 ) -> Write:
     """χ_R (continuous w.r.t. the previous χ through ``rule``), its distance and E_R for a regular pose,
-    written by one ``pack(buffer, 0, px, py, pz, *χ_R, inf, distance, C_IF row-major with p, 1.0,
-    [X; E·X]'s entries)`` (the order of :func:`fast_update`'s buffer)."""
+    written by one ``pack(buffer, offset, ...)`` in the order of :func:`fast_update`'s buffer: columns
+    3-5 of [X; E·X] (column-major), χ, the distances (inf for Cartesian), rows 0-2 of the pose."""
     if isinstance(param, EulerAngles):
         return _euler(param, rule, pack, buffer)
     from_rotation, distance_of, E_of = param._from_rotation, param._distance, param._E
-    size = param.size
+    m = param.size
+    by_columns = itemgetter(*(3 * r + c for c in range(3) for r in range(m)))  # E_R (m, 3) column-major
 
-    def generic(
-        C: list[float], px: float, py: float, pz: float, threshold: float, previous: list[float] | None
-    ) -> list[float] | None:
+    def generic(C: list[float], threshold: float, previous: list[float] | None) -> list[float] | None:
         chi = list(from_rotation(math, False, *_ROW_MAJOR(C)))
         if previous is not None:
-            chi = rule(chi, previous[3 : 3 + size])
+            chi = rule(chi, previous[3 : 3 + m])
         distance = distance_of(math, *chi)
         if not distance >= threshold or distance == 0.0:
             return None
-        E = E_of(math, *chi)
-        c00, c10, c20, c01, c11, c21, c02, c12, c22 = C
+        E = by_columns(E_of(math, *chi))
+        c00, c10, c20, c01, c11, c21, c02, c12, c22, px, py, pz = C
         # fmt: off
-        pack(buffer, 0, px, py, pz, *chi, _INF, distance,
-             c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz, 1.0,
-             1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, 1.0, 1.0, 1.0,
-             1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, *E)
+        pack(buffer, 0, -pz, py, 1.0, -pz, py, *E[:m], pz, -px, 1.0, pz, -px, *E[m : 2 * m],
+             -py, px, 1.0, -py, px, *E[2 * m :], px, py, pz, *chi, _INF, distance,
+             c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
         # fmt: on
         return [px, py, pz, *chi]
 
@@ -80,7 +79,10 @@ def _euler(param: EulerAngles, rule: Rule, pack: Callable[..., None], buffer: An
     # column-major positions of C[a][b], C[a][t], C[a][a], C[b][a], C[t][a], C[b][t], C[t][t], C[t][b],
     # C[b][b]
     pick = itemgetter(*(3 * (i % 3) + i // 3 for i in param._index))
-    e, to_columns = param._eps, param._to_columns
+    e, perm = param._eps, param._perm
+    # E'(columns in (a, b, t) order) -> E column-major (EulerAngles._to_columns, then transposed)
+    to_columns = [3 * r + perm.index(col) for r in range(3) for col in range(3)]
+    by_columns = itemgetter(*(to_columns[3 * r + c] for c in range(3) for r in range(3)))
     atan2, hypot, cos, sin, pi, tol = (
         math.atan2,
         math.hypot,
@@ -92,9 +94,7 @@ def _euler(param: EulerAngles, rule: Rule, pack: Callable[..., None], buffer: An
     half_pi = 0.5 * math.pi
     proper = param._proper
 
-    def euler(
-        C: list[float], px: float, py: float, pz: float, threshold: float, previous: list[float] | None
-    ) -> list[float] | None:
+    def euler(C: list[float], threshold: float, previous: list[float] | None) -> list[float] | None:
         Cab, Cat, Caa, Cba, Cta, Cbt, Ctt, Ctb, Cbb = pick(C)
         if proper:
             chi2 = atan2(hypot(Cab, Cat), Caa)
@@ -122,7 +122,7 @@ def _euler(param: EulerAngles, rule: Rule, pack: Callable[..., None], buffer: An
                 return None
             u = 1.0 / s2
             k = cos(chi2) * u
-            E = to_columns((1.0, -s1 * k, e * c1 * k, 0.0, c1, e * s1, 0.0, s1 * u, -e * c1 * u))
+            E = by_columns((1.0, -s1 * k, e * c1 * k, 0.0, c1, e * s1, 0.0, s1 * u, -e * c1 * u))
         else:
             c2 = cos(chi2)
             distance = abs(c2)
@@ -130,13 +130,13 @@ def _euler(param: EulerAngles, rule: Rule, pack: Callable[..., None], buffer: An
                 return None
             u = 1.0 / c2
             t = sin(chi2) * u
-            E = to_columns((1.0, s1 * t, -e * c1 * t, 0.0, c1, e * s1, 0.0, -e * s1 * u, c1 * u))
-        c00, c10, c20, c01, c11, c21, c02, c12, c22 = C
+            E = by_columns((1.0, s1 * t, -e * c1 * t, 0.0, c1, e * s1, 0.0, -e * s1 * u, c1 * u))
+        e00, e10, e20, e01, e11, e21, e02, e12, e22 = E
+        c00, c10, c20, c01, c11, c21, c02, c12, c22, px, py, pz = C
         # fmt: off
-        pack(buffer, 0, px, py, pz, chi1, chi2, chi3, _INF, distance,
-             c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz, 1.0,
-             1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, 1.0, 1.0, 1.0,
-             1.0, pz, -py, 1.0, -pz, px, 1.0, py, -px, *E)
+        pack(buffer, 0, -pz, py, 1.0, -pz, py, e00, e10, e20, pz, -px, 1.0, pz, -px, e01, e11, e21,
+             -py, px, 1.0, -py, px, e02, e12, e22, px, py, pz, chi1, chi2, chi3, _INF, distance,
+             c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
         # fmt: on
         return [px, py, pz, chi1, chi2, chi3]
 
@@ -145,35 +145,41 @@ def _euler(param: EulerAngles, rule: Rule, pack: Callable[..., None], buffer: An
 
 def fast_update(
     a: FrameKinematics, block: FrameBlock, stacked: np.ndarray, flat: np.ndarray
-) -> Callable[[np.ndarray, bool, float, bool], bool]:
+) -> Callable[[np.ndarray, bool, float, bool], bool] | None:
     """``update(q, check, threshold, continuous) -> bool``: True when it wrote every attribute but the
     rates (which the Task keeps NaN); False, having written nothing, where the general path must run.
+    None if Pinocchio's frame placement is not the 12 contiguous doubles (C_IF column-major, p) read here.
 
     ``stacked`` (6 + 3 + m, dof) C-contiguous: rows 0-5 are the block's J_e0, the rest its J_A. ``flat``
-    holds χ (3 + m), the two distances, the pose (4, 4) and [X; E·X] (9 + m, 6), in this order: one
-    struct call writes them all.
+    holds [X; E·X] (9 + m, 6) column-major, χ (3 + m), the two distances and the pose (4, 4): one struct
+    call writes all but their constants (columns 0-2 of [X; E·X], the pose's last row).
     """
     model, data, fid, coords = a.model, a.data, a.fid, a.coords
+    R, p = a.R, a.p
+    if p.__array_interface__["data"][0] != R.__array_interface__["data"][0] + 72 or not R.flags.f_contiguous:
+        return None
+    placement = np.lib.stride_tricks.as_strided(R, shape=(12,), strides=(8,))  # C_IF column-major, then p
     rotation = block.pmap.rotation
     assert rotation is not None
     m = rotation.size
-    rows = 9 + m
-    start = 3 + m + 2 + 16  # [X; E·X], X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]
-    S = flat[start:].reshape(rows, 6)
-    places = list(range(3 + m + 2 + 12)) + [3 + m + 2 + 15]  # χ, distances, pose rows 0-2, pose[3, 3]
-    places += [start + k for k in (0, 4, 5, 7, 9, 11, 14, 15, 16, 21, 28, 35)]  # 1, pz, −py, 1, −pz, px,
-    # 1, py, −px, 1, 1, 1 (rows 0-5); rows 6-8: 1, pz, −py, 1, −pz, px, 1, py, −px; E_R in rows 9-
-    places += [start + k for k in (36, 40, 41, 43, 45, 47, 50, 51, 52)]
-    places += [start + 6 * (9 + r) + 3 + c for r in range(m) for c in range(3)]
-    fmt, last = "<", -1  # struct writes zeros into the pad bytes: every other entry written is a constant 0
+    rows = 9 + m  # [X; E·X], X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]
+    S = flat[: 6 * rows].reshape(6, rows).T
+    S[:6] = np.eye(6)
+    S[6:9, :3] = np.eye(3)
+    # column 3: −pz, py, 1, −pz, py in rows 1, 2, 3, 7, 8; column 4: pz, −px, 1, pz, −px in rows 0, 2, 4,
+    # 6, 8; column 5: −py, px, 1, −py, px in rows 0, 1, 5, 6, 7; E_R's columns in rows 9-
+    places = [rows * c + r for c, used in ((3, (1, 2, 3, 7, 8)), (4, (0, 2, 4, 6, 8)), (5, (0, 1, 5, 6, 7)))
+              for r in (*used, *range(9, rows))]  # fmt: skip
+    chi_at = 6 * rows
+    places += list(range(chi_at, chi_at + 3 + m + 2 + 12))  # χ, the distances, the pose's rows 0-2
+    fmt, last = "<", places[0] - 1  # struct writes zeros into pad bytes: the entries skipped are zeros
     for k in places:
         fmt += f"{8 * (k - last - 1)}xd"
         last = k
-    assert last == flat.size - 1 or m == 0
-    buffer: Any = flat  # an ndarray is a buffer (numpy declares __buffer__ for Python >= 3.12 only)
-    write = rotation_function(rotation, continuity_rule(rotation.name), struct.Struct(fmt).pack_into, buffer)
-    Rflat = a.R.T.reshape(9)  # column-major entries of C_IF: a view into data, follows every update
-    p = a.p
+    assert last == flat.size - 5
+    pack = struct.Struct(fmt).pack_into
+    buffer: Any = flat[places[0] :]  # an ndarray is a buffer (numpy declares __buffer__ for Python >= 3.12)
+    write = rotation_function(rotation, continuity_rule(rotation.name), pack, buffer)
     Jw = data.J.reshape(6, model.nv)
     zero = np.zeros(model.nv)
     qp = np.empty(model.nq)
@@ -199,8 +205,7 @@ def fast_update(
             q = qp
         fkd(model, data, q, zero, zero)
         place(model, data, fid)
-        px, py, pz = p.tolist()
-        chi = write(Rflat.tolist(), px, py, pz, threshold, block.previous)
+        chi = write(placement.tolist(), threshold, block.previous)
         if chi is None:
             return False
         if fold is not None:
