@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from .control.frame_task import FrameTask
     from .control.ik import IKResult
     from .control.ik_batch import IKBatchResult
+    from .control.ik_multi import MultiIKResult
     from .control.manipulability import SingularityReport
     from .control.pose_error import pose_error
     from .control.qp import DifferentialIK, PoseTarget, PostureTarget
@@ -46,6 +47,7 @@ _LAZY = {
     "FrameTask": "control.frame_task",
     "IKBatchResult": "control.ik_batch",
     "IKResult": "control.ik",
+    "MultiIKResult": "control.ik_multi",
     "PoseTarget": "control.qp",
     "PostureTarget": "control.qp",
     "SingularityReport": "control.manipulability",
@@ -63,6 +65,7 @@ __all__ = [
     "IKResult",
     "KinematicSingularityError",
     "KinematicsError",
+    "MultiIKResult",
     "OptionError",
     "ParameterizationError",
     "PoseTarget",
