@@ -9,9 +9,11 @@ distance to the singular set and E_R(χ) by scalar math (one function per parame
 ``analytic_jacobian`` (X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]).
 
 It computes what :class:`~kinengine.control.task_frame.FrameBlock` computes, with the same scalar
-formulas and the same continuity rule (so the same floats). For a pose within the threshold of a
-singular set, or at gimbal lock, it writes nothing and returns False: the general path then runs
-(NaN rows or the error, exactly as before).
+formulas and the same continuity rule: the same floats for χ, the distances and the pose; J_e0 and J_A
+agree to rounding (one product instead of two). For a pose within the threshold of a singular set, or at
+gimbal lock, it writes nothing and returns False: the general path then runs (NaN rows or the error,
+exactly as before). [X; E·X], χ, the distances and the pose share one Task buffer, in this order, so
+that one struct call writes every entry that changes (see :func:`fast_update`).
 """
 
 from __future__ import annotations
