@@ -22,12 +22,12 @@ from ..analytic import (
 from ..analytic.evaluate import analytic_relative
 from ..analytic.pose_map import check_on_singularity
 from ..arrays import ArrayLike, FloatArray
-from ..control.frame_task import FrameTask
-from ..control.task import Task
 from ..kinematics import relative as _relative
 from ..kinematics.options import checked_flag, checked_frames, checked_parameterization, checked_threshold
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the Task's modules are imported by the first robot.task(...) call
+    from ..control.frame_task import FrameTask
+    from ..control.task import Task
     from ..robot import Robot
 
 
@@ -190,6 +190,9 @@ class AnalyticMethods:
             checked_flag(continuous, "continuous"),
             checked_flag(check_inputs, "check_inputs"),
         )
+        from ..control.frame_task import FrameTask
+        from ..control.task import Task
+
         checked_frames(frames, (str, FrameTask))
         return Task(
             robot,
