@@ -7,7 +7,6 @@ subclass also derives from the builtin a caller would naturally catch
 
 from __future__ import annotations
 
-import difflib
 import re
 from collections.abc import Iterable, Sequence
 
@@ -73,6 +72,8 @@ class FrameNotFoundError(KinematicsError, KeyError):
         self.name = name
         self.known = list(known)
         self._init = ((name, self.known), {"kind": kind})
+        import difflib  # only when a name is unknown (difflib costs ~1 ms at import)
+
         close = difflib.get_close_matches(str(name), self.known, n=3, cutoff=0.5)
         hint = (
             f" Did you mean {', '.join(repr(c) for c in close)}?"
