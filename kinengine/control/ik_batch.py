@@ -28,23 +28,17 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics import batch
+from . import ik_solver as rules  # the single solver's constants, followed here
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
-from .ik_solver import (
-    DAMPING_SCALE,
-    GIVE_UP,
-    NULLSPACE_FADE,
-    PROBE_ITERATIONS,
-    STALL_FROM,
-    STALL_RATIO,
-    STALL_SPAN,
-    IKResult,
-    LimitWeights,
-)
+from .ik_solver import IKResult, LimitWeights
 from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from ..robot import Robot
 
+LAPACK_BELOW = 256
+"""Fewer columns than this solve their damped systems with np.linalg.solve, more by the column-wise
+Cholesky (fewer numpy calls against less work per column)."""
 SPECULATE = 1024
 """When no more than this many attempts are running, targets run their next attempts at the same time
 (up to this many rows in all): a batch iteration costs about the same for one row as for a few hundred,
@@ -125,8 +119,8 @@ def solve_batch(
     # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
     # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
     # iterations (by iteration % span), the target's p_d (3) and C_d (9)
-    meta, state = np.empty((3, 0), dtype=np.intp), np.empty((2 * dof + STALL_SPAN + 12, 0))
-    H, P = 2 * dof, 2 * dof + STALL_SPAN  # first rows of the history and of p_d
+    meta, state = np.empty((3, 0), dtype=np.intp), np.empty((2 * dof + rules.STALL_SPAN + 12, 0))
+    H, P = 2 * dof, 2 * dof + rules.STALL_SPAN  # first rows of the history and of p_d
     space = _Workspace(max(n, SPECULATE), dof)
     new = np.arange(n)
     while True:
@@ -172,12 +166,12 @@ def solve_batch(
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
         patient = (att == attempts - 1) | ((att == 0) & problem.patient_first)
-        slot = (it % STALL_SPAN, np.arange(r))
-        stalled = (it >= STALL_FROM) & (score > STALL_RATIO * history[slot])
+        slot = (it % rules.STALL_SPAN, np.arange(r))
+        stalled = (it >= rules.STALL_FROM) & (score > rules.STALL_RATIO * history[slot])
         end = (
             done
             | (it == max_iterations)
-            | (((it == PROBE_ITERATIONS) & (score > GIVE_UP) | stalled) & ~patient)
+            | (((it == rules.PROBE_ITERATIONS) & (score > rules.GIVE_UP) | stalled) & ~patient)
         )
         history[slot] = score
         ended = np.empty(0, dtype=np.intp)
@@ -202,6 +196,9 @@ def solve_batch(
             meta[2] += 1
         # next attempts: one per target that needs one; when few columns run, several at once per target
         # (_resolve takes the outcomes in attempt order, as if the attempts had run one after another)
+        if not end.any():  # no attempt ended: nothing new to start
+            new = ended
+            continue
         speculate = r + len(ended) <= SPECULATE
         candidates = np.unique(np.concatenate((tid, ended)) if speculate else ended)
         running = np.bincount(tid, minlength=n)[candidates]
@@ -290,14 +287,18 @@ def _step(
     m, r = len(J), J.shape[2]
     JW = J if w is None else np.multiply(J, w, out=space.weighted[:m, :, :r])  # J W⁻¹
     A = np.einsum("ikn,jkn->ijn", JW, J, out=space.normal[:m, :m, :r])
-    damping = DAMPING_SCALE * np.einsum("in,in->n", err, err) + problem.damping_sq
+    damping = rules.DAMPING_SCALE * np.einsum("in,in->n", err, err) + problem.damping_sq
     for i in range(len(A)):
         A[i, i] += damping
-    if problem.q_ns is None:
-        return q + np.einsum("ijn,in->jn", JW, _cholesky_solve(A, err))
-    z = (problem.gain * np.minimum(1.0, score / NULLSPACE_FADE)) * (problem.q_ns[:, None] - q)
-    y = _cholesky_solve(A, err - np.einsum("ijn,jn->in", J, z))
-    return q + np.einsum("ijn,in->jn", JW, y) + z
+    z = None
+    if problem.q_ns is not None:
+        z = (problem.gain * np.minimum(1.0, score / rules.NULLSPACE_FADE)) * (problem.q_ns[:, None] - q)
+        err = err - np.einsum("ijn,jn->in", J, z)
+    if r < LAPACK_BELOW:  # LAPACK per (m, m) system: ~1 µs each, against ~80 µs of calls for Cholesky
+        y = np.linalg.solve(A.transpose(2, 0, 1), err.T[..., None])[..., 0].T
+    else:
+        y = _cholesky_solve(A, err)
+    return q + np.einsum("ijn,in->jn", JW, y) + (0.0 if z is None else z)
 
 
 def _cholesky_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
