@@ -129,6 +129,10 @@ def solve_one(
         pin.log3,
         pin.LOCAL_WORLD_ALIGNED,
     )
+    joint_jacobians, get_jacobian, LOCAL = pin.computeJointJacobians, pin.getFrameJacobian, pin.LOCAL
+    # A full pose is solved in F (the damped step and the norms do not depend on the frame they are
+    # written in): its error then comes from one SE3 call instead of a subtraction and a 3x3 product.
+    target = pin.SE3(C_d, p_d) if full else None
     dot, subtract, maximum, minimum, hypot = np.dot, np.subtract, np.maximum, np.minimum, math.hypot
     m = len(rows) if rows is not None else part.stop - part.start
     A = np.empty((m, m))
@@ -142,12 +146,19 @@ def solve_one(
         iteration, previous = 0, None
         history: list[float] = []  # the score at each iteration
         while True:
-            J = frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, LWA)
-            M = place(model, data, fid)
-            if p_d is not None:
-                subtract(p_d, M.translation, out=e_p)
-            if C_d is not None:
-                e_r[:] = log3(C_d @ M.rotation.T)
+            if full:  # e and J in F: Cᵀ e = (Cᵀ(p_d − p), log3(Cᵀ C_d)) from M⁻¹ M_d, one SE3 call
+                joint_jacobians(model, data, q if identity else pinocchio_q(q))
+                J = get_jacobian(model, data, fid, LOCAL)
+                M = place(model, data, fid).actInv(target)
+                e_p[:] = M.translation
+                e_r[:] = log3(M.rotation)
+            else:
+                J = frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, LWA)
+                M = place(model, data, fid)
+                if p_d is not None:
+                    subtract(p_d, M.translation, out=e_p)
+                if C_d is not None:
+                    e_r[:] = log3(C_d @ M.rotation.T)
             if rows is None:
                 e0, e1, e2, e3, e4, e5 = e.tolist()
                 ep, er = hypot(e0, e1, e2), hypot(e3, e4, e5)
