@@ -1,6 +1,12 @@
 """The single-target IK solver: damped least squares iterations (see :mod:`kinengine.control.ik` for the
 error, the step and the seeds) from each seed in turn, with Chan & Dubey's joint-limit weights
-(:class:`LimitWeights`); returns an :class:`IKResult`."""
+(:class:`LimitWeights`); returns an :class:`IKResult`.
+
+Damping λ² = DAMPING_SCALE·|e|² + λ_min². An attempt other than the last gives way to the next seed when
+its score |e_p| + 0.2 m/rad·|e_R| is still above GIVE_UP after PROBE_ITERATIONS iterations, or when, from
+STALL_FROM iterations on, it has not fallen below STALL_RATIO × its value STALL_SPAN iterations earlier.
+A full pose target is iterated in the frame F itself (e_F = blockdiag(Cᵀ, Cᵀ) e, J_F likewise): the step
+and the norms are the same in any frame (Robot Dynamics lecture notes, ETH Zurich, §2.8)."""
 
 from __future__ import annotations
 
