@@ -33,8 +33,8 @@ How: one ``computeForwardKinematicsDerivatives`` fills Pinocchio's world-frame j
 J̇_w (no array is returned, so nothing is allocated); per frame :mod:`kinengine.control.task_frame` does
 the rest. Pinocchio's model has plain joints only; with mimic joints q_pin = M q + b and q̇_pin = M q̇
 are written into preallocated arrays and J_w, J̇_w are folded, J_w·M (see :mod:`kinengine.model.coordinates`).
-``update(q)`` of one absolute frame with all rows, Cartesian position and a rotation takes the fast path of
-:mod:`kinengine.control.task_fast` (the same floats, one product for J and J_A) wherever χ is regular.
+A task of one absolute frame with all rows, Cartesian position and a rotation takes the fast path of
+:mod:`kinengine.control.task_fast` (the same χ, J and J_A to rounding by one product) wherever χ is regular.
 
 A Task owns its own Pinocchio Data: use one Task per thread. The attributes are read-only
 views that the next update overwrites; copy what you keep.
@@ -138,8 +138,9 @@ class Task:
         # J_e0 and J_A in one buffer: the fast path writes both with one product (see task_fast)
         stacked = np.zeros((6 * k + M, n))
         self._J, self._JA = stacked[: 6 * k].reshape(k, 6, n), stacked[6 * k :]
-        self._Jdot, self._JAdot = np.zeros((k, 6, n)), np.zeros((M, n))
-        self._twist = np.zeros((k, 6))
+        stacked_dot, rates = np.zeros((6 * k + M, n)), np.zeros(6 * k + M)  # [J̇; J̇_A], [twist; χ̇] alike
+        self._Jdot, self._JAdot = stacked_dot[: 6 * k].reshape(k, 6, n), stacked_dot[6 * k :]
+        self._twist, self._chi_dot = rates[: 6 * k].reshape(k, 6), rates[6 * k :]
         # ([X; E·X] of the fast path,) χ, the distances and the poses in one buffer: one struct call fills it
         P, lead = len(self.singularity_labels), 6 * (6 + M) if fast else 0
         flat = np.zeros(lead + M + P + 16 * k)
@@ -147,7 +148,6 @@ class Task:
         self._distances.fill(np.inf)
         self._pose = flat[lead + M + P :].reshape(k, 4, 4)
         self._pose[:, 3, 3] = 1.0
-        self._chi_dot = np.zeros(M)
         self._weights = np.concatenate(
             [np.full(pm.size, f.weight) for f, pm in zip(specs, pmaps, strict=False)]
         )
@@ -180,7 +180,11 @@ class Task:
             self._blocks.append(block)
             row, part = row + pm.size, part + len(pm.parts)
         self._kinematics = tuple(kinematics.values())
-        self._fast = fast_update(self._kinematics[0], self._blocks[0], stacked, flat) if fast else None
+        self._fast = (
+            fast_update(self._kinematics[0], self._blocks[0], stacked, stacked_dot, rates, flat)
+            if fast
+            else None
+        )
         single = isinstance(frames, (str, FrameTask))
         self.pose = _readonly(self._pose[0] if single else self._pose)
         self.jacobian = _readonly(self._J.reshape(6 * k, n))
@@ -213,12 +217,11 @@ class Task:
         RepresentationSingularityError (see the module doc).
         """
         fast = self._fast
-        if (
-            qdot is None
-            and fast is not None
-            and not self._rates_valid
-            and fast(q, self.check_inputs, self.singularity_threshold, self.continuous)
-        ):
+        if fast is not None and fast(q, qdot, self.check_inputs, self.singularity_threshold, self.continuous):
+            if qdot is not None:
+                self._rates_valid = True
+            elif self._rates_valid:
+                self._invalidate_rates()
             return
         coords = self._coords
         if self.check_inputs:

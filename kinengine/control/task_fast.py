@@ -1,16 +1,17 @@
-"""The fast path of :meth:`Task.update(q) <kinengine.control.task.Task.update>` without q̇, for the
-common task: one absolute frame, all rows, Cartesian position and one rotation parameterization.
+"""The fast path of :meth:`Task.update(q[, qdot]) <kinengine.control.task.Task.update>` for the common
+task: one absolute frame, all rows, Cartesian position and one rotation parameterization.
 
-One closure does the whole update with few numpy calls: the input check, one
+One closure does the whole update with few numpy calls: the input checks, one
 ``computeForwardKinematicsDerivatives`` (returns nothing: no allocation), the frame placement, χ_R, its
 distance to the singular set and E_R(χ) by scalar math (one function per parameterization family, see
 :func:`rotation_function`), then J_e0 and J_A = E·J_e0 = (E·X)·J_w by *one* product of the stacked
 (6 + 3 + m, 6) matrix [X; E·X] with J_w into one buffer whose rows are the Task's ``jacobian`` and
-``analytic_jacobian`` (X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]).
+``analytic_jacobian`` (X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]). With q̇: [twist; χ̇] by
+one product and [J̇_e0; J̇_A] by two (see :func:`fast_update`).
 
 It computes what :class:`~kinengine.control.task_frame.FrameBlock` computes, with the same scalar
-formulas and the same continuity rule: the same floats for χ, the distances and the pose; J_e0 and J_A
-agree to rounding (one product instead of two). For a pose within the threshold of a singular set, or at
+formulas and the same continuity rule: the same floats for χ, the distances and the pose; J_e0, J_A and
+the rates agree to rounding (fewer, larger products). For a pose within the threshold of a singular set, or at
 gimbal lock, it writes nothing and returns False: the general path then runs (NaN rows or the error,
 exactly as before). [X; E·X], χ, the distances and the pose share one Task buffer, in this order, so
 that one struct call writes every entry that changes (see :func:`fast_update`).
@@ -146,15 +147,26 @@ def _euler(param: EulerAngles, rule: Rule, pack: Callable[..., None], buffer: An
 
 
 def fast_update(
-    a: FrameKinematics, block: FrameBlock, stacked: np.ndarray, flat: np.ndarray
-) -> Callable[[np.ndarray, bool, float, bool], bool] | None:
-    """``update(q, check, threshold, continuous) -> bool``: True when it wrote every attribute but the
-    rates (which the Task keeps NaN); False, having written nothing, where the general path must run.
-    None if Pinocchio's frame placement is not the 12 contiguous doubles (C_IF column-major, p) read here.
+    a: FrameKinematics,
+    block: FrameBlock,
+    stacked: np.ndarray,
+    stacked_dot: np.ndarray,
+    rates: np.ndarray,
+    flat: np.ndarray,
+) -> Callable[[np.ndarray, np.ndarray | None, bool, float, bool], bool] | None:
+    """``update(q, qdot, check, threshold, continuous) -> bool``: True when it wrote every attribute (the
+    rates only with q̇: without, the Task keeps them NaN); False, having written nothing, where the general
+    path must run. None if Pinocchio's frame placement is not the 12 contiguous doubles (C_IF
+    column-major, p) read here.
 
-    ``stacked`` (6 + 3 + m, dof) C-contiguous: rows 0-5 are the block's J_e0, the rest its J_A. ``flat``
-    holds [X; E·X] (9 + m, 6) column-major, χ (3 + m), the two distances and the pose (4, 4): one struct
-    call writes all but their constants (columns 0-2 of [X; E·X], the pose's last row).
+    ``stacked`` (6 + 3 + m, dof) C-contiguous: rows 0-5 are the block's J_e0, the rest its J_A;
+    ``stacked_dot`` alike [J̇_e0; J̇_A] and ``rates`` (6 + 3 + m,) [twist; χ̇] = stacked·q̇. ``flat`` holds
+    [X; E·X] (9 + m, 6) column-major, χ (3 + m), the two distances and the pose (4, 4): one struct call
+    writes all but their constants (columns 0-2 of [X; E·X], the pose's last row).
+
+    Rates: [J̇_e0; J̇_A] = [X; E·X]·J̇_w + T·J_w with T = [Ẋ; Ė·X + E·Ẋ] = [[0, −[v]x]; 0; [0, −[v]x];
+    [0, Ė_R]] (Ė = blockdiag(0, Ė_R), Ẋ = [[0, −[v]x], [0, 0]], v the origin's velocity): the terms of
+    the general path's J̇ = X·J̇_w + Ẋ·J_w and J̇_A = E·J̇ + Ė·J, added in the same order.
     """
     model, data, fid, coords = a.model, a.data, a.fid, a.coords
     R, p = a.R, a.p
@@ -174,52 +186,94 @@ def fast_update(
               for r in (*used, *range(9, rows))]  # fmt: skip
     chi_at = 6 * rows
     places += list(range(chi_at, chi_at + 3 + m + 2 + 12))  # χ, the distances, the pose's rows 0-2
-    fmt, last = "<", places[0] - 1  # struct writes zeros into pad bytes: the entries skipped are zeros
-    for k in places:
-        fmt += f"{8 * (k - last - 1)}xd"
-        last = k
-    assert last == flat.size - 5
-    pack = struct.Struct(fmt).pack_into
-    buffer: Any = flat[places[0] :]  # an ndarray is a buffer (numpy declares __buffer__ for Python >= 3.12)
+    assert places[-1] == flat.size - 5
+    pack, start = _packer(places)
+    buffer: Any = flat[start:]  # an ndarray is a buffer (numpy declares __buffer__ for Python >= 3.12)
     write = rotation_function(rotation, continuity_rule(rotation.name), pack, buffer)
-    Jw = data.J.reshape(6, model.nv)
+    # T (rows, 6) column-major: −[v]x in rows 0-2 and 6-8 of columns 3-5 (as X's −[p]x), Ė_R in rows 9-
+    T = np.zeros((6, rows)).T
+    pack_T, start_T = _packer(
+        [k for k in places if k < chi_at and k not in (3 * rows + 3, 4 * rows + 4, 5 * rows + 5)]
+    )
+    T_buffer: Any = T.T.reshape(6 * rows)[start_T:]
+    E_dot, by_columns = rotation._E_dot, itemgetter(*(3 * r + c for c in range(3) for r in range(m)))
+    Jw, dJw = data.J.reshape(6, model.nv), data.dJ.reshape(6, model.nv)
     zero = np.zeros(model.nv)
-    qp = np.empty(model.nq)
+    qp, vp = np.empty(model.nq), np.empty(model.nv)
     identity, has_offset = coords.identity, coords.has_offset
     fold = None if identity else coords.matrix
     offset = coords.offset if has_offset else None
     if a.mask is not None and fold is not None:
         fold = a.mask[:, None] * fold  # J_w·diag(mask)·M in one product
     mask = a.mask if fold is None else None
-    G = np.empty((6, block.J.shape[1]))
-    product = S.dot
+    n = stacked.shape[1]
+    G, dG, tmp = np.empty((6, n)), np.empty((6, n)), np.empty((rows, n))
+    product, product_T, product_rates = S.dot, T.dot, stacked.dot
+    twist = rates[:6]
     fkd, place = pin.computeForwardKinematicsDerivatives, pin.updateFramePlacement
     ready, check_q = coords.ready, coords.check
     fold_q = coords.matrix
 
-    def update(q: np.ndarray, check: bool, threshold: float, continuous: bool) -> bool:
+    def update(
+        q: np.ndarray, qdot: np.ndarray | None, check: bool, threshold: float, continuous: bool
+    ) -> bool:
         if check and not ready(q):
             q = check_q(q, allow_batch=False)
+        v = zero
+        if qdot is not None:
+            if check and not ready(qdot):
+                qdot = check_q(qdot, name="qdot", allow_batch=False)
+            v = qdot
         if not identity:
             np.dot(fold_q, q, out=qp)
             if offset is not None:
                 np.add(qp, offset, out=qp)
             q = qp
-        fkd(model, data, q, zero, zero)
+            if qdot is not None:
+                np.dot(fold_q, qdot, out=vp)
+                v = vp
+        fkd(model, data, q, v, zero)
         place(model, data, fid)
         chi = write(placement.tolist(), threshold, block.previous)
         if chi is None:
             return False
+        J, dJ = Jw, dJw
         if fold is not None:
+            J, dJ = G, dG
             Jw.dot(fold, G)
-            product(G, stacked)
         elif mask is not None:
+            J, dJ = G, dG
             np.multiply(Jw, mask, out=G)
-            product(G, stacked)
-        else:
-            product(Jw, stacked)
+        product(J, stacked)
         if continuous:
             block.previous = chi
+        if qdot is None:
+            return True
+        product_rates(qdot, rates)
+        vx, vy, vz, wx, wy, wz = twist.tolist()
+        Ed = by_columns(E_dot(math, chi[3:], (wx, wy, wz)))
+        # fmt: off
+        pack_T(T_buffer, 0, -vz, vy, -vz, vy, *Ed[:m], vz, -vx, vz, -vx, *Ed[m : 2 * m],
+               -vy, vx, -vy, vx, *Ed[2 * m :])
+        # fmt: on
+        if fold is not None:
+            dJw.dot(fold, dG)
+        elif mask is not None:
+            np.multiply(dJw, mask, out=dG)
+        product(dJ, stacked_dot)
+        product_T(J, tmp)
+        np.add(stacked_dot, tmp, out=stacked_dot)
         return True
 
     return update
+
+
+def _packer(places: list[int]) -> tuple[Callable[..., None], int]:
+    """A struct ``pack_into`` writing doubles at these increasing indices of a float64 buffer (from the first
+    one on, given as the second value: pack into ``buffer[first:]``); struct writes zeros into pad bytes, so
+    every entry skipped in between must be a zero."""
+    fmt, last = "<", places[0] - 1
+    for k in places:
+        fmt += f"{8 * (k - last - 1)}xd"
+        last = k
+    return struct.Struct(fmt).pack_into, places[0]
