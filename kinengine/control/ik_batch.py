@@ -97,12 +97,7 @@ def log3(R: np.ndarray) -> np.ndarray:
 
 
 def solve_batch(
-    robot: Robot,
-    problem: Problem,
-    p_d: np.ndarray,
-    C_d: np.ndarray,
-    q0: np.ndarray | None,
-    generator: RandomSource,
+    robot: Robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None, rng: RandomSource
 ) -> IKBatchResult:
     """Solve every target (p_d (N, 3), C_d (N, 3, 3)) vectorized; see the module doc."""
     kin, joints, dof = robot.engine, robot.engine.coordinates, robot.dof
@@ -132,7 +127,7 @@ def solve_batch(
             seeded = new_meta[1] < seeds.count
             block[:dof, seeded] = seeds.starts(new[seeded], new_meta[1][seeded]).T
             if (~seeded).any():
-                block[:dof, ~seeded] = generator.configurations(robot, int((~seeded).sum())).T
+                block[:dof, ~seeded] = rng.configurations(robot, int((~seeded).sum())).T
             block[dof:H] = -1.0
             block[P : P + 3], block[P + 3 :] = p_d[new].T, C_d[new].reshape(-1, 9).T
             meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
@@ -282,14 +277,20 @@ def _step(
     problem: Problem,
     space: _Workspace,
 ) -> np.ndarray:
-    """q + Δq for every column (J (m, dof, r), err (m, r), q (dof, r)): weighted damped least squares,
-    λ² = DAMPING_SCALE·|e|² + λ_min² (and the nullspace pull), A = J W⁻¹ Jᵀ + λ² I by Cholesky."""
+    """q + Δq for every column (J (m, dof, r), err (m, r), q (dof, r)): weighted damped least squares
+    (and the nullspace pull) as the single solver's, A = J W⁻¹ Jᵀ + λ² I by Cholesky."""
     m, r = len(J), J.shape[2]
     JW = J if w is None else np.multiply(J, w, out=space.weighted[:m, :, :r])  # J W⁻¹
     A = np.einsum("ikn,jkn->ijn", JW, J, out=space.normal[:m, :m, :r])
-    damping = rules.DAMPING_SCALE * np.einsum("in,in->n", err, err) + problem.damping_sq
+    # a full pose's rotation rows weighted by ρ (the single solver's ROTATION_ROW_WEIGHT, if it has one): λ²
+    # = DAMPING_SCALE·(|e_p|² + ρ²|e_R|²) + λ_min², and A's diagonal takes λ²·(1, 1, 1, ρ⁻², ρ⁻², ρ⁻²)
+    rho = getattr(rules, "ROTATION_ROW_WEIGHT", 1.0) if problem.rows is None else 1.0
+    squared = np.einsum("in,in->n", err, err)
+    if rho != 1.0:
+        squared += (rho**2 - 1.0) * np.einsum("in,in->n", err[3:], err[3:])
+    damping = rules.DAMPING_SCALE * squared + problem.damping_sq
     for i in range(len(A)):
-        A[i, i] += damping
+        A[i, i] += damping if i < 3 else damping / rho**2
     z = None
     if problem.q_ns is not None:
         z = (problem.gain * np.minimum(1.0, score / rules.NULLSPACE_FADE)) * (problem.q_ns[:, None] - q)
