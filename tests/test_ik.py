@@ -351,3 +351,19 @@ def test_a_singular_damped_matrix_falls_back_to_least_squares(abb):
     assert np.isfinite(result.q).all() and _within_limits(abb, result.q)
     ep, er = _pose_errors(abb, result.q, "tool0", T)
     assert ep <= 1e-12 and er <= 1e-12
+
+
+def test_a_full_pose_step_equals_the_explicitly_weighted_six_row_step(abb):
+    """A full pose's least squares weights the rotation rows by ROTATION_ROW_WEIGHT (done on the damping
+    diagonal, in the frame F); the six rows in the target frame with weights w = (1, 1, 1, ρ², ρ², ρ²) take
+    the same steps in another frame and another code path, so both end on the same q, attempt and count."""
+    from kinengine.control import ik_solver
+
+    rho_sq = ik_solver.ROTATION_ROW_WEIGHT**2
+    targets = abb.frame_pose(abb.random_configuration(np.random.default_rng(3), size=30))
+    for i, T in enumerate(targets):
+        full = inverse_kinematics(abb, T, rng=i)
+        rows = inverse_kinematics(abb, T, weights=[1.0, 1.0, 1.0, rho_sq, rho_sq, rho_sq], rng=i)
+        assert full.success and rows.success
+        assert (full.iterations, full.restarts) == (rows.iterations, rows.restarts)
+        np.testing.assert_allclose(full.q, rows.q, rtol=0, atol=1e-10)
