@@ -84,16 +84,9 @@ class IKBatchResult:
 def log3(R: np.ndarray) -> np.ndarray:
     """log of rotation matrices R (n, 3, 3) as rotation vectors (n, 3): θ = atan2(|w|/2, (tr R − 1)/2),
     w = vee(R − Rᵀ), log = θ·w/|w|; Pinocchio's log3 row by row where θ is within 0.15 rad of π."""
-    w = np.stack((R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]), axis=1)
-    norm = np.sqrt(np.einsum("ni,ni->n", w, w))
-    cos = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)
-    theta = np.arctan2(0.5 * norm, cos)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        factor = np.where(norm > 1e-12, theta / norm, 0.5)
-    out = w * factor[:, None]
-    for i in np.flatnonzero(cos < -0.988):  # near π the axis from w is inaccurate
-        out[i] = pin.log3(R[i])
-    return out
+    out, n = np.empty((3, len(R))), len(R)
+    _log3_columns(np.ascontiguousarray(np.transpose(R, (1, 2, 0))), np.eye(3)[..., None].repeat(n, 2), out)
+    return out.T
 
 
 def solve_batch(
@@ -131,12 +124,12 @@ def solve_batch(
             block[dof:H] = -1.0
             block[P : P + 3], block[P + 3 :] = p_d[new].T, C_d[new].reshape(-1, 9).T
             meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
-        r = meta.shape[1]
+        r, (tid, att, it) = meta.shape[1], meta
+        patient = (att == attempts - 1) | ((att == 0) & problem.patient_first)
         if not r:
             break
         if r > space.capacity:
             space = _Workspace(r, dof)
-        tid, att, it = meta
         q, history, pd, Cd = state[:dof], state[H:P], state[P : P + 3], state[P + 3 :].reshape(3, 3, r)
         T, J = space.pose[..., :r], space.jac[..., :r]  # (4, 4, r), (6, dof, r): the chain writes rows
         batch.evaluate(
@@ -146,28 +139,18 @@ def solve_batch(
         np.subtract(pd, T[:3, 3], out=e[:3])
         _log3_columns(Cd, T[:3, :3], e[3:])
         if rows is None:
-            err, ep, er = (
-                e,
-                np.sqrt(np.einsum("in,in->n", e[:3], e[:3])),
-                np.sqrt(np.einsum("in,in->n", e[3:], e[3:])),
-            )
+            err, (ep, er) = e, np.sqrt(np.einsum("kin,kin->kn", e.reshape(2, 3, r), e.reshape(2, 3, r)))
         else:
-            e_d = np.concatenate((np.einsum("kin,kn->in", Cd, e[:3]), np.einsum("kin,kn->in", Cd, e[3:])))[
-                rows
-            ]
+            e_d = np.einsum("kin,jkn->jin", Cd, e.reshape(2, 3, r)).reshape(6, r)[rows]  # C_dᵀ e, blockwise
             ep = np.sqrt(np.einsum("in,in->n", e_d[position_rows], e_d[position_rows]))
             er = np.sqrt(np.einsum("in,in->n", e_d[~position_rows], e_d[~position_rows]))
             err = e_d if sqrt_w is None else e_d * sqrt_w[:, None]
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
-        patient = (att == attempts - 1) | ((att == 0) & problem.patient_first)
         slot = (it % rules.STALL_SPAN, np.arange(r))
         stalled = (it >= rules.STALL_FROM) & (score > rules.STALL_RATIO * history[slot])
-        end = (
-            done
-            | (it == max_iterations)
-            | (((it == rules.PROBE_ITERATIONS) & (score > rules.GIVE_UP) | stalled) & ~patient)
-        )
+        gives_way = ((it == rules.PROBE_ITERATIONS) & (score > rules.GIVE_UP) | stalled) & ~patient
+        end = done | (it == max_iterations) | gives_way
         history[slot] = score
         ended = np.empty(0, dtype=np.intp)
         if end.any():
@@ -180,9 +163,7 @@ def solve_batch(
             tid, q, Cd = meta[0], state[:dof], state[P + 3 :].reshape(3, 3, r)
         if r:
             if rows is not None:
-                J = np.concatenate(
-                    (np.einsum("kin,kjn->ijn", Cd, J[:3]), np.einsum("kin,kjn->ijn", Cd, J[3:]))
-                )
+                J = np.einsum("kin,hkjn->hijn", Cd, J.reshape(2, 3, dof, r)).reshape(6, dof, r)
                 J = J[rows] if sqrt_w is None else J[rows] * sqrt_w[:, None, None]
             w = None
             if limits.any:
