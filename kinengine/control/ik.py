@@ -7,13 +7,17 @@ With ``rows=`` or ``weights=`` both halves are expressed in the target frame D (
 blockwise) and only the named rows count: rows=("x", "y", "z", "rx", "ry") is a 5-D target, position plus
 tool axis (D's z axis): rotation about it is left free. ``weights`` (w ≥ 0, one per kept row) minimize
 Σ w_i e_i² instead of |e|².
-Step (λ² = 0.2·|e|² + λ_min² (``DAMPING_SCALE``), Sugihara's Levenberg–Marquardt rule: strong damping
-far from the target or near a singularity, Gauss–Newton speed close to it):
-    Δq = Jᵀ (J Jᵀ + λ² I)⁻¹ e  +  (I − Jᵀ (J Jᵀ + λ² I)⁻¹ J)·z,   q ← clip(q + Δq, lower, upper),
+Step (Sugihara's Levenberg–Marquardt rule: strong damping far from the target or near a singularity,
+Gauss–Newton speed close to it). A full pose is iterated in the end effector's own frame with its rotation
+rows weighted by ρ = ``ROTATION_ROW_WEIGHT`` = 0.2 m/rad (S = diag(1, 1, 1, ρ, ρ, ρ), the same distance
+that ranks seeds and attempts), λ² = ``DAMPING_SCALE``·(|e_p|² + ρ²|e_R|²) + λ_min² with DAMPING_SCALE = 0.1:
+    Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e  +  (I − Jᵀ (J Jᵀ + λ² I)⁻¹ J)·z,   q ← clip(q + Δq, lower, upper),
+(rows=/weights= targets: S = I and λ² = DAMPING_SCALE·|e_w|² + λ_min² on the weighted kept rows e_w), solved
+by Cholesky (least squares where the matrix is not positive definite),
 with z = gain·min(1, score/NULLSPACE_FADE) · (q_ns − q) pulling towards ``nullspace_target`` in the
 (damped) nullspace of J.
-Joint limits: every iterate is clipped into them, and Chan & Dubey's weights (:class:`LimitWeights`)
-slow joints that approach a limit (Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² I)⁻¹ e).
+Joint limits: every iterate is clipped into them, and Chan & Dubey's weights W (:class:`LimitWeights`)
+slow joints that approach a limit.
 Seeds, in order, one attempt each of at most ``max_iterations`` iterations (an attempt whose error
 is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations, or from iteration ``STALL_FROM`` on above
 ``STALL_RATIO`` × its error ``STALL_SPAN`` iterations earlier, makes way for the next seed):
