@@ -21,7 +21,7 @@ and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``li
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -30,12 +30,15 @@ import pinocchio as pin
 from ..kinematics import batch
 from . import ik_solver as rules  # the single solver's constants, followed here
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
-from .ik_solver import IKResult, LimitWeights
+from .ik_solver import IKResult, LimitWeights, solve_one
 from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from ..robot import Robot
 
+TAIL = 4
+"""When no more columns than this are left, all of them attempts that never give way (the last ones), the
+single-target solver runs each again from its start (~15 µs an iteration, a batch iteration ~125 µs)."""
 LAPACK_BELOW = 256
 """Fewer columns than this solve their damped systems with np.linalg.solve, more by the column-wise
 Cholesky (fewer numpy calls against less work per column)."""
@@ -106,9 +109,9 @@ def solve_batch(
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
     # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
     # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
-    # iterations (by iteration % span), the target's p_d (3) and C_d (9)
-    meta, state = np.empty((3, 0), dtype=np.intp), np.empty((2 * dof + rules.STALL_SPAN + 12, 0))
-    H, P = 2 * dof, 2 * dof + rules.STALL_SPAN  # first rows of the history and of p_d
+    # iterations (by iteration % span), the target's p_d (3) and C_d (9), the attempt's start (dof)
+    H, P, S = 2 * dof, 2 * dof + rules.STALL_SPAN, 2 * dof + rules.STALL_SPAN + 12  # history, p_d, start
+    meta, state = np.empty((3, 0), dtype=np.intp), np.empty((S + dof, 0))
     space = _Workspace(max(n, SPECULATE), dof)
     new = np.arange(n)
     while True:
@@ -121,16 +124,25 @@ def solve_batch(
             block[:dof, seeded] = seeds.starts(new[seeded], new_meta[1][seeded]).T
             if (~seeded).any():
                 block[:dof, ~seeded] = rng.configurations(robot, int((~seeded).sum())).T
-            block[dof:H] = -1.0
-            block[P : P + 3], block[P + 3 :] = p_d[new].T, C_d[new].reshape(-1, 9).T
+            block[dof:H], block[S:] = -1.0, block[:dof]
+            block[P : P + 3], block[P + 3 : S] = p_d[new].T, C_d[new].reshape(-1, 9).T
             meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
         r, (tid, att, it) = meta.shape[1], meta
         patient = (att == attempts - 1) | ((att == 0) & problem.patient_first)
-        if not r:
+        if r <= TAIL and patient.all():  # a few attempts that never give way: the single solver reruns them
+            rest = replace(problem, restarts=0, patient_first=True)
+            tail = [
+                solve_one(robot, rest, p_d[t], C_d[t], x[None], rng)
+                for t, x in zip(tid, state[S:].T.copy(), strict=True)
+            ]
+            e = np.array([[o.position_error, o.rotation_error, o.iterations] for o in tail]).reshape(r, 3).T
+            q_t = np.array([o.q for o in tail]).reshape(r, dof)
+            log.append((tid, att, e[2].astype(np.intp), e[0] + SEED_ROTATION_WEIGHT * e[1], e[0], e[1], q_t))
+            np.minimum.at(winner, tid, np.where([o.success for o in tail], att, attempts))
             break
         if r > space.capacity:
             space = _Workspace(r, dof)
-        q, history, pd, Cd = state[:dof], state[H:P], state[P : P + 3], state[P + 3 :].reshape(3, 3, r)
+        q, history, pd, Cd = state[:dof], state[H:P], state[P : P + 3], state[P + 3 : S].reshape(3, 3, r)
         T, J = space.pose[..., :r], space.jac[..., :r]  # (4, 4, r), (6, dof, r): the chain writes rows
         batch.evaluate(
             kin, q.T, problem.fid, pin.LOCAL_WORLD_ALIGNED, out=(T.transpose(2, 0, 1), J.transpose(2, 0, 1))
@@ -160,7 +172,7 @@ def solve_batch(
             keep = ~end & (att < winner[tid])  # attempts after a converged one are dropped
             meta, state, err, score = meta[:, keep], state[:, keep], err[:, keep], score[keep]
             J, r = space.compact(J, keep), len(score)
-            tid, q, Cd = meta[0], state[:dof], state[P + 3 :].reshape(3, 3, r)
+            tid, q, Cd = meta[0], state[:dof], state[P + 3 : S].reshape(3, 3, r)
         if r:
             if rows is not None:
                 J = np.einsum("kin,hkjn->hijn", Cd, J.reshape(2, 3, dof, r)).reshape(6, dof, r)
