@@ -1,18 +1,19 @@
 """Inverse kinematics for a batch of targets (N, 4, 4), vectorized over every running attempt at once.
 
 The algorithm of :mod:`kinengine.control.ik` (same error, damping, limit weights, seeds, attempts,
-give-up rule and tolerances), each iteration done for every attempt still running, held column-wise
+give-up rules and tolerances), each iteration done for every attempt still running, held column-wise
 (q (dof, r), J (6, dof, r), ...: every numpy call runs over r contiguous entries): poses and
 Jacobians J_e0 from the batch chain (:mod:`kinengine.kinematics.batch`, written straight into reused
 column buffers), the rotation errors log(C_d Cᵀ) in closed form, and the damped least-squares systems
-(m, m, r) by a column-wise Cholesky factorization. Attempts that end (converged, given up, out of
-iterations) are compacted away, and the target's next attempt starts (its seed looked up only then:
-:class:`~kinengine.control.ik_seeds.BatchSeeds`). When few attempts are left running (SPECULATE), each
-target runs several of its next attempts at the same time; every target's outcome is then taken from
-its attempts in order (:func:`_resolve`): the same q, success, iteration count and restarts as if the
-attempts had run one after another. Its floating point differs from the single solver's (Pinocchio's
-Jacobian vs the batch chain's, Cholesky vs LU), so the two agree in convergence and tolerance, not
-bit for bit; random restarts draw from ``rng`` in a different order.
+(m, m, r) by a column-wise Cholesky factorization (LAPACK for few columns). Attempts that end
+(converged, given up, out of iterations) are compacted away, and the target's next attempt starts (its
+seed looked up only then: :class:`~kinengine.control.ik_seeds.BatchSeeds`). When few attempts are left
+running (SPECULATE), each target runs several of its next attempts at the same time; every target's
+outcome is then taken from its attempts in order (:func:`_resolve`): the same q, success, iteration
+count and restarts as if the attempts had run one after another. The last few attempts that never give
+way (TAIL) are rerun from their starts by the single solver. Floating point differs from the single
+solver's (the batch chain's Jacobian, Cholesky), so the two agree in convergence and tolerance, not bit
+for bit; random restarts draw from ``rng`` in a different order.
 
 The result is an :class:`IKBatchResult`: arrays over the batch (``q`` (N, dof), ``success`` (N,), ...),
 and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``list(result)``).
