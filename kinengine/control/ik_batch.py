@@ -276,9 +276,9 @@ def _step(
     m, r = len(J), J.shape[2]
     JW = J if w is None else np.multiply(J, w, out=space.weighted[:m, :, :r])  # J W⁻¹
     A = np.einsum("ikn,jkn->ijn", JW, J, out=space.normal[:m, :m, :r])
-    # a full pose's rotation rows weighted by ρ (the single solver's ROTATION_ROW_WEIGHT, if it has one): λ²
-    # = DAMPING_SCALE·(|e_p|² + ρ²|e_R|²) + λ_min², and A's diagonal takes λ²·(1, 1, 1, ρ⁻², ρ⁻², ρ⁻²)
-    rho = getattr(rules, "ROTATION_ROW_WEIGHT", 1.0) if problem.rows is None else 1.0
+    # a full pose's rotation rows weighted by ρ = ROTATION_ROW_WEIGHT (as the single solver): λ² =
+    # DAMPING_SCALE·(|e_p|² + ρ²|e_R|²) + λ_min², and A's diagonal takes λ²·(1, 1, 1, ρ⁻², ρ⁻², ρ⁻²)
+    rho = rules.ROTATION_ROW_WEIGHT if problem.rows is None else 1.0
     squared = np.einsum("in,in->n", err, err)
     if rho != 1.0:
         squared += (rho**2 - 1.0) * np.einsum("in,in->n", err[3:], err[3:])
