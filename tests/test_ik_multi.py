@@ -151,7 +151,9 @@ def test_one_frame_mapping_is_the_single_frame_call(name, frame, options):
             given_q0 = None if q0 is None else q0.copy()
             single = inverse_kinematics(robot, T, frame, q0=given_q0, rng=i, **options)
             several = inverse_kinematics(robot, {frame: T}, q0=given_q0, rng=i, **options)
-            np.testing.assert_allclose(several.q, single.q, rtol=0, atol=1e-12)
+            # the same steps up to rounding: the single solver writes a full pose's error in the end
+            # effector's frame, the stacked one in I (last iterates measured within 1.4e-12 rad)
+            np.testing.assert_allclose(several.q, single.q, rtol=0, atol=1e-10)
             assert (several.success, several.iterations, several.restarts) == (
                 single.success,
                 single.iterations,

@@ -29,17 +29,7 @@ import pinocchio as pin
 
 from ..errors import OptionError, ParameterizationError
 from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
-from .ik_solver import (
-    DAMPING_SCALE,
-    GIVE_UP,
-    NULLSPACE_FADE,
-    PROBE_ITERATIONS,
-    STALL_FROM,
-    STALL_RATIO,
-    STALL_SPAN,
-    IKResult,
-    LimitWeights,
-)
+from .ik_solver import DAMPING_SCALE, ROTATION_ROW_WEIGHT, IKResult, LimitWeights, gives_way, take_step
 from .ik_target import Problem, RandomSource, checked_problem, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -219,7 +209,12 @@ def solve_frames(
     m = layout[-1][4]
     err, J, e, A = np.empty(m), np.empty((m, robot.dof)), np.empty(6), np.empty((m, m))
     e_p, e_r, diagonal = e[:3], e[3:], A.reshape(-1)[:: m + 1]  # views; diagonal: A's
-    limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper))
+    limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper, joints.continuous))
+    rotation_sq = ROTATION_ROW_WEIGHT**2  # a full pose's rotation rows weigh ρ, as in the single solver:
+    row_damping = np.ones(m)  # (J W⁻¹Jᵀ + λ² S⁻²) with S = diag(1, 1, 1, ρ, ρ, ρ) on those blocks
+    for _, _, _, start, stop, S, _, _ in layout:
+        if S is None:
+            row_damping[start + 3 : stop] = 1.0 / rotation_sq
     best, total = None, 0
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
@@ -238,7 +233,7 @@ def solve_frames(
                     err[start:stop] = e
                     e0, e1, e2, e3, e4, e5 = e.tolist()
                     ep, er = hypot(e0, e1, e2), hypot(e3, e4, e5)
-                    squared += e0 * e0 + e1 * e1 + e2 * e2 + e3 * e3 + e4 * e4 + e5 * e5
+                    squared += e0 * e0 + e1 * e1 + e2 * e2 + rotation_sq * (e3 * e3 + e4 * e4 + e5 * e5)
                 else:
                     e_d = S @ e
                     ep = sqrt(float(e_d[position_rows] @ e_d[position_rows]))
@@ -249,11 +244,7 @@ def solve_frames(
                 per_frame.append((ep, er))
                 score += ep + SEED_ROTATION_WEIGHT * er
                 done = done and ep <= tol_p and er <= tol_r
-            gives_way = not last and (
-                (iteration == PROBE_ITERATIONS and score > GIVE_UP)
-                or (iteration >= STALL_FROM and score > STALL_RATIO * history[iteration - STALL_SPAN])
-            )
-            if done or iteration == max_iterations or gives_way:
+            if done or iteration == max_iterations or (not last and gives_way(iteration, score, history)):
                 break
             history.append(score)
             iteration += 1
@@ -273,16 +264,8 @@ def solve_frames(
             else:
                 JW = J
             dot(JW, J.T, out=A)
-            diagonal += DAMPING_SCALE * squared + damping_sq
-            if q_ns is None:
-                y = dposv(A, err)[1:]
-                q += dot(JW.T, y[0] if y[1] == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
-            else:
-                z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
-                b = np.column_stack((err, J @ z))
-                y = dposv(A, b)[1:]
-                x = y[0] if y[1] == 0 else np.linalg.lstsq(A, b, rcond=None)[0]
-                q += JW.T @ (x[:, 0] - x[:, 1]) + z
+            diagonal += (DAMPING_SCALE * squared + damping_sq) * row_damping
+            take_step(q, A, JW, J, err, q_ns, gain, score, dposv)
             minimum(maximum(q, lower, out=q), upper, out=q)
         total += iteration
         if best is None or score < best[2]:

@@ -11,6 +11,7 @@ and the norms are the same in any frame (Robot Dynamics lecture notes, ETH Zuric
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -106,6 +107,39 @@ class LimitWeights:
         return np.array(inverse), grad
 
 
+def gives_way(iteration: int, score: float, history: list[float]) -> bool:
+    """Whether an attempt other than the last makes way for the next seed at this iteration (its score
+    still above GIVE_UP after PROBE_ITERATIONS, or stalled: see STALL_FROM); ``history``: earlier scores."""
+    return (iteration == PROBE_ITERATIONS and score > GIVE_UP) or (
+        iteration >= STALL_FROM and score > STALL_RATIO * history[iteration - STALL_SPAN]
+    )
+
+
+def take_step(
+    q: np.ndarray,
+    A: np.ndarray,
+    JW: np.ndarray,
+    J: np.ndarray,
+    err: np.ndarray,
+    q_ns: np.ndarray | None,
+    gain: float,
+    score: float,
+    dposv: Callable[..., tuple],
+) -> None:
+    """q += W⁻¹Jᵀ A⁻¹ e (+ the nullspace pull z towards ``q_ns``), in place; A = J W⁻¹Jᵀ + damping, JW =
+    J W⁻¹ (rows as J's). A by Cholesky (``dposv``), by least squares where it is not positive definite."""
+    if q_ns is None:
+        _, x, info = dposv(A, err)
+        q += np.dot(JW.T, x if info == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
+        return
+    z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
+    b = np.column_stack((err, J @ z))
+    _, x, info = dposv(A, b)
+    if info:
+        x = np.linalg.lstsq(A, b, rcond=None)[0]
+    q += JW.T @ (x[:, 0] - x[:, 1]) + z
+
+
 def solve_one(
     robot: Robot,
     problem: Problem,
@@ -189,11 +223,7 @@ def solve_one(
                 squared = float(err @ err)
             score = ep + SEED_ROTATION_WEIGHT * er
             done = ep <= tol_p and er <= tol_r
-            gives_way = not last and (
-                (iteration == PROBE_ITERATIONS and score > GIVE_UP)
-                or (iteration >= STALL_FROM and score > STALL_RATIO * history[iteration - STALL_SPAN])
-            )
-            if done or iteration == max_iterations or gives_way:
+            if done or iteration == max_iterations or (not last and gives_way(iteration, score, history)):
                 break
             history.append(score)
             iteration += 1
@@ -213,16 +243,7 @@ def solve_one(
                 JW = J
             dot(JW, J.T, out=A)
             diagonal += (DAMPING_SCALE * squared + damping_sq) * row_damping
-            if q_ns is None:
-                _, x, info = dposv(A, err)
-                q += dot(JW.T, x if info == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
-            else:
-                z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
-                b = np.column_stack((err, J @ z))
-                _, x, info = dposv(A, b)
-                if info:
-                    x = np.linalg.lstsq(A, b, rcond=None)[0]
-                q += JW.T @ (x[:, 0] - x[:, 1]) + z
+            take_step(q, A, JW, J, err, q_ns, gain, score, dposv)
             minimum(maximum(q, lower, out=q), upper, out=q)
         total += iteration
         if best is None or score < best[3]:
@@ -248,5 +269,7 @@ __all__ = [
     "STALL_SPAN",
     "IKResult",
     "LimitWeights",
+    "gives_way",
     "solve_one",
+    "take_step",
 ]
