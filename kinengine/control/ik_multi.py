@@ -197,19 +197,13 @@ def solve_frames(
         pin.log3,
         pin.LOCAL_WORLD_ALIGNED,
     )
-    dot, subtract, maximum, minimum, hypot, sqrt = (
-        np.dot,
-        np.subtract,
-        np.maximum,
-        np.minimum,
-        math.hypot,
-        math.sqrt,
-    )
+    subtract, hypot, sqrt = np.subtract, math.hypot, math.sqrt
     layout = _layout(goals)
     m = layout[-1][4]
     err, J, e, A = np.empty(m), np.empty((m, robot.dof)), np.empty(6), np.empty((m, m))
-    e_p, e_r, diagonal = e[:3], e[3:], A.reshape(-1)[:: m + 1]  # views; diagonal: A's
+    e_p, e_r = e[:3], e[3:]  # views
     limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper, joints.continuous))
+    weigh, bounds = limits.inverse_weights_one if limits.any else None, (lower, upper)
     rotation_sq = ROTATION_ROW_WEIGHT**2  # a full pose's rotation rows weigh ρ, as in the single solver:
     row_damping = np.ones(m)  # (J W⁻¹Jᵀ + λ² S⁻²) with S = diag(1, 1, 1, ρ, ρ, ρ) on those blocks
     for _, _, _, start, stop, S, _, _ in layout:
@@ -258,15 +252,8 @@ def solve_frames(
                     J[start:stop] = S @ J_F
                 else:
                     J[start:stop] = (S @ J_F) * sqrt_w[:, None]
-            if limits.any:
-                w, previous = limits.inverse_weights_one(q, previous)
-                JW = J * w
-            else:
-                JW = J
-            dot(JW, J.T, out=A)
-            diagonal += (DAMPING_SCALE * squared + damping_sq) * row_damping
-            take_step(q, A, JW, J, err, q_ns, gain, score, dposv)
-            minimum(maximum(q, lower, out=q), upper, out=q)
+            damping = (DAMPING_SCALE * squared + damping_sq) * row_damping
+            previous = take_step(q, J, err, A, damping, weigh, previous, bounds, (q_ns, gain, score), dposv)
         total += iteration
         if best is None or score < best[2]:
             best = (q, per_frame, score, attempt, done)

@@ -117,27 +117,40 @@ def gives_way(iteration: int, score: float, history: list[float]) -> bool:
 
 def take_step(
     q: np.ndarray,
-    A: np.ndarray,
-    JW: np.ndarray,
     J: np.ndarray,
     err: np.ndarray,
-    q_ns: np.ndarray | None,
-    gain: float,
-    score: float,
+    A: np.ndarray,
+    damping: np.ndarray | float,
+    weigh: Callable[[np.ndarray, list | None], tuple[np.ndarray, list]] | None,
+    previous: list | None,
+    bounds: tuple[np.ndarray, np.ndarray],
+    nullspace: tuple[np.ndarray | None, float, float],
     dposv: Callable[..., tuple],
-) -> None:
-    """q += W⁻¹Jᵀ A⁻¹ e (+ the nullspace pull z towards ``q_ns``), in place; A = J W⁻¹Jᵀ + damping, JW =
-    J W⁻¹ (rows as J's). A by Cholesky (``dposv``), by least squares where it is not positive definite."""
+) -> list | None:
+    """One damped, limit-weighted step in place: q ← clip(q + W⁻¹Jᵀ A⁻¹ e (+ z), lower, upper) with
+    A = J W⁻¹Jᵀ + diag(damping) written into the (m, m) buffer ``A`` and solved by Cholesky (``dposv``; least
+    squares where it is not positive definite). ``weigh``: LimitWeights.inverse_weights_one (None: W = I),
+    ``previous`` its last gradient, which is returned for the next step. ``nullspace`` (q_ns, gain, score):
+    the pull z towards q_ns (None: none)."""
+    JW = J
+    if weigh is not None:
+        w, previous = weigh(q, previous)
+        JW = J * w
+    np.dot(JW, J.T, out=A)
+    A.reshape(-1)[:: len(A) + 1] += damping
+    q_ns, gain, score = nullspace
     if q_ns is None:
         _, x, info = dposv(A, err)
         q += np.dot(JW.T, x if info == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
-        return
-    z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
-    b = np.column_stack((err, J @ z))
-    _, x, info = dposv(A, b)
-    if info:
-        x = np.linalg.lstsq(A, b, rcond=None)[0]
-    q += JW.T @ (x[:, 0] - x[:, 1]) + z
+    else:
+        z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
+        b = np.column_stack((err, J @ z))
+        _, x, info = dposv(A, b)
+        if info:
+            x = np.linalg.lstsq(A, b, rcond=None)[0]
+        q += JW.T @ (x[:, 0] - x[:, 1]) + z
+    np.minimum(np.maximum(q, bounds[0], out=q), bounds[1], out=q)
+    return previous
 
 
 def solve_one(
@@ -183,12 +196,12 @@ def solve_one(
     # with Δq = W⁻¹Jᵀ (S x): the weights only scale the damping on the diagonal.
     rotation_sq = ROTATION_ROW_WEIGHT**2 if full else 1.0
     row_damping = np.array([1.0, 1.0, 1.0] + [1.0 / rotation_sq] * 3) if full else 1.0
-    dot, subtract, maximum, minimum, hypot = np.dot, np.subtract, np.maximum, np.minimum, math.hypot
+    subtract, hypot = np.subtract, math.hypot
     m = len(rows) if rows is not None else part.stop - part.start
     A = np.empty((m, m))
-    diagonal = A.reshape(-1)[:: m + 1]  # a view: A's diagonal
     limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper, joints.continuous))
     weigh = limits.inverse_weights_one if limits.any else None
+    bounds = (lower, upper)
     best, total = None, 0
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
@@ -236,15 +249,8 @@ def solve_one(
                     J = J * sqrt_w[:, None]
             elif not full:
                 J = J[part]
-            if weigh is not None:
-                w, previous = weigh(q, previous)
-                JW = J * w
-            else:
-                JW = J
-            dot(JW, J.T, out=A)
-            diagonal += (DAMPING_SCALE * squared + damping_sq) * row_damping
-            take_step(q, A, JW, J, err, q_ns, gain, score, dposv)
-            minimum(maximum(q, lower, out=q), upper, out=q)
+            damping = (DAMPING_SCALE * squared + damping_sq) * row_damping
+            previous = take_step(q, J, err, A, damping, weigh, previous, bounds, (q_ns, gain, score), dposv)
         total += iteration
         if best is None or score < best[3]:
             best = (q, ep, er, score, attempt)
