@@ -110,7 +110,7 @@ def solve_batch(
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
     # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
     # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
-    # iterations (by iteration % span), the target's p_d (3) and C_d (9), the attempt's start (dof)
+    # iterations (newest first), the target's p_d (3) and C_d (9), the attempt's start (dof)
     H, P, S = 2 * dof, 2 * dof + rules.STALL_SPAN, 2 * dof + rules.STALL_SPAN + 12  # history, p_d, start
     meta, state = np.empty((3, 0), dtype=np.intp), np.empty((S + dof, 0))
     space = _Workspace(max(n, SPECULATE), dof)
@@ -160,11 +160,10 @@ def solve_batch(
             err = e_d if sqrt_w is None else e_d * sqrt_w[:, None]
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
-        slot = (it % rules.STALL_SPAN, np.arange(r))
-        stalled = (it >= rules.STALL_FROM) & (score > rules.STALL_RATIO * history[slot])
+        stalled = (it >= rules.STALL_FROM) & (score > rules.STALL_RATIO * history[-1])  # STALL_SPAN earlier
         gives_way = ((it == rules.PROBE_ITERATIONS) & (score > rules.GIVE_UP) | stalled) & ~patient
         end = done | (it == max_iterations) | gives_way
-        history[slot] = score
+        history[1:], history[0] = history[:-1].copy(), score  # newest first
         ended = np.empty(0, dtype=np.intp)
         if end.any():
             log.append((tid[end], att[end], it[end], score[end], ep[end], er[end], q[:, end].T))
@@ -275,7 +274,12 @@ def _step(
     (and the nullspace pull) as the single solver's, A = J W⁻¹ Jᵀ + λ² I by Cholesky."""
     m, r = len(J), J.shape[2]
     JW = J if w is None else np.multiply(J, w, out=space.weighted[:m, :, :r])  # J W⁻¹
-    A = np.einsum("ikn,jkn->ijn", JW, J, out=space.normal[:m, :m, :r])
+    A = space.normal[:m, :m, :r]
+    if r < LAPACK_BELOW:
+        np.einsum("ikn,jkn->ijn", JW, J, out=A)
+    else:  # the lower triangle only: the Cholesky factorization reads no more
+        for i in range(m):
+            np.einsum("kn,jkn->jn", JW[i], J[: i + 1], out=A[i, : i + 1])
     # a full pose's rotation rows weighted by ρ = ROTATION_ROW_WEIGHT (as the single solver): λ² =
     # DAMPING_SCALE·(|e_p|² + ρ²|e_R|²) + λ_min², and A's diagonal takes λ²·(1, 1, 1, ρ⁻², ρ⁻², ρ⁻²)
     rho = rules.ROTATION_ROW_WEIGHT if problem.rows is None else 1.0
