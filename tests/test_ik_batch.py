@@ -118,3 +118,21 @@ def test_column_wise_log3_equals_pinocchio_including_near_pi():
     expected = np.array([pin.log3(a @ b.T) for a, b in zip(C_d, C, strict=True)])
     np.testing.assert_allclose(out.T, expected, atol=1e-9)
     np.testing.assert_allclose(ik_batch.log3(C_d @ C.transpose(0, 2, 1)), expected, atol=1e-9)
+
+
+def test_large_batches_are_solved_in_chunks_with_the_same_results(monkeypatch):
+    robot = kinengine.load("ur5")
+    q = robot.random_configuration(np.random.default_rng(37), 130)
+    targets = robot.frame_pose(q)
+    starts = np.clip(q + 0.2, robot.lower_limits, robot.upper_limits)
+    whole = robot.inverse_kinematics(targets, q0=starts, restarts=0)
+    shared_whole = robot.inverse_kinematics(targets, q0=starts[0], restarts=0)  # one q0 for all
+    monkeypatch.setattr(ik_batch, "CHUNK_TARGETS", 50)  # chunks of 50, 50, 30
+    chunked = robot.inverse_kinematics(targets, q0=starts, restarts=0)
+    shared = robot.inverse_kinematics(targets, q0=starts[0], restarts=0)
+    assert len(chunked) == 130 and len(shared) == 130
+    np.testing.assert_array_equal(shared.success, shared_whole.success)
+    for field in ("success", "iterations", "restarts"):
+        np.testing.assert_array_equal(getattr(whole, field), getattr(chunked, field), err_msg=field)
+    np.testing.assert_allclose(whole.q, chunked.q, atol=1e-9)
+    assert whole.success.all()

@@ -22,7 +22,7 @@ and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``li
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -41,12 +41,12 @@ TAIL = 4
 """When no more columns than this are left, all of them attempts that never give way (the last ones), the
 single-target solver runs each again from its start (~15 µs an iteration, a batch iteration ~125 µs)."""
 LAPACK_BELOW = 256
-"""Fewer columns than this solve their damped systems with np.linalg.solve, more by the column-wise
-Cholesky (fewer numpy calls against less work per column)."""
+"""Fewer columns than this solve their damped systems by np.linalg.solve, more by the column-wise Cholesky."""
 SPECULATE = 1024
-"""When no more than this many attempts are running, targets run their next attempts at the same time
-(up to this many rows in all): a batch iteration costs about the same for one row as for a few hundred,
-and the outcomes are taken in attempt order, as if the attempts had run one after another."""
+"""When no more attempts than this are running, targets run their next ones at the same time (up to this
+many in all): a batch iteration costs about the same for one column as for a few hundred."""
+CHUNK_TARGETS = 65536
+"""Larger batches are solved in chunks of this many targets (bounded buffers: ~1.6 KiB a target)."""
 
 
 @dataclass(frozen=True)
@@ -97,8 +97,12 @@ def solve_batch(
     robot: Robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None, rng: RandomSource
 ) -> IKBatchResult:
     """Solve every target (p_d (N, 3), C_d (N, 3, 3)) vectorized; see the module doc."""
-    kin, joints, dof = robot.engine, robot.engine.coordinates, robot.dof
-    n = len(p_d)
+    kin, joints, dof, n, c = robot.engine, robot.engine.coordinates, robot.dof, len(p_d), CHUNK_TARGETS
+    if n > c:  # q0 (N, dof) split with the targets, q0 (dof,) shared
+        cut = [slice(a, a + c) for a in range(0, n, c)]
+        Q0 = [q0 if q0 is None or q0.ndim == 1 else q0[k] for k in cut]
+        parts = [solve_batch(robot, problem, p_d[k], C_d[k], q, rng) for k, q in zip(cut, Q0, strict=True)]
+        return IKBatchResult(*(np.concatenate([getattr(x, f.name) for x in parts]) for f in fields(parts[0])))
     seeds = BatchSeeds(robot, problem, p_d, C_d, q0)
     attempts = seeds.count + problem.restarts
     rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
@@ -249,8 +253,7 @@ class _Workspace:
     cost a page fault per 4 KiB): poses, two Jacobians (compacted one into the other), J W⁻¹ and A."""
 
     def __init__(self, capacity: int, dof: int) -> None:
-        self.capacity = capacity
-        self.pose = np.empty((4, 4, capacity))
+        self.capacity, self.pose = capacity, np.empty((4, 4, capacity))
         self.jac, self.spare = np.empty((6, dof, capacity)), np.empty((6, dof, capacity))
         self.weighted, self.normal = np.empty((6, dof, capacity)), np.empty((6, 6, capacity))
 
