@@ -189,6 +189,7 @@ def solve_one(
         pin.LOCAL_WORLD_ALIGNED,
     )
     joint_jacobians, get_jacobian, LOCAL = pin.computeJointJacobians, pin.getFrameJacobian, pin.LOCAL
+    forward, movable = pin.forwardKinematics, kin.dof > 0  # Pinocchio 4.1 crashes on a Jacobian with nv = 0
     # A full pose is solved in F (the damped step and the norms do not depend on the frame they are
     # written in): its error then comes from one SE3 call instead of a subtraction and a 3x3 product.
     target = pin.SE3(C_d, p_d) if full else None
@@ -209,14 +210,17 @@ def solve_one(
         iteration, previous = 0, None
         history: list[float] = []  # the score at each iteration
         while True:
+            qp = q if identity else pinocchio_q(q)
             if full:  # e and J in F: Cᵀ e = (Cᵀ(p_d − p), log3(Cᵀ C_d)) from M⁻¹ M_d, one SE3 call
-                joint_jacobians(model, data, q if identity else pinocchio_q(q))
-                J = get_jacobian(model, data, fid, LOCAL)
+                (joint_jacobians if movable else forward)(model, data, qp)
                 M = place(model, data, fid).actInv(target)
                 e_p[:] = M.translation
                 e_r[:] = log3(M.rotation)
             else:
-                J = frame_jacobian(model, data, q if identity else pinocchio_q(q), fid, LWA)
+                if movable:
+                    J = frame_jacobian(model, data, qp, fid, LWA)
+                else:
+                    forward(model, data, qp)
                 M = place(model, data, fid)
                 if p_d is not None:
                     subtract(p_d, M.translation, out=e_p)
@@ -238,8 +242,12 @@ def solve_one(
             done = ep <= tol_p and er <= tol_r
             if done or iteration == max_iterations or (not last and gives_way(iteration, score, history)):
                 break
+            if not movable:  # no joint moves the frame: the error stays as it is
+                break
             history.append(score)
             iteration += 1
+            if full:
+                J = get_jacobian(model, data, fid, LOCAL)
             if not identity or J.ndim == 1:
                 J = fold(J.reshape(6, -1))
             if rows is not None:
