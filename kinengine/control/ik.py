@@ -41,7 +41,7 @@ import numpy.typing as npt
 from ..errors import OptionError
 from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, first_seeds
 from .ik_solver import IKResult, solve_one
-from .ik_target import RandomSource, batch_targets, checked_problem, single_target
+from .ik_target import Options, RandomSource, batch_targets, checked_problem, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from ..robot import Robot
@@ -83,35 +83,7 @@ def inverse_kinematics(
     1). Success when every frame is within the tolerances; the result's position_error / rotation_error
     are the maxima over the frames, ``frame_errors`` each frame's (:mod:`kinengine.control.ik_multi`).
     """
-    if isinstance(target, Mapping):
-        if frame is not None or position is not None or rotation is not None:
-            raise OptionError(
-                "a mapping {frame: pose} names its frames and takes poses (4, 4): leave `frame`, "
-                "`position` and `rotation` None (or pass one pose with frame=...)"
-            )
-        from .ik_multi import Options, inverse_kinematics_frames
-
-        options = Options(
-            tol_position,
-            tol_rotation,
-            max_iterations,
-            restarts,
-            nullspace_target,
-            nullspace_gain,
-            min_damping,
-            q0 is not None,
-        )
-        return inverse_kinematics_frames(robot, target, q0, rows, weights, rng, options)
-    batch = (
-        position is None and rotation is None and np.ndim(target) == 3
-        if not isinstance(target, str)
-        else False
-    )
-    problem = checked_problem(
-        robot,
-        frame,
-        rows,
-        weights,
+    options = Options(
         tol_position,
         tol_rotation,
         max_iterations,
@@ -121,6 +93,21 @@ def inverse_kinematics(
         min_damping,
         q0 is not None,
     )
+    if isinstance(target, Mapping):
+        if frame is not None or position is not None or rotation is not None:
+            raise OptionError(
+                "a mapping {frame: pose} names its frames and takes poses (4, 4): leave `frame`, "
+                "`position` and `rotation` None (or pass one pose with frame=...)"
+            )
+        from .ik_multi import inverse_kinematics_frames
+
+        return inverse_kinematics_frames(robot, target, q0, rows, weights, rng, options)
+    batch = (
+        position is None and rotation is None and np.ndim(target) == 3
+        if not isinstance(target, str)
+        else False
+    )
+    problem = checked_problem(robot, frame, rows, weights, *options.values())
     if problem.rows is not None and (position is not None or rotation is not None):
         raise OptionError(
             "`rows=` and `weights=` apply to pose targets (4, 4) or (N, 4, 4); for parameters χ "

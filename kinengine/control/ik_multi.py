@@ -30,7 +30,7 @@ import pinocchio as pin
 from ..errors import OptionError, ParameterizationError
 from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
 from .ik_solver import DAMPING_SCALE, ROTATION_ROW_WEIGHT, IKResult, LimitWeights, gives_way, take_step
-from .ik_target import Problem, RandomSource, checked_problem, single_target
+from .ik_target import Options, Problem, RandomSource, checked_problem, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from ..robot import Robot
@@ -51,32 +51,6 @@ class FrameGoal:
     problem: Problem
     p_d: np.ndarray
     C_d: np.ndarray
-
-
-@dataclass(frozen=True)
-class Options:
-    """The options shared by every frame, as given (checked by checked_problem for each frame)."""
-
-    tol_position: object
-    tol_rotation: object
-    max_iterations: object
-    restarts: object
-    nullspace_target: object
-    nullspace_gain: object
-    min_damping: object
-    has_q0: bool
-
-    def values(self) -> tuple[object, object, object, object, object, object, object, bool]:
-        return (
-            self.tol_position,
-            self.tol_rotation,
-            self.max_iterations,
-            self.restarts,
-            self.nullspace_target,
-            self.nullspace_gain,
-            self.min_damping,
-            self.has_q0,
-        )
 
 
 def _per_frame(name: str, value: object, frames: Mapping[str, object]) -> dict[str, object]:

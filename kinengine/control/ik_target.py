@@ -42,6 +42,33 @@ class Problem:
     patient_first: bool  # the first attempt (from the caller's q0) never gives up early
 
 
+@dataclass(frozen=True)
+class Options:
+    """inverse_kinematics' options as given, in :func:`checked_problem`'s order (``values()``); a mapping
+    target checks them once per frame."""
+
+    tol_position: object
+    tol_rotation: object
+    max_iterations: object
+    restarts: object
+    nullspace_target: object
+    nullspace_gain: object
+    min_damping: object
+    has_q0: bool
+
+    def values(self) -> tuple[object, object, object, object, object, object, object, bool]:
+        return (
+            self.tol_position,
+            self.tol_rotation,
+            self.max_iterations,
+            self.restarts,
+            self.nullspace_target,
+            self.nullspace_gain,
+            self.min_damping,
+            self.has_q0,
+        )
+
+
 def _number(name: str, value: object, low: float, high: float = math.inf) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise OptionError(f"`{name}` must be a number, got {value!r}")
@@ -262,6 +289,7 @@ def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
 __all__ = [
     "MAX_TARGET_DISTANCE",
     "ROW_NAMES",
+    "Options",
     "Problem",
     "RandomSource",
     "batch_targets",
