@@ -260,6 +260,12 @@ def _entry_points(robot):
     yield "manipulability batch", lambda: robot.manipulability(Q), (3,)
     yield "velocity_ellipsoid", lambda: robot.velocity_ellipsoid(q).semi_axes, (3,)
     yield "inverse_kinematics", lambda: robot.inverse_kinematics(robot.frame_pose(q), q0=q).q, (n,)
+    yield "inverse_kinematics batch", lambda: robot.inverse_kinematics(robot.frame_pose(Q)).q, (3, n)
+    yield (
+        "inverse_kinematics frames",
+        lambda: robot.inverse_kinematics({robot.end_effector: robot.frame_pose(q)}).q,
+        (n,),
+    )
     yield "random_configuration", lambda: robot.random_configuration(0, size=4), (4, n)
     yield "random_configuration one", lambda: robot.random_configuration(0), (n,)
 
