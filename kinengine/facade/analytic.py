@@ -31,6 +31,10 @@ if TYPE_CHECKING:  # the Task's modules are imported by the first robot.task(...
     from ..robot import Robot
 
 
+FastPath = tuple[Callable[[object], bool], Callable[[np.ndarray], FloatArray]]
+"""(ready, J_A): the input test CoordinateMap.ready and J_A(q) for a q that passed it."""
+
+
 def _fast_path(
     robot: Robot,
     frame: object,
@@ -39,22 +43,17 @@ def _fast_path(
     rows: object,
     threshold: object,
     on_singularity: object,
-) -> Callable[[object], FloatArray | None] | None:
-    """For these options (each checked here: an error is raised, not kept), ``J_A(q)`` that answers a
-    float64 (dof,) array q (CoordinateMap.ready) and returns None for any other q (the general path
-    checks it); None where the general path is needed (on_singularity other than "raise")."""
+) -> FastPath | None:
+    """For these options (each checked here: an error is raised, not kept), (ready, J_A): J_A(q) answers a
+    float64 (dof,) array q that ``ready`` passed (any other q takes the general path, which checks it);
+    None where the general path is needed (on_singularity other than "raise")."""
     pmap = pose_map(*checked_parameterization(position, rotation, rows))
     threshold = checked_threshold(threshold)
     fid = robot.engine.frame_id(robot.end_effector if frame is None else frame)
     if on_singularity != "raise":
         check_on_singularity(on_singularity)
         return None
-    ready, single = robot.engine.coordinates.ready, analytic_function(robot.engine, fid, pmap, threshold)
-
-    def evaluate(q: object) -> FloatArray | None:
-        return single(q) if ready(q) else None  # type: ignore[arg-type]  # ready: a float64 (dof,) array
-
-    return evaluate
+    return robot.engine.coordinates.ready, analytic_function(robot.engine, fid, pmap, threshold)
 
 
 class AnalyticMethods:
@@ -130,24 +129,24 @@ class AnalyticMethods:
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         if relative_to is None and check_limits is False:
             key = (frame, position, rotation, rows, singularity_threshold, on_singularity)
-            evaluate, found = None, True
+            path, found = None, True
             try:  # options seen before (checked then): J_A(q) for them, looked up once
-                evaluate = self._analytic_paths[key]
+                path = self._analytic_paths[key]
             except AttributeError:  # the first call on this Robot
-                self._analytic_paths: dict[tuple, Callable[[object], FloatArray | None] | None] = {}
+                self._analytic_paths: dict[tuple, FastPath | None] = {}
                 found = False
             except KeyError:
                 found = False
             except TypeError:  # unhashable options (e.g. rows as a list): the general path checks them
                 pass
             if not found:  # checked here (outside the handlers above, so that an error reads plainly)
-                evaluate = _fast_path(robot, *key)
+                path = _fast_path(robot, *key)
                 if len(self._analytic_paths) < 256:
-                    self._analytic_paths[key] = evaluate
-            if evaluate is not None:
-                JA = evaluate(q)
-                if JA is not None:
-                    return JA
+                    self._analytic_paths[key] = path
+            if path is not None:
+                ready, evaluate = path
+                if ready(q):  # a float64 (dof,) array within the bounds: checked
+                    return evaluate(q)  # type: ignore[arg-type]
         kin = robot.engine
         pmap = pose_map(*checked_parameterization(position, rotation, rows))
         singularity_threshold = checked_threshold(singularity_threshold)
