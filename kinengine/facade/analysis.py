@@ -12,7 +12,6 @@ import numpy as np
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, pose_map
 from ..analytic.hessian import analytic_hessian as _analytic_hessian
 from ..arrays import ArrayLike, FloatArray, Reference
-from ..control import LazyModule
 from ..control import manipulability as _manipulability
 from ..control.manipulability import DEFAULT_TOLERANCE, Rows, SingularityReport, VelocityEllipsoid
 from ..kinematics import derivatives as _derivatives
@@ -20,12 +19,9 @@ from ..kinematics import resolve_reference
 from ..kinematics.options import checked_parameterization, checked_threshold
 
 if TYPE_CHECKING:
-    from ..control import ik as _ik
     from ..control.ik import IKResult
     from ..control.ik_batch import IKBatchResult
     from ..robot import Robot
-else:
-    _ik = LazyModule("kinengine.control.ik")  # inverse kinematics is imported on its first call
 
 
 class AnalysisMethods:
@@ -150,6 +146,8 @@ class AnalysisMethods:
         every frame at once (``frame`` None; ``rows``/``weights`` one spec or {frame: spec}; a MultiIKResult
         whose errors are the maxima over the frames, ``frame_errors`` per frame). See
         :func:`kinengine.control.ik.inverse_kinematics` for the options."""
+        from ..control import ik as _ik  # here: inverse kinematics is imported by its first call
+
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
         return _ik.inverse_kinematics(
             robot,
