@@ -88,6 +88,16 @@ def _embed(p: np.ndarray | None, C: np.ndarray | None, n: int) -> np.ndarray:
     return np.hstack(parts) if parts else np.zeros((n, 1))
 
 
+def _default_start(robot: Robot, problem: Problem) -> np.ndarray:
+    """The seeded start that is not from a table: the middle of the joint ranges (0 for an unbounded joint),
+    or the nullspace target clipped into the limits."""
+    joints = robot.engine.coordinates
+    if problem.q_ns is not None:
+        return np.clip(problem.q_ns, joints.lower, joints.upper)
+    bounded = np.isfinite(joints.lower) & np.isfinite(joints.upper)
+    return (np.where(bounded, joints.lower, 0.0) + np.where(bounded, joints.upper, 0.0)) / 2
+
+
 def first_seeds(
     robot: Robot, problem: Problem, p_d: np.ndarray | None, C_d: np.ndarray | None, q0: np.ndarray | None
 ) -> np.ndarray:
@@ -98,9 +108,7 @@ def first_seeds(
     n = len(given)
     if q0 is not None:
         return np.broadcast_to(np.clip(q0, joints.lower, joints.upper), (n, robot.dof))[:, None, :].copy()
-    bounded = np.isfinite(joints.lower) & np.isfinite(joints.upper)
-    middle = (np.where(bounded, joints.lower, 0.0) + np.where(bounded, joints.upper, 0.0)) / 2
-    first = middle if problem.q_ns is None else np.clip(problem.q_ns, joints.lower, joints.upper)
+    first = _default_start(robot, problem)
     tables = robot.engine.memoized("ik seed tables", SeedTables)
     key = (problem.frame, p_d is not None, C_d is not None)
     configs, tree = tables.get(
@@ -131,9 +139,7 @@ class BatchSeeds:
         self.count = 1
         if self.given is not None:
             return
-        bounded = np.isfinite(joints.lower) & np.isfinite(joints.upper)
-        middle = (np.where(bounded, joints.lower, 0.0) + np.where(bounded, joints.upper, 0.0)) / 2
-        self.first = middle if problem.q_ns is None else np.clip(problem.q_ns, joints.lower, joints.upper)
+        self.first = _default_start(robot, problem)
         self.configs, self.tree = robot.engine.memoized(
             ("ik batch seed table", problem.frame),
             lambda: _seed_table(
