@@ -85,14 +85,6 @@ class IKBatchResult:
         )
 
 
-def log3(R: np.ndarray) -> np.ndarray:
-    """log of rotation matrices R (n, 3, 3) as rotation vectors (n, 3): θ = atan2(|w|/2, (tr R − 1)/2),
-    w = vee(R − Rᵀ), log = θ·w/|w|; Pinocchio's log3 row by row where θ is within 0.15 rad of π."""
-    out, n = np.empty((3, len(R))), len(R)
-    _log3_columns(np.ascontiguousarray(np.transpose(R, (1, 2, 0))), np.eye(3)[..., None].repeat(n, 2), out)
-    return out.T
-
-
 def solve_batch(
     robot: Robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None, rng: RandomSource
 ) -> IKBatchResult:
@@ -220,8 +212,9 @@ def _resolve(
 
 
 def _log3_columns(Cd: np.ndarray, C: np.ndarray, out: np.ndarray) -> None:
-    """log(C_d Cᵀ) (3, r) into ``out`` for columns of rotations Cd, C (3, 3, r), as :func:`log3`: with c_k,
-    d_k the k-th columns of C and C_d, vee(C_d Cᵀ − C C_dᵀ) = Σ_k c_k × d_k and tr(C_d Cᵀ) = Σ C_d∘C."""
+    """log(C_d Cᵀ) (3, r) into ``out`` for columns of rotations Cd, C (3, 3, r): θ = atan2(|w|/2, (tr − 1)/2),
+    log = θ·w/|w| with w = vee(C_d Cᵀ − C C_dᵀ) = Σ_k c_k × d_k (c_k, d_k the k-th columns of C and C_d) and
+    tr(C_d Cᵀ) = Σ C_d∘C; Pinocchio's log3 column by column where θ is within 0.15 rad of π."""
     roll, back = [1, 2, 0], [2, 0, 1]
     w = np.einsum("ikn,ikn->in", Cd[back], C[roll]) - np.einsum("ikn,ikn->in", Cd[roll], C[back])
     norm = np.sqrt(np.einsum("in,in->n", w, w))
@@ -326,4 +319,4 @@ def _cholesky_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     return x
 
 
-__all__ = ["IKBatchResult", "log3", "solve_batch"]
+__all__ = ["IKBatchResult", "solve_batch"]
