@@ -31,7 +31,7 @@ import pinocchio as pin
 from ..kinematics import batch
 from . import ik_solver as rules  # the single solver's constants, followed here
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
-from .ik_solver import IKResult, LimitWeights, solve_one
+from .ik_solver import IKResult, LimitWeights, limit_weights, solve_one
 from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -100,7 +100,7 @@ def solve_batch(
     rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
     tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
     lower, upper = joints.lower[:, None], joints.upper[:, None]
-    limits = LimitWeights(joints.lower, joints.upper)
+    limits = limit_weights(robot.engine)
     winner = np.full(n, attempts, dtype=np.intp)  # each target's first converged attempt (none yet)
     launched = np.zeros(n, dtype=np.intp)  # attempts started so far
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
@@ -190,11 +190,11 @@ def solve_batch(
         extra = np.minimum(share - running, attempts - launched[candidates])
         extra[winner[candidates] < attempts] = 0
         new = np.repeat(candidates, np.maximum(extra, 0))
-    return _resolve(log, winner, joints.continuous, (tol_p, tol_r))
+    return _resolve(log, winner, limits, (tol_p, tol_r))
 
 
 def _resolve(
-    log: list[tuple[np.ndarray, ...]], winner: np.ndarray, continuous: np.ndarray, tol: tuple
+    log: list[tuple[np.ndarray, ...]], winner: np.ndarray, limits: LimitWeights, tol: tuple
 ) -> IKBatchResult:
     """Each target's outcome from its finished attempts, as the single solver takes them one after
     another: the attempts up to the first converged one count (iterations summed), and the best score
@@ -206,7 +206,7 @@ def _resolve(
     order = np.lexsort((att, score, tid))
     first = order[np.r_[True, tid[order][1:] != tid[order][:-1]]]  # best per target, targets ascending
     best_q = q[first]
-    best_q[:, continuous] = np.remainder(best_q[:, continuous] + np.pi, 2 * np.pi) - np.pi
+    limits.wrap(best_q)
     success = (ep[first] <= tol[0]) & (er[first] <= tol[1])
     return IKBatchResult(best_q, success, total, ep[first], er[first], att[first])
 

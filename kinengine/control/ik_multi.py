@@ -5,8 +5,9 @@ error is the single-frame one (:mod:`kinengine.control.ik`): e_F = (p_d − p, l
 or, with ``rows=``/``weights=``, e_D = (C_dᵀ e_p, C_dᵀ e_R) in the frame's target frame D, kept rows only,
 each times √w. Its Jacobian is J_F = J_e0 ("local_world_aligned", folded with the coordinate map M for
 mimic robots), rotated and cut the same way. The solver stacks them, e = (e_F1, e_F2, ...),
-J = (J_F1; J_F2; ...), and takes the single-frame step: Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² I)⁻¹ e (+ the nullspace
-pull), λ² = 0.2·|e|² + λ_min², Chan & Dubey's limit weights W, every iterate clipped into the limits.
+J = (J_F1; J_F2; ...), and takes the single-frame step (:func:`.ik_solver.take_step`): Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ +
+λ² S⁻²)⁻¹ e (+ the nullspace pull), S weighting a full pose's rotation rows by 0.2 m/rad, λ² =
+DAMPING_SCALE·(weighted |e|²) + λ_min², Chan & Dubey's limit weights W, every iterate clipped into the limits.
 Success: EVERY frame within ``tol_position`` [m] and ``tol_rotation`` [rad]. Attempts are ranked by
 Σ_F (|e_p| + 0.2 m/rad·|e_R|) and give way to the next by the single-frame rules (still above ``GIVE_UP``
 after ``PROBE_ITERATIONS`` iterations, or stalled).
@@ -29,7 +30,7 @@ import pinocchio as pin
 
 from ..errors import OptionError, ParameterizationError
 from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
-from .ik_solver import DAMPING_SCALE, ROTATION_ROW_WEIGHT, IKResult, LimitWeights, gives_way, take_step
+from .ik_solver import DAMPING_SCALE, ROTATION_ROW_WEIGHT, IKResult, gives_way, limit_weights, take_step
 from .ik_target import Options, Problem, RandomSource, checked_problem, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -176,7 +177,7 @@ def solve_frames(
     m = layout[-1][4]
     err, J, e, A = np.empty(m), np.empty((m, robot.dof)), np.empty(6), np.empty((m, m))
     e_p, e_r = e[:3], e[3:]  # views
-    limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper, joints.continuous))
+    limits = limit_weights(kin)
     weigh, bounds = limits.inverse_weights_one if limits.any else None, (lower, upper)
     rotation_sq = ROTATION_ROW_WEIGHT**2  # a full pose's rotation rows weigh ρ, as in the single solver:
     row_damping = np.ones(m)  # (J W⁻¹Jᵀ + λ² S⁻²) with S = diag(1, 1, 1, ρ, ρ, ρ) on those blocks
@@ -235,7 +236,7 @@ def solve_frames(
             break
     assert best is not None  # attempts >= 1: the seeds hold at least one start
     q, per_frame, _, attempt, done = best
-    q[joints.continuous] = np.remainder(q[joints.continuous] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)
+    limits.wrap(q)
     errors_by_frame = {g.problem.frame: pe for g, pe in zip(goals, per_frame, strict=True)}
     ep, er = max(pe[0] for pe in per_frame), max(pe[1] for pe in per_frame)
     return MultiIKResult(q, bool(done), total, ep, er, attempt, errors_by_frame)

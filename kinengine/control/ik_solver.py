@@ -22,6 +22,7 @@ from .ik_seeds import SEED_ROTATION_WEIGHT
 from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
+    from ..kinematics.engine import Kinematics
     from ..robot import Robot
 
 PROBE_ITERATIONS = 10
@@ -82,6 +83,12 @@ class LimitWeights:
         self._rows = np.column_stack(columns).tolist()  # per joint (l, u, l + u, (u − l)²/4)
         self.continuous = np.flatnonzero(continuous) if continuous is not None and continuous.any() else None
 
+    def wrap(self, q: np.ndarray) -> None:
+        """The continuous joints' angles of q (dof,) or (n, dof) into [-π, π), in place."""
+        turns = self.continuous
+        if turns is not None:
+            q[..., turns] = np.remainder(q[..., turns] + np.pi, 2 * np.pi) - np.pi
+
     def inverse_weights(self, q: np.ndarray, previous: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """(1 / w, |∂φ/∂q|) at q, given |∂φ/∂q| of the last iteration (None: the first). Distances to the
         limits are floored at 1e-12 (a joint on its limit gets a huge finite gradient, weight ~0)."""
@@ -105,6 +112,12 @@ class LimitWeights:
             return np.array([1.0 / (1.0 + g) for g in grad]), grad
         inverse = [1.0 / (1.0 + g) if g > p else 1.0 for g, p in zip(grad, previous, strict=True)]
         return np.array(inverse), grad
+
+
+def limit_weights(kin: Kinematics) -> LimitWeights:
+    """The robot's LimitWeights (its coordinates' limits and continuous joints), made once per robot."""
+    c = kin.coordinates
+    return kin.memoized("ik limit weights", lambda: LimitWeights(c.lower, c.upper, c.continuous))
 
 
 def gives_way(iteration: int, score: float, history: list[float]) -> bool:
@@ -200,7 +213,7 @@ def solve_one(
     subtract, hypot = np.subtract, math.hypot
     m = len(rows) if rows is not None else part.stop - part.start
     A = np.empty((m, m))
-    limits = kin.memoized("ik limit weights", lambda: LimitWeights(lower, upper, joints.continuous))
+    limits = limit_weights(kin)
     weigh = limits.inverse_weights_one if limits.any else None
     bounds = (lower, upper)
     best, total = None, 0
@@ -266,9 +279,8 @@ def solve_one(
             break
     assert best is not None  # attempts >= 1: the seeds hold at least one start
     q, ep, er, _, attempt = best
-    if wrap and limits.continuous is not None:
-        turns = limits.continuous
-        q[turns] = np.remainder(q[turns] + np.pi, 2 * np.pi) - np.pi  # into [-π, π)
+    if wrap:
+        limits.wrap(q)
     return IKResult(q, bool(ep <= tol_p and er <= tol_r), total, ep, er, attempt)
 
 
@@ -284,6 +296,7 @@ __all__ = [
     "IKResult",
     "LimitWeights",
     "gives_way",
+    "limit_weights",
     "solve_one",
     "take_step",
 ]
