@@ -175,7 +175,7 @@ def solve_batch(
                 J = J[rows] if sqrt_w is None else J[rows] * sqrt_w[:, None, None]
             w = None
             if limits.any:
-                w, state[dof:H] = _inverse_weights(limits, q, state[dof:H])
+                w, state[dof:H] = limits.inverse_weights(q, state[dof:H])
             np.clip(_step(J, w, err, score, q, problem, space), lower, upper, out=q)
             meta[2] += 1
         # next attempts: one per target that needs one; when few columns run, several at once per target
@@ -224,21 +224,6 @@ def _log3_columns(Cd: np.ndarray, C: np.ndarray, out: np.ndarray) -> None:
         np.multiply(w, np.where(norm > 1e-12, theta / norm, 0.5), out=out)
     for i in np.flatnonzero(cos < -0.988).tolist():  # near π the axis from w is inaccurate
         out[:, i] = pin.log3(Cd[..., i] @ C[..., i].T)
-
-
-def _inverse_weights(
-    limits: LimitWeights, q: np.ndarray, previous: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """:meth:`LimitWeights.inverse_weights` for columns q (dof, r), previous (dof, r) (-1: first
-    iteration, every joint weighted)."""
-    lower, upper = limits.lower[:, None], limits.upper[:, None]
-    distances = np.maximum(upper - q, 1e-12) * np.maximum(q - lower, 1e-12)
-    grad = (
-        limits.quarter_span_sq[:, None]
-        * np.abs(2 * q - limits.middle_twice[:, None])
-        / (distances * distances)
-    )
-    return np.where(grad > previous, 1.0 / (1.0 + grad), 1.0), grad
 
 
 class _Workspace:

@@ -69,7 +69,7 @@ class IKResult:
 class LimitWeights:
     """Chan & Dubey's weighted least norm: w_i = 1 + |∂φ/∂q_i| while joint i approaches a limit (|∂φ/∂q_i|
     grew since the last iteration), else 1, with φ = Σ (u−l)² / (4 (u−q)(q−l)), so
-    ∂φ/∂q = (u−l)² (2q − u − l) / (4 (u−q)² (q−l)²); unbounded joints: 1. Works on q (dof,) or (n, dof).
+    ∂φ/∂q = (u−l)² (2q − u − l) / (4 (u−q)² (q−l)²); unbounded joints: 1.
     ``continuous`` (dof,) bool, optional: kept as the indices of the joints a solution wraps into [-π, π)
     (None if there are none)."""
 
@@ -89,15 +89,16 @@ class LimitWeights:
         if turns is not None:
             q[..., turns] = np.remainder(q[..., turns] + np.pi, 2 * np.pi) - np.pi
 
-    def inverse_weights(self, q: np.ndarray, previous: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """(1 / w, |∂φ/∂q|) at q, given |∂φ/∂q| of the last iteration (None: the first). Distances to the
-        limits are floored at 1e-12 (a joint on its limit gets a huge finite gradient, weight ~0)."""
-        distances = np.maximum(self.upper - q, 1e-12) * np.maximum(q - self.lower, 1e-12)
-        grad = self.quarter_span_sq * np.abs(2 * q - self.middle_twice) / (distances * distances)
-        inverse = 1.0 / (1.0 + grad)
-        if previous is None:
-            return inverse, grad
-        return np.where(grad > previous, inverse, 1.0), grad
+    def inverse_weights(self, q: np.ndarray, previous: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(1 / w, |∂φ/∂q|) for columns q (dof, r) (one configuration a column, the batched solver's layout),
+        given |∂φ/∂q| of the last iteration (dof, r) (−1 where there is none: every joint weighted).
+        Distances to the limits are floored at 1e-12 (a joint on its limit gets a huge finite gradient,
+        weight ~0)."""
+        lower, upper = self.lower[:, None], self.upper[:, None]
+        distances = np.maximum(upper - q, 1e-12) * np.maximum(q - lower, 1e-12)
+        spread = np.abs(2 * q - self.middle_twice[:, None])
+        grad = self.quarter_span_sq[:, None] * spread / (distances * distances)
+        return np.where(grad > previous, 1.0 / (1.0 + grad), 1.0), grad
 
     def inverse_weights_one(self, q: np.ndarray, previous: list | None) -> tuple[np.ndarray, list]:
         """:meth:`inverse_weights` for one q (dof,) in plain floats (a dozen numpy calls on a 6-vector cost
