@@ -26,6 +26,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..arrays import Reference
+from ..model import accelerator
+from ..model.coordinates import MAX_MAGNITUDE
 from . import batch
 from .engine import REFERENCES, Kinematics, resolve_reference
 
@@ -194,6 +196,26 @@ def _bind(
             J = frame_jacobian(model, data, q, pfid, ref)
             return place(model, data, pfid).homogeneous, J
 
+        native = accelerator.frame_calls(
+            dof=dof,
+            limit=MAX_MAGNITUDE,
+            checking=checking,
+            model=model,
+            frame_id=pfid,
+            local=local,
+            state=state,
+            forward=forward,
+            place=place,
+            frame_jacobian=frame_jacobian,
+            references=references,
+            default_reference=references["local_world_aligned"],
+            local_reference=references["local"],
+            slow_pose=pose,
+            slow_jacobian=jacobian,
+            slow_kinematics=kinematics,
+        )  # the same calls in C, which hands these closures every call that is not plain
+        if native is not None:
+            return (*native, placement)
         return pose, jacobian, kinematics, placement
 
     # A frame moved by mimic joints (q_pin = M q + b for those joints only; J_pin · M), or dof == 1

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import ConfigurationError, FrameNotFoundError, OptionError
 from ..urdf import RobotDescription
+from . import accelerator
 from .mimics import mimic_roots, narrow_by_mimics
 
 _F64 = np.dtype(np.float64)
@@ -66,8 +67,9 @@ class CoordinateMap:
         self.continuous = np.array([joints[n].type == "continuous" for n in names], dtype=bool)
         self._index = index
         self.ready: Callable[[object], TypeGuard[np.ndarray]] = _ready_vector(self.dof)
-        """``ready(q)``: True iff q is already a C-contiguous float64 ndarray of shape (dof,) with every
-        |q_i| <= MAX_MAGNITUDE (finite): :meth:`check` returns it as it is. The one check's fast path."""
+        """``ready(q)``: True only if q is already a C-contiguous float64 ndarray of shape (dof,) with every
+        |q_i| <= MAX_MAGNITUDE (finite): :meth:`check` returns it as it is. The one check's fast path (in C
+        when :mod:`kinengine.model.accelerator` runs; a q it passes by goes through the full check)."""
         self._mimics = {name: root[0] for name, root in roots.items()}
 
     # -- the map ------------------------------------------------------------------------------
@@ -293,7 +295,11 @@ def _ready_vector(dof: int) -> Callable[[object], TypeGuard[np.ndarray]]:
     wrong size raises, and Eigen's vectorized loops would round a strided vector's products differently);
     ``hypot`` of the entries is NaN for a NaN, inf for an inf and at least max |q_i| otherwise, so
     ``hypot <= MAX_MAGNITUDE`` bounds every entry with one scalar call (a plain sum would let +1e300 and
-    -1e300 cancel). The dtype test keeps other 8-byte types out; ndim keeps (dof, 1) out."""
+    -1e300 cancel). The dtype test keeps other 8-byte types out; ndim keeps (dof, 1) out. The C accelerator,
+    when it runs, tests the same things entry by entry."""
+    native = accelerator.ready_check(dof, MAX_MAGNITUDE)
+    if native is not None:
+        return native  # type: ignore[return-value]  # the same predicate
     ndarray, f64, hypot, limit = np.ndarray, _F64, math.hypot, MAX_MAGNITUDE
     unpack = struct.Struct(f"={dof}d").unpack
 
