@@ -1,10 +1,11 @@
 """E_R(χ) of two rotation parameterizations from Pinocchio's C++ helpers, for one pose C_IF (3, 3) on the
 single-configuration hot path (the rows act on J_e0's angular rows ω in the root frame I, so χ̇_R = E_R·ω):
 
-* ``rotation_vector``: φ = log3(C) and E_R = Jlog3(C)·Cᵀ (Jlog3 maps the angular velocity in the frame's own
-  axes to φ̇; Cᵀ takes ω from I's axes to them). Used for θ < 2.5 rad (NATIVE_MAX_SQ), where it is within
-  1.2e-15 (relative) of the scalar formulas of :mod:`kinengine.parameterizations` (measured on random C:
-  6e-15 at θ = 2.9, 2e-12 at 3.13 — Jlog3 loses accuracy towards π, so the scalar path takes over).
+* ``rotation_vector``: E_R = Jlog3(C)·Cᵀ (Jlog3 maps the angular velocity in the frame's own axes to φ̇;
+  Cᵀ takes ω from I's axes to them), with θ = |φ| from cos θ = (tr C − 1)/2. Used for θ < 2.9 rad
+  (NATIVE_MAX_ANGLE): against a 40-digit mpmath evaluation of E_R at random axes, Jlog3 is within 2.8e-15
+  (relative) up to θ = 2.9, 1.4e-14 at 3.0 and 1.7e-13 at 3.1, where the scalar formulas of
+  :mod:`kinengine.parameterizations` stay within 3.2e-15 — so the scalar path takes over towards π.
 * ``euler_zyx``: (roll, pitch, yaw) = matrixToRpy(C) and E_R = computeRpyJacobianInverse(rpy,
   LOCAL_WORLD_ALIGNED) with its rows reversed (χ = (yaw, pitch, roll) = (χ1, χ2, χ3)); distance |cos χ2|.
 
@@ -23,19 +24,20 @@ from ..parameterizations.euler import GIMBAL_LOCK_TOLERANCE
 
 NativeE = Callable[[np.ndarray], "tuple[float, np.ndarray] | None"]
 _TWO_PI, _HALF_PI = 2.0 * math.pi, 0.5 * math.pi
-NATIVE_MAX_SQ = 2.5**2
-"""θ² [rad²] below which the rotation vector's E_R comes from Jlog3 (see the module doc)."""
+NATIVE_MAX_ANGLE = 2.9
+"""θ [rad] below which the rotation vector's E_R comes from Jlog3 (see the module doc)."""
+_MIN_COS = math.cos(NATIVE_MAX_ANGLE)
 
 
 def _rotation_vector() -> NativeE:
-    log3, jlog3, sqrt = pin.log3, pin.Jlog3, math.sqrt
+    jlog3, acos = pin.Jlog3, math.acos
 
     def native(C: np.ndarray) -> tuple[float, np.ndarray] | None:
-        x, y, z = log3(C).tolist()
-        t = x * x + y * y + z * z
-        if not t < NATIVE_MAX_SQ:
+        (c00, _, _), (_, c11, _), (_, _, c22) = C.tolist()
+        cos_theta = 0.5 * (c00 + c11 + c22 - 1.0)
+        if not cos_theta > _MIN_COS:  # θ >= NATIVE_MAX_ANGLE (or NaN)
             return None
-        return abs(sqrt(t) - _TWO_PI), jlog3(C).dot(C.T)
+        return _TWO_PI - acos(min(cos_theta, 1.0)), jlog3(C).dot(C.T)  # distance to |φ| = 2π
 
     return native
 
@@ -61,4 +63,4 @@ def _euler_zyx() -> NativeE:
 NATIVE_E: dict[str, Callable[[], NativeE]] = {"rotation_vector": _rotation_vector, "euler_zyx": _euler_zyx}
 """Rotation parameterization name -> a maker of its native E_R."""
 
-__all__ = ["NATIVE_E", "NATIVE_MAX_SQ", "NativeE"]
+__all__ = ["NATIVE_E", "NATIVE_MAX_ANGLE", "NativeE"]
