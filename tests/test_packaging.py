@@ -18,6 +18,7 @@ import re
 import shutil
 import subprocess
 import sys
+import sysconfig
 import tarfile
 import zipfile
 from collections.abc import Iterator
@@ -46,6 +47,7 @@ def _clean_env() -> dict[str, str]:
         "VIRTUAL_ENV",
         "__PYVENV_LAUNCHER__",
         "PYTHONUSERBASE",
+        "KINENGINE_PURE_PYTHON",
     ):
         env.pop(name, None)
     env["PYTHONNOUSERSITE"] = "1"
@@ -177,7 +179,23 @@ def test_twine_check_strict(dists: dict[str, Path]) -> None:
 def test_file_names_carry_the_version(dists: dict[str, Path]) -> None:
     v = kinengine.__version__
     assert dists["sdist"].name == f"kinengine-{v}.tar.gz"
-    assert dists["wheel"].name == f"kinengine-{v}-py3-none-any.whl"
+    wheel = dists["wheel"].name
+    with zipfile.ZipFile(dists["wheel"]) as whl:
+        compiled = any(_is_accelerator(n) for n in whl.namelist())
+    if compiled:  # the optional C accelerator was built: a wheel for this interpreter and platform
+        tag = f"cp{sys.version_info.major}{sys.version_info.minor}"
+        assert re.fullmatch(rf"kinengine-{re.escape(v)}-{tag}-{tag}-\w+\.whl", wheel), wheel
+    else:
+        assert wheel == f"kinengine-{v}-py3-none-any.whl"
+
+
+def _is_accelerator(name: str) -> bool:
+    return re.fullmatch(r"kinengine/model/fastcall\.[^/]*(\.so|\.pyd)", name) is not None
+
+
+def _can_compile() -> bool:
+    headers = Path(sysconfig.get_paths()["include"], "Python.h").exists()
+    return headers and shutil.which(os.environ.get("CC", "cc")) is not None
 
 
 def test_wheel_metadata(dists: dict[str, Path], wheel_names: list[str]) -> None:
@@ -202,8 +220,11 @@ def test_wheel_contents(wheel_names: list[str], tracked: list[str]) -> None:
         "kinengine/__init__.py",
         "kinengine/py.typed",
         "kinengine/robots/abb_irb120/abb_irb120.urdf",
+        "kinengine/model/fastcall.pyi",
     ):
         assert required in names
+    if _can_compile():  # pip builds the optional C accelerator where it can
+        assert any(_is_accelerator(n) for n in names), sorted(n for n in names if "fastcall" in n)
     assert {"abb_irb120", "planar_3dof", "scara"} <= set(SHIPPED_ROBOTS)
     for robot in SHIPPED_ROBOTS:
         assert f"kinengine/robots/{robot}/{robot}.urdf" in names
@@ -252,6 +273,14 @@ def test_installed_kinengine_is_the_wheel(venv: Path, elsewhere: Path) -> None:
     installed = Path(proc.stdout.strip()).resolve()
     assert installed.is_relative_to(venv.parent.resolve()), installed
     assert not installed.is_relative_to(REPO), installed
+
+
+def test_installed_wheel_runs_the_accelerator_it_ships(
+    venv: Path, elsewhere: Path, wheel_names: list[str]
+) -> None:
+    code = "from kinengine.model import accelerator; print(accelerator.AVAILABLE)"
+    proc = _run([venv / "python", "-c", code], cwd=elsewhere, timeout=120)
+    assert proc.stdout.strip() == str(any(_is_accelerator(n) for n in wheel_names))
 
 
 def test_installed_version(venv: Path, elsewhere: Path) -> None:
