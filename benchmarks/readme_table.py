@@ -62,8 +62,10 @@ def machine(report: dict) -> str:
         if v.get(name)
     )
     return (
-        f"{report['cpu']}, {report['cores']} cores, Python {report['python']}, kinengine {v['kinengine']}, "
-        f"Pinocchio {v['pin']}, numpy {v['numpy']}"
+        f"{report['cpu']}, {report['cores']} cores, Python {report['python']}, kinengine {v['kinengine']}"
+        + {True: " (C accelerator on)", False: " (pure Python)"}.get(report.get("accelerator"), "")
+        + ", "
+        + f"Pinocchio {v['pin']}, numpy {v['numpy']}"
         + (f"; peers: {peers}" if peers else "")
         + f"; run {report['timestamp']}"
     )

@@ -27,6 +27,7 @@ from .errors import (
 from .kinematics.handle import FrameHandle
 from .loading import load, load_urdf_string
 from .model import available_robots
+from .model.accelerator import AVAILABLE as ACCELERATED
 from .robot import Robot
 
 if TYPE_CHECKING:
@@ -56,6 +57,7 @@ _LAZY = {
 }
 
 __all__ = [
+    "ACCELERATED",
     "ConfigurationError",
     "DifferentialIK",
     "FrameHandle",

@@ -86,6 +86,10 @@ def test_every_public_name_resolves_to_its_object(name):
         assert value is expected[name]
     elif name == "__version__":
         assert isinstance(value, str)
+    elif name == "ACCELERATED":
+        from kinengine.model import accelerator
+
+        assert value is accelerator.AVAILABLE and value is (accelerator.native is not None)
     else:
         assert getattr(value, "__name__", None) == name
         assert value.__module__.startswith("kinengine.")

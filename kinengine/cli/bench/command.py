@@ -85,12 +85,18 @@ def _us(value: float) -> str:
     return f"{value:,.2f}" if value < 100 else f"{value:,.0f}"
 
 
+def _accelerator(report: dict) -> str:
+    """Whether the run had the C accelerator of the hot path (kinengine.ACCELERATED)."""
+    on = report.get("accelerator")
+    return "C accelerator on" if on else "pure Python" if on is False else "accelerator not recorded"
+
+
 def format_table(report: dict) -> str:
     """The rows as a text table, then the peers' table and any disagreement."""
     versions = report["versions"]
     lines = [
-        f"kinengine {versions['kinengine']} · Pinocchio {versions['pin']} · numpy {versions['numpy']} · "
-        + f"{report['cpu']} ({report['cores']} cores) · {report['timestamp']}",
+        f"kinengine {versions['kinengine']} ({_accelerator(report)}) · Pinocchio {versions['pin']} · "
+        + f"numpy {versions['numpy']} · {report['cpu']} ({report['cores']} cores) · {report['timestamp']}",
         "",
     ]
     header = (

@@ -170,7 +170,7 @@ def environment(peers: list | None = None) -> dict:
             versions[dist] = importlib.metadata.version(dist)
         except importlib.metadata.PackageNotFoundError:
             versions[dist] = None
-    from ... import __version__
+    from ... import ACCELERATED, __version__
 
     versions["kinengine"] = versions["kinengine"] or __version__
     for peer in peers or ():
@@ -184,6 +184,7 @@ def environment(peers: list | None = None) -> dict:
         "python": platform.python_version(),
         "platform": platform.platform(),
         "versions": versions,
+        "accelerator": ACCELERATED,
     }
 
 
