@@ -21,7 +21,16 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries, series_or_closed
-from .base import Component, Entries, FloatArray, Namespace, RotationParameterization, Values, is_single
+from .base import (
+    SMALL_ANGLE_SQ,
+    Component,
+    Entries,
+    FloatArray,
+    Namespace,
+    RotationParameterization,
+    Values,
+    is_single,
+)
 
 PIN_LOG3_MAX_SQ = 4.0
 """θ² below which one sample takes φ from pin.log3 (as accurate as the quaternion route there: ~5e-16 in C(φ);
@@ -111,6 +120,26 @@ class RotationVector(RotationParameterization):
             s = np.sqrt(np.where(small, 1.0, s2))
             scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.atan2(s, w) / s)
         return scale * x, scale * y, scale * z
+
+    def _fast_E(self, *C: float) -> tuple[float, Entries] | None:
+        """(distance, E's entries) from C_IF's 9 entries (Python floats) for one pose, or None for θ near 0
+        (the caller takes the general path): :meth:`_distance` and :meth:`_E` of :meth:`_from_rotation`'s φ,
+        the same operations in the same order, written out in one function (the analytic Jacobian's hot path
+        for θ near π, where Pinocchio's Jlog3 loses digits)."""
+        w, x, y, z = quaternion_from_matrix(math, *C)
+        s2 = x * x + y * y + z * z
+        if s2 < _TINY_SIN2:
+            return None
+        root = math.sqrt(s2)
+        scale = 2.0 * math.atan2(root, w) / root
+        x, y, z = scale * x, scale * y, scale * z
+        t = x * x + y * y + z * z
+        if t < SMALL_ANGLE_SQ:
+            return None
+        half = 0.5 * math.sqrt(t)
+        theta = math.sqrt(t)
+        distance = abs(theta - _TWO_PI * (round(theta / _TWO_PI) or 1))
+        return distance, rotation_entries(-0.5, (1.0 - half / math.tan(half)) / t, x, y, z)
 
     def _to_rotation(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z
