@@ -26,9 +26,15 @@ from .errors import (
 )
 from .kinematics.handle import FrameHandle
 from .loading import load, load_urdf_string
+from .model import accelerator as _accelerator
 from .model import available_robots
-from .model.accelerator import AVAILABLE as ACCELERATED
 from .robot import Robot
+
+ACCELERATED: bool = _accelerator.AVAILABLE
+"""True when kinengine's optional C accelerator of the hot path runs: built by ``pip install`` where a C
+compiler is present, off with the environment variable ``KINENGINE_PURE_PYTHON=1``. It runs the input check
+of a single q and a frame handle's plain ``pose`` / ``jacobian`` / ``kinematics`` calls in C, with results
+equal bit for bit to the pure-Python path (about 0.4 µs slower per call)."""
 
 if TYPE_CHECKING:
     from .control.frame_task import FrameTask
