@@ -400,7 +400,7 @@ def test_kinematics_out_and_workers():
 )
 def test_cos_sin_from_the_half_angle_tangent_match_numpy(angles):
     q = np.array(angles)
-    cos, sin = chain._cos_sin(q[None], np.empty((3, len(q))))  # q (dof, n): here one coordinate
+    cos, sin = chain._cos_sin(q[None], np.empty((4, len(q))))  # q (dof, n): here one coordinate
     np.testing.assert_allclose(cos[0], np.cos(q), rtol=0, atol=4.5e-16)  # 2 ulp of 1
     np.testing.assert_allclose(sin[0], np.sin(q), rtol=0, atol=4.5e-16)
 
@@ -497,3 +497,42 @@ def test_compiled_constants_drop_rounding_residue_only(tilt):
         T_ref, J_ref = _single(robot, Q[rows], "tip", reference)
         np.testing.assert_allclose(T[rows], T_ref, rtol=0, atol=1e-14)
         np.testing.assert_allclose(J[rows], J_ref, rtol=0, atol=1e-14)
+
+
+NEAR_AXES_URDF = """<?xml version="1.0"?>
+<robot name="near_axes"><link name="base"/><link name="a"/><link name="b"/><link name="c"/><link name="tip"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/>
+    <origin xyz="0 0 0.15"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/>
+    <origin xyz="0 0.002 -0.12" rpy="-{half} 0 {pi}"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j3" type="revolute"><parent link="b"/><child link="c"/>
+    <origin xyz="0 -0.41 0" rpy="0 {pi} 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="f" type="fixed"><parent link="c"/><child link="tip"/>
+    <origin xyz="0.1 0 0.2" rpy="{half} 0 {pi}"/></joint>
+</robot>
+"""
+
+
+def test_joints_off_axis_by_a_truncated_pi_cost_one_product_each_and_match_pinocchio():
+    """π/2 and π written with 11 digits (as in the Kinova's URDF) leave K_i 5e-12 off a signed permutation:
+    a real tilt that Pinocchio keeps, so the chain keeps it too, at one A · M product per joint (the rotation
+    entries cost a numpy call each before). Batches equal Pinocchio's single calls within 1e-14."""
+    exact, truncated = (
+        kinengine.load_urdf_string(NEAR_AXES_URDF.format(half=half, pi=pi))
+        for half, pi in (("1.5707963267948966", "3.141592653589793"), ("1.57079632679", "3.14159265359"))
+    )
+    chains = [batch.compiled_chain(r.engine, r.frame_id("tip")) for r in (exact, truncated)]
+    products = [sum(move[1] is not None for move in c.plan.moves) for c in chains]
+    assert products == [0, 2]  # j2 and j3 (j1's K is folded into the start)
+    assert chains[1].plan.matrix is not None and chains[1].pose_calls - chains[0].pose_calls <= 3
+    Q = exact.random_configuration(4, size=5000)
+    rows = np.arange(0, 5000, 499)
+    for reference in REFERENCES:
+        for robot in (exact, truncated):
+            T, J = robot.kinematics(Q, "tip", reference)
+            T_ref, J_ref = _single(robot, Q[rows], "tip", reference)
+            np.testing.assert_allclose(T[rows], T_ref, rtol=0, atol=1e-14)
+            np.testing.assert_allclose(J[rows], J_ref, rtol=0, atol=1e-14)
+    assert np.abs(truncated.frame_pose(Q[rows], "tip") - exact.frame_pose(Q[rows], "tip")).max() > 1e-13

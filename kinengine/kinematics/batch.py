@@ -216,11 +216,6 @@ def _vector_terms(vector: np.ndarray) -> tuple[tuple[int, float], ...]:
     return tuple((m, float(vector[m])) for m in range(3) if vector[m] != 0.0)
 
 
-def _compose_calls(terms: Terms) -> int:
-    """numpy calls that _compose makes (a column that is a plain copy costs none)."""
-    return sum(0 if len(t) == 1 and t[0][1] == 1.0 else 2 * len(t) - 1 for t in terms)
-
-
 def _compile(kin: Kinematics, fid: int) -> Chain:
     """The chain of movable joints from the root to frame ``fid``, with its constants."""
     model, coords = kin.model, kin.coordinates
@@ -242,12 +237,7 @@ def _compile(kin: Kinematics, fid: int) -> Chain:
         Q_parent = Q
     rotation = _terms(Q_parent.T @ frame.placement.rotation)
     translation = _vector_terms(Q_parent.T @ frame.placement.translation)
-    pose_calls = 20 + _compose_calls(rotation) + 2 * len(translation)  # the tan pass, the pose's entries
-    pose_calls += sum(
-        _compose_calls(s.rotation) + 2 * len(s.translation) + (2 if s.prismatic else 6) for s in steps
-    )
-    jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
-    return Chain(tuple(steps), rotation, translation, kin.dof, pose_calls, jacobian_calls)
+    return Chain(tuple(steps), rotation, translation, kin.dof)
 
 
 def compiled_chain(kin: Kinematics, fid: int) -> Chain:

@@ -8,10 +8,13 @@ Q_i is a constant rotation with Q_i e_z = a_i (its axis):
     S_i = S_parent · K_i · Rz(θ_i),   K_i = Q_parentᵀ · C_i⁰ · Q_i     (C_i⁰, p_i⁰: joint placement)
     p_i = p_parent + S_parent · t_i,  t_i = Q_parentᵀ · p_i⁰             (+ S_i e_z · d if prismatic)
 
-so the world axis of joint i is the third column of S_i, and for axis-aligned joints K_i is a signed
-permutation: composing with it costs nothing. Columns of S are (3, n) arrays over a chunk of n
-configurations (chunks run in parallel: see :mod:`kinengine.kinematics.batch`). A mimic joint uses
-θ = multiplier · q_leader + offset and adds multiplier × its column to the leader's column.
+so the world axis of joint i is the third column of S_i. S lives in a (3, 3, n) buffer M, slot j one
+column up to sign, which slot and sign fixed at compile time (:class:`Plan`): a signed permutation K_i
+(axis-aligned joints) only renames slots, any other K_i (a real tilt, or a URDF's π/2 written with 11
+digits: 5e-12 off, which Pinocchio keeps) is one product A · M; Rz(θ_i) is one product and one sum on
+the pair of slots of columns 0 and 1. Numpy calls, not bytes, bound two threads (each call hands the GIL
+over). A mimic joint uses θ = multiplier · q_leader + offset and adds multiplier × its column to the
+leader's column.
 """
 
 from __future__ import annotations
@@ -26,8 +29,11 @@ import pinocchio as pin
 CHUNK = 8192
 """Most configurations per numpy pass: each call costs ~1 µs and hands the GIL to the other threads, so
 long passes win (ABB IRB 120 on 2 threads: 1.3 M configs/s in chunks of 1024, 2.2 in 4096, 3.0 in 8192),
-up to where two threads' scratch (8 · scratch_rows bytes per row each) crowds the shared L3 cache."""
+up to where two threads' scratch (8 · scratch_rows bytes per row each) crowds the shared L3 cache.
+An A · M product (27 · CHUNK multiply-adds) takes as long with OPENBLAS_NUM_THREADS=1: not split."""
 Terms = tuple[tuple[tuple[int, float], ...], ...]
+_PAIRS = {(0, 1): slice(0, 2), (1, 0): slice(1, None, -1), (0, 2): slice(0, 3, 2)}
+_PAIRS |= {(2, 0): slice(2, None, -2), (1, 2): slice(1, 3), (2, 1): slice(2, 0, -1)}
 
 
 class Step:
@@ -48,26 +54,76 @@ class Step:
             setattr(self, name, value)
 
 
+class Plan:
+    """The chain's work on M, fixed at compile time. M starts as ``start`` (K of the first step folded in)
+    and p as ``origin``; ``moves``, one per step: (shift: p += Σ value · M[slot], t_i before K_i; matrix:
+    M' = matrix · M into the other buffer, None if K_i only renamed slots; pair: M[pair] = the slots of
+    columns 0 and 1, ordered so that Rz is (a c + b s, b c − a s); axis: slot and sign of column 2).
+    After them p_f = p + Σ ``shift`` and M' = ``matrix`` · M holds C_IF's columns in order."""
+
+    def __init__(self, steps: tuple[Step, ...], rotation: Terms, translation: tuple) -> None:
+        slots: tuple[int, ...] = (0, 1, 2)
+        signs: tuple[float, ...] = (1.0, 1.0, 1.0)
+
+        def rename(terms: Terms, move: bool = False) -> np.ndarray | None:
+            nonlocal slots, signs
+            if not move and all(len(c) == 1 and abs(c[0][1]) == 1.0 for c in terms):
+                slots = tuple(slots[c[0][0]] for c in terms)
+                signs = tuple(signs[c[0][0]] * c[0][1] for c in terms)
+                return None
+            A = np.zeros((3, 3))
+            for (k, column), row in itertools.product(enumerate(terms), range(3)):
+                A[k, slots[row]] += sum(v * signs[row] for m, v in column if m == row)
+            slots, signs = (0, 1, 2), (1.0, 1.0, 1.0)
+            return A
+
+        def shift(terms: tuple) -> tuple:
+            return tuple((slots[m], v * signs[m]) for m, v in terms)
+
+        self.moves: list[tuple] = []
+        for i, step in enumerate(steps):
+            if i == 0:  # S = I and p = 0 until the first joint moves: K_1 and t_1 are constants
+                self.origin, start = _constant(step.rotation, step.translation)
+                moved, matrix = (), None
+            else:
+                moved, matrix = shift(step.translation), rename(step.rotation)
+            a, b = (slots[0], slots[1]) if signs[0] == signs[1] else (slots[1], slots[0])
+            self.moves.append((moved, matrix, _PAIRS[a, b], (slots[2], signs[2])))
+        if steps:
+            self.shift, self.matrix = shift(translation), rename(rotation)
+            if self.matrix is None and (slots, signs) != ((0, 1, 2), (1.0, 1.0, 1.0)):
+                self.matrix = rename((((0, 1.0),), ((1, 1.0),), ((2, 1.0),)), True)  # C_IF in slot order
+        else:
+            (self.origin, start), self.shift, self.matrix = _constant(rotation, translation), (), None
+        self.start = np.ascontiguousarray(start.T)[:, :, None]  # slot k: column k, broadcast over n
+        self.buffers = 2 if self.matrix is not None or any(m[1] is not None for m in self.moves) else 1
+        self.calls = 27 + 2 * len(self.shift) + (self.matrix is not None)  # cos/sin, fill, pose entries
+        self.calls += sum(2 * len(m[0]) + (m[1] is not None) + 2 for m in self.moves)
+
+
+def _constant(rotation: Terms, translation: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """(t (3, 1), K (3, 3)) from their nonzero entries."""
+    p, K = np.zeros((3, 1)), np.zeros((3, 3))
+    for k, column in enumerate(rotation):
+        for m, value in column:
+            K[m, k] = value
+    for m, value in translation:
+        p[m] = value
+    return p, K
+
+
 class Chain:
     """The compiled chain: its steps, the frame placement after the last one (C_IF = S_last · rotation),
-    the zero Jacobian columns, and the numpy calls per chunk for the pose and for the Jacobian."""
+    the zero Jacobian columns, its :class:`Plan` and its numpy calls per chunk (pose; Jacobian)."""
 
-    __slots__ = (
-        "columns",
-        "dof",
-        "jacobian_calls",
-        "pose_calls",
-        "rotation",
-        "steps",
-        "translation",
-        "unused",
-    )
+    __slots__ = ("columns", "dof", "jacobian_calls", "plan", "pose_calls",
+                 "rotation", "steps", "translation", "unused")  # fmt: skip
 
-    def __init__(
-        self, steps: tuple[Step, ...], rotation: Terms, translation: tuple, dof: int, pose: int, jac: int
-    ) -> None:
+    def __init__(self, steps: tuple[Step, ...], rotation: Terms, translation: tuple, dof: int) -> None:
         self.steps, self.rotation, self.translation, self.dof = steps, rotation, translation, dof
-        self.pose_calls, self.jacobian_calls = pose, jac
+        self.plan = Plan(steps, rotation, translation)
+        self.pose_calls = self.plan.calls + sum(4 for s in steps if s.scaling != 1.0 or s.offset != 0.0)
+        self.jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
         driven = {s.coordinate for s in steps}
         self.unused = tuple(k for k in range(dof) if k not in driven)
         first = steps[0].coordinate if steps else 0  # revolute steps filling a slice of columns, one each:
@@ -78,58 +134,53 @@ class Chain:
         self.columns = slice(first, first + len(steps)) if plain and steps else None
 
     @property
-    def full(self) -> bool:
-        """Every coordinate drives a joint of the chain (no zero Jacobian column)."""
+    def full(self) -> bool:  # every coordinate drives a joint of the chain (no zero Jacobian column)
         return not self.unused
 
 
-def _compose(columns: list, terms: Terms) -> list:
-    """Columns of S · K, for S given by its columns and K by its nonzero entries."""
-    out = []
-    for column_terms in terms:
-        (m, value), rest = column_terms[0], column_terms[1:]
-        if not rest and value == 1.0:
-            out.append(columns[m])
-            continue
-        acc = -columns[m] if value == -1.0 else columns[m] * value
-        for m, value in rest:
-            acc = acc + columns[m] * value
-        out.append(acc)
-    return out
-
-
 def _shift(
-    p: npt.NDArray[np.float64], columns: list, terms: tuple[tuple[int, float], ...]
-) -> npt.NDArray[np.float64]:
-    for m, value in terms:
-        p = p + columns[m] * value
+    p: npt.NDArray[np.float64], M: np.ndarray, terms: tuple, out: np.ndarray | None = None
+) -> np.ndarray:
+    """p + Σ value · M[slot] (the last sum into ``out`` if given)."""
+    for i, (slot, value) in enumerate(terms):
+        last = out if i == len(terms) - 1 else None
+        if abs(value) == 1.0:
+            p = (np.add if value > 0 else np.subtract)(p, M[slot], out=last)
+        else:
+            p = np.add(p, M[slot] * value, out=last)
+    if out is not None and not terms:
+        out[...] = p
     return p
 
 
-def _cross(
-    a: npt.NDArray[np.float64], b: npt.NDArray[np.float64], out: np.ndarray, temp: np.ndarray | None = None
-) -> None:
+def _column(M: np.ndarray, slot: int, sign: float, out: np.ndarray | None = None) -> np.ndarray:
+    """sign · M[slot] as an array of its own (into ``out`` if given)."""
+    if sign < 0:
+        return np.negative(M[slot], out=out)
+    return M[slot].copy() if out is None else np.add(M[slot], 0.0, out=out)
+
+
+def _cross(a: np.ndarray, b: np.ndarray, out: np.ndarray, temp: np.ndarray | None = None) -> None:
     """out[0:3] = a × b for (3, ...) arrays (out rows may be strided views; temp: two scratch rows)."""
     for i, j, k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
-        if temp is None:
-            np.subtract(a[j] * b[k], a[k] * b[j], out=out[i])
-        else:
-            np.subtract(
-                np.multiply(a[j], b[k], out=temp[0]), np.multiply(a[k], b[j], out=temp[1]), out=out[i]
-            )
+        t = (None, None) if temp is None else temp
+        np.subtract(np.multiply(a[j], b[k], out=t[0]), np.multiply(a[k], b[j], out=t[1]), out=out[i])
 
 
 def _cos_sin(q: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """cos q and sin q (the first two thirds of ``rows``) from t = tan(q/2): cos = (1 − t²)/(1 + t²),
-    sin = 2t/(1 + t²). One tan and six cheap passes cost ~30 ns per angle where numpy's cos and sin
-    take ~40; within 2.3e-16 of them (q/2 is exact; measured on 3e6 angles, ±π and ±π/2 included)."""
+    """cos q and sin q from t = tan(q/2): cos = (1 − t²)/(1 + t²), sin = 2t/(1 + t²). One tan and six cheap
+    passes cost ~30 ns per angle where numpy's cos and sin take ~40; within 2.3e-16 of them (q/2 is exact;
+    measured on 3e6 angles, ±π and ±π/2 included). ``rows`` (4 k, n) end up as the blocks cos, cos, −sin,
+    sin (Rz's coefficients, see evaluate_chain)."""
     k = len(q)
-    cos, sin, d = rows[:k], rows[k : 2 * k], rows[2 * k :]
+    cos, cos2, d, sin = rows[:k], rows[k : 2 * k], rows[2 * k : 3 * k], rows[3 * k :]
     t = np.tan(np.multiply(q, 0.5, out=sin), out=sin)
     tt = np.multiply(t, t, out=cos)
     np.reciprocal(np.add(tt, 1.0, out=d), out=d)
     np.multiply(np.subtract(1.0, tt, out=cos), d, out=cos)
     np.multiply(np.add(t, t, out=sin), d, out=sin)
+    np.copyto(cos2, cos)
+    np.negative(sin, out=d)
     return cos, sin
 
 
@@ -144,53 +195,59 @@ def evaluate_chain(
     """Fill pose (n, 4, 4), jac (n, 6, dof) and/or the analytic Jacobian for the chunk qT (dof, n).
 
     qT may be a strided view (``Q[a:b].T``): only its rows are read. Results go straight into the
-    outputs' strided views (no transposing copy); analytic: (pmap, out (n, m, dof), distances (n, parts)),
-    with reference "local_world_aligned". Few numpy calls per chunk, each over many entries: threads
-    hand the GIL over at every call.
+    outputs' strided views; analytic: (pmap, out (n, m, dof), distances (n, parts)), "local_world_aligned".
     """
-    dof, n, m = chain.dof, qT.shape[1], len(chain.steps)
+    dof, n, m, plan = chain.dof, qT.shape[1], len(chain.steps), chain.plan
     jacobian = jac is not None or analytic is not None
     direct = analytic is None and reference != pin.LOCAL  # Jacobian columns straight into jac's view
-    # this thread's scratch rows (see scratch_rows): cos, sin, 1/(1 + t²), later the Jacobian's products |
-    # z_i, p_i stacked (3, m, n) | the Jacobian (6, dof, n) when it is not written straight into jac
-    head = 3 * max(dof, 2)
+    # this thread's scratch rows (see scratch_rows): cos, cos, −sin, sin (later the Jacobian's products) |
+    # the buffers M | Rz's product | z_i, p_i stacked (3, m, n) | J (6, dof, n) unless direct
+    head, body = 4 * max(dof, 2), 9 * plan.buffers + 12
     memory = _rows(n, scratch_rows(chain, jacobian, direct))
-    cos, sin = _cos_sin(qT, memory[: 3 * dof])  # of every coordinate
-    stacked = jacobian and chain.columns is not None  # z_i, p_i stacked (3, m, n) for the Jacobian
+    _cos_sin(qT, memory[: 4 * dof])  # of every coordinate
+    turns = memory[: 4 * dof].reshape(2, 2, dof, n)  # [[cos, cos], [−sin, sin]]
+    buffers = [memory[head + 9 * b : head + 9 * b + 9].reshape(3, 3, n) for b in range(plan.buffers)]
+    product = memory[head + 9 * plan.buffers : head + body].reshape(2, 2, 3, n)
+    stacked = jacobian and chain.columns is not None  # z_i, p_i stacked for the Jacobian
     if stacked:
-        Z = memory[head : head + 3 * m].reshape(3, m, n)
-        P = memory[head + 3 * m : head + 6 * m].reshape(3, m, n)
-    eye = np.eye(3)
-    S = [eye[:, k : k + 1] for k in range(3)]  # (3, 1) columns broadcast against (3, n)
-    p = np.zeros((3, 1))
+        Z, P = memory[head + body : head + body + 6 * m].reshape(2, 3, m, n)
+    M = buffers[0]
+    M[...] = plan.start
+    p = plan.origin
     joints = []
-    for i, step in enumerate(chain.steps):
-        p = _shift(p, S, step.translation)
-        S = _compose(S, step.rotation)
-        if step.scaling != 1.0 or step.offset != 0.0:
-            theta = qT[step.coordinate] * step.scaling + step.offset
-            c, s = np.cos(theta), np.sin(theta)
-        else:
-            theta, c, s = qT[step.coordinate], cos[step.coordinate], sin[step.coordinate]
+    for i, (step, (moved, matrix, pair, (slot, sign))) in enumerate(
+        zip(chain.steps, plan.moves, strict=True)
+    ):
+        p = _shift(p, M, moved, P[:, i] if stacked else None)
+        if matrix is not None:
+            other = buffers[1] if M is buffers[0] else buffers[0]
+            M = np.matmul(matrix, M.reshape(3, 3 * n), out=other.reshape(3, 3 * n)).reshape(3, 3, n)
+        plain = step.scaling == 1.0 and step.offset == 0.0
+        theta = qT[step.coordinate] if plain else qT[step.coordinate] * step.scaling + step.offset
         if step.prismatic:
-            p = p + S[2] * theta
-        else:
-            S = [S[0] * c + S[1] * s, S[1] * c - S[0] * s, S[2]]
+            p = (np.add if sign > 0 else np.subtract)(p, M[slot] * theta)
+        else:  # Rz(θ) on M[pair] = (a, b) in place: (a c + b s, b c − a s)
+            c, s = (0.0, 0.0) if plain else (np.cos(theta), np.sin(theta))
+            turn = turns[:, :, step.coordinate] if plain else np.array([[c, c], [-s, s]])
+            np.multiply(M[pair][None], turn[:, :, None], out=product)
+            np.add(product[0], product[1, ::-1], out=M[pair])
         if stacked:
-            Z[:, i], P[:, i] = S[2], p
+            _column(M, slot, sign, Z[:, i])
         elif jacobian:
-            joints.append((step, S[2], p))
-    p_f = _shift(p, S, chain.translation)
-    R_f = _compose(S, chain.rotation)
+            joints.append((step, _column(M, slot, sign), p))
+    p_f = _shift(p, M, plan.shift)
+    if stacked and analytic is not None and not plan.shift:
+        p_f = p_f.copy()  # not the last row of P, which the Jacobian overwrites
+    if plan.matrix is not None:
+        other = buffers[1] if M is buffers[0] else buffers[0]
+        M = np.matmul(plan.matrix, M.reshape(3, 3 * n), out=other.reshape(3, 3 * n)).reshape(3, 3, n)
     if pose is not None:
-        for k in range(3):  # one strided copy per entry: faster than a transposing copy of (3, n) blocks
-            for r in range(3):
-                pose[:, r, k] = R_f[k][r]
-            pose[:, k, 3] = p_f[k]
+        pose[:, :3, :3] = M.transpose(2, 1, 0)  # M[k, r] = C_IF[r, k]; one call: calls cost more than bytes
+        pose[:, :3, 3] = p_f.T
         pose[:, 3] = (0.0, 0.0, 0.0, 1.0)
     if not jacobian:
         return
-    target = jac.transpose(1, 2, 0) if direct else memory[head + 6 * m :].reshape(6, dof, n)  # type: ignore[union-attr]
+    target = jac.transpose(1, 2, 0) if direct else memory[head + body + 6 * m :].reshape(6, dof, n)  # type: ignore[union-attr]
     for k in chain.unused:
         target[:, k] = 0.0
     if stacked:
@@ -200,12 +257,12 @@ def evaluate_chain(
             _cross(P, Z, cols, temp)
         else:  # p_f − p_i in place of p_i
             _cross(Z, np.subtract(p_f[:, None], P, out=P), cols, temp)
-        for r in range(3):
-            cols[3 + r] = Z[r]
+        cols[3:] = Z
     else:
-        _columns(joints, p_f, reference, target, memory[:6])
+        _columns(joints, p_f, reference, target)
     if direct:
         return
+    R_f = list(M)
     if jac is not None:
         if reference == pin.LOCAL:  # [v; ω] in F: C_IFᵀ applied to both halves
             t = memory[: 2 * dof].reshape(2, dof, n)  # within the cos and sin rows, done with
@@ -222,22 +279,19 @@ def evaluate_chain(
     if analytic is not None:
         pmap, out, distances = analytic
         JA = np.empty((pmap.size, chain.dof, n))
-        # row-major entries of C_IF and p, as (n,) views (a column the chain never turns is (3, 1))
-        C = [np.broadcast_to(R_f[j][i], (n,)) for i in range(3) for j in range(3)]
+        # row-major entries of C_IF and p, as (n,) views (a position the chain never moves is (3, 1))
+        C = [R_f[j][i] for i in range(3) for j in range(3)]
         p_rows = [np.broadcast_to(p_f[i], (n,)) for i in range(3)]
         for k, distance in enumerate(pmap.fill_columns(p_rows, C, target, JA)):
             distances[:, k] = distance
         out[...] = JA.transpose(2, 0, 1)
 
 
-def _columns(
-    joints: list, p_f: np.ndarray, reference: pin.ReferenceFrame | None, target: np.ndarray, col: np.ndarray
-) -> None:
-    """The Jacobian column of each step in turn (prismatic joints; mimic joints scaled and accumulated
-    through the scratch ``col`` (6, n))."""
+def _columns(joints: list, p_f: np.ndarray, reference: pin.ReferenceFrame | None, target: np.ndarray) -> None:
+    """The Jacobian column of each step in turn (prismatic joints; mimic joints scaled and accumulated)."""
     for step, z, p_i in joints:
         rows = target[:, step.coordinate]  # (6, n)
-        dst = col if step.accumulate or step.scaling != 1.0 else rows
+        dst = np.empty_like(rows) if step.accumulate or step.scaling != 1.0 else rows
         if step.prismatic:
             dst[:3] = z
             dst[3:] = 0.0
@@ -260,9 +314,8 @@ _LOCAL = threading.local()
 
 def scratch_rows(chain: Chain, jacobian: bool, direct: bool) -> int:
     """Scratch float64 per configuration of a chunk (``direct``: J written in place, no LOCAL frame)."""
-    return 3 * max(chain.dof, 2) + (
-        6 * len(chain.steps) + (0 if direct else 6 * chain.dof) if jacobian else 0
-    )
+    head = 4 * max(chain.dof, 2) + 9 * chain.plan.buffers + 12  # cos/sin | M | Rz's product
+    return head + (6 * len(chain.steps) + (0 if direct else 6 * chain.dof) if jacobian else 0)
 
 
 def _rows(n: int, rows: int) -> np.ndarray:
