@@ -23,7 +23,6 @@ import itertools
 import threading
 
 import numpy as np
-import numpy.typing as npt
 import pinocchio as pin
 
 CHUNK = 8192
@@ -55,25 +54,29 @@ class Step:
 
 
 class Plan:
-    """The chain's work on M, fixed at compile time. M starts as ``start`` (K of the first step folded in)
-    and p as ``origin``; ``moves``, one per step: (shift: p += Σ value · M[slot], t_i before K_i; matrix:
-    M' = matrix · M into the other buffer, None if K_i only renamed slots; pair: M[pair] = the slots of
-    columns 0 and 1, ordered so that Rz is (a c + b s, b c − a s); axis: slot and sign of column 2).
-    After them p_f = p + Σ ``shift`` and M' = ``matrix`` · M holds C_IF's columns in order."""
+    """The chain's work on M (4, 3, n): slots 0-2 columns of S up to sign, slot 3 p when a product needs it.
+    M starts as ``start`` (the first step's K and t folded in); ``moves``, one per step: (shift: p +=
+    Σ value · M[slot], t_i before K_i; matrix (4, 4): M' = matrix · M into the other buffer, K_i and t_i
+    at once, or None: K_i only renamed slots; pair: M[pair] = the slots of columns 0 and 1, ordered so
+    that Rz is (a c + b s, b c − a s); axis: slot and sign of column 2). Last, M' = ``matrix`` · M holds
+    C_IF's columns and p_f in order."""
 
     def __init__(self, steps: tuple[Step, ...], rotation: Terms, translation: tuple) -> None:
         slots: tuple[int, ...] = (0, 1, 2)
         signs: tuple[float, ...] = (1.0, 1.0, 1.0)
 
-        def rename(terms: Terms, move: bool = False) -> np.ndarray | None:
+        def rename(terms: Terms, moved: tuple, move: bool = False) -> np.ndarray | None:
             nonlocal slots, signs
             if not move and all(len(c) == 1 and abs(c[0][1]) == 1.0 for c in terms):
                 slots = tuple(slots[c[0][0]] for c in terms)
                 signs = tuple(signs[c[0][0]] * c[0][1] for c in terms)
                 return None
-            A = np.zeros((3, 3))
+            A = np.eye(4)  # row 3: p' = p + Σ value · M[slot]
+            A[:3, :3] = 0.0
             for (k, column), row in itertools.product(enumerate(terms), range(3)):
                 A[k, slots[row]] += sum(v * signs[row] for m, v in column if m == row)
+            for slot, value in moved:
+                A[3, slot] += value
             slots, signs = (0, 1, 2), (1.0, 1.0, 1.0)
             return A
 
@@ -86,29 +89,25 @@ class Plan:
                 self.origin, start = _constant(step.rotation, step.translation)
                 moved, matrix = (), None
             else:
-                moved, matrix = shift(step.translation), rename(step.rotation)
+                moved = shift(step.translation)
+                matrix = rename(step.rotation, moved)
+                moved = () if matrix is not None else moved
             a, b = (slots[0], slots[1]) if signs[0] == signs[1] else (slots[1], slots[0])
             self.moves.append((moved, matrix, _PAIRS[a, b], (slots[2], signs[2])))
         if steps:
-            self.shift, self.matrix = shift(translation), rename(rotation)
-            if self.matrix is None and (slots, signs) != ((0, 1, 2), (1.0, 1.0, 1.0)):
-                self.matrix = rename((((0, 1.0),), ((1, 1.0),), ((2, 1.0),)), True)  # C_IF in slot order
+            self.matrix = rename(rotation, shift(translation), True)
         else:
-            (self.origin, start), self.shift, self.matrix = _constant(rotation, translation), (), None
-        self.start = np.ascontiguousarray(start.T)[:, :, None]  # slot k: column k, broadcast over n
-        self.buffers = 2 if self.matrix is not None or any(m[1] is not None for m in self.moves) else 1
-        self.calls = 27 + 2 * len(self.shift) + (self.matrix is not None)  # cos/sin, fill, pose entries
-        self.calls += sum(2 * len(m[0]) + (m[1] is not None) + 2 for m in self.moves)
+            (self.origin, start), self.matrix = _constant(rotation, translation), None
+        self.start = np.vstack([start.T, self.origin.T])[:, :, None]  # slot k: column k; slot 3: p
+        self.calls = 21 + sum(2 * len(m[0]) + 2 * (m[1] is not None) + 3 for m in self.moves)
 
 
 def _constant(rotation: Terms, translation: tuple) -> tuple[np.ndarray, np.ndarray]:
     """(t (3, 1), K (3, 3)) from their nonzero entries."""
     p, K = np.zeros((3, 1)), np.zeros((3, 3))
     for k, column in enumerate(rotation):
-        for m, value in column:
-            K[m, k] = value
-    for m, value in translation:
-        p[m] = value
+        K[[m for m, _ in column], k] = [value for _, value in column]
+    p[[m for m, _ in translation], 0] = [value for _, value in translation]
     return p, K
 
 
@@ -124,8 +123,7 @@ class Chain:
         self.plan = Plan(steps, rotation, translation)
         self.pose_calls = self.plan.calls + sum(4 for s in steps if s.scaling != 1.0 or s.offset != 0.0)
         self.jacobian_calls = 4 + sum(3 if s.prismatic else 12 for s in steps)
-        driven = {s.coordinate for s in steps}
-        self.unused = tuple(k for k in range(dof) if k not in driven)
+        self.unused = tuple(k for k in range(dof) if k not in {s.coordinate for s in steps})
         first = steps[0].coordinate if steps else 0  # revolute steps filling a slice of columns, one each:
         plain = all(  # their Jacobian columns are computed at once
             not s.prismatic and s.scaling == 1.0 and s.offset == 0.0 and s.coordinate == first + i
@@ -133,14 +131,10 @@ class Chain:
         )
         self.columns = slice(first, first + len(steps)) if plain and steps else None
 
-    @property
-    def full(self) -> bool:  # every coordinate drives a joint of the chain (no zero Jacobian column)
-        return not self.unused
+    full = property(lambda self: not self.unused, doc="Every coordinate drives a joint (no zero column).")
 
 
-def _shift(
-    p: npt.NDArray[np.float64], M: np.ndarray, terms: tuple, out: np.ndarray | None = None
-) -> np.ndarray:
+def _shift(p: np.ndarray, M: np.ndarray, terms: tuple, out: np.ndarray | None = None) -> np.ndarray:
     """p + Σ value · M[slot] (the last sum into ``out`` if given)."""
     for i, (slot, value) in enumerate(terms):
         last = out if i == len(terms) - 1 else None
@@ -148,16 +142,14 @@ def _shift(
             p = (np.add if value > 0 else np.subtract)(p, M[slot], out=last)
         else:
             p = np.add(p, M[slot] * value, out=last)
-    if out is not None and not terms:
-        out[...] = p
     return p
 
 
 def _column(M: np.ndarray, slot: int, sign: float, out: np.ndarray | None = None) -> np.ndarray:
     """sign · M[slot] as an array of its own (into ``out`` if given)."""
-    if sign < 0:
-        return np.negative(M[slot], out=out)
-    return M[slot].copy() if out is None else np.add(M[slot], 0.0, out=out)
+    out = np.empty_like(M[slot]) if out is None else out
+    np.negative(M[slot], out=out) if sign < 0 else np.copyto(out, M[slot])
+    return out
 
 
 def _cross(a: np.ndarray, b: np.ndarray, out: np.ndarray, temp: np.ndarray | None = None) -> None:
@@ -202,48 +194,54 @@ def evaluate_chain(
     direct = analytic is None and reference != pin.LOCAL  # Jacobian columns straight into jac's view
     # this thread's scratch rows (see scratch_rows): cos, cos, −sin, sin (later the Jacobian's products) |
     # the buffers M | Rz's product | z_i, p_i stacked (3, m, n) | J (6, dof, n) unless direct
-    head, body = 4 * max(dof, 2), 9 * plan.buffers + 12
+    head, body = 4 * max(dof, 2), 36
     memory = _rows(n, scratch_rows(chain, jacobian, direct))
     _cos_sin(qT, memory[: 4 * dof])  # of every coordinate
     turns = memory[: 4 * dof].reshape(2, 2, dof, n)  # [[cos, cos], [−sin, sin]]
-    buffers = [memory[head + 9 * b : head + 9 * b + 9].reshape(3, 3, n) for b in range(plan.buffers)]
-    product = memory[head + 9 * plan.buffers : head + body].reshape(2, 2, 3, n)
+    buffers = list(memory[head : head + 24].reshape(2, 4, 3 * n))  # M, M' (4, 3 n) for the products
+    product = memory[head + 24 : head + body].reshape(2, 2, 3, n)
     stacked = jacobian and chain.columns is not None  # z_i, p_i stacked for the Jacobian
     if stacked:
-        Z, P = memory[head + body : head + body + 6 * m].reshape(2, 3, m, n)
-    M = buffers[0]
+        Z, P = ZP = memory[head + body : head + body + 6 * m].reshape(2, 3, m, n)
+    M = buffers[0].reshape(4, 3, n)
     M[...] = plan.start
-    p = plan.origin
+    p, held = M[3], True  # held: p is M[3]
     joints = []
-    for i, (step, (moved, matrix, pair, (slot, sign))) in enumerate(
-        zip(chain.steps, plan.moves, strict=True)
-    ):
-        p = _shift(p, M, moved, P[:, i] if stacked else None)
-        if matrix is not None:
-            other = buffers[1] if M is buffers[0] else buffers[0]
-            M = np.matmul(matrix, M.reshape(3, 3 * n), out=other.reshape(3, 3 * n)).reshape(3, 3, n)
+    for i, (step, move) in enumerate(zip(chain.steps, plan.moves, strict=True)):
+        moved, matrix, pair, (slot, sign) = move
+        if matrix is not None:  # K_i and t_i in one product
+            if not held:
+                M[3] = p
+            buffers.reverse()
+            M = np.matmul(matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
+            p, held = M[3], True
+        elif moved:
+            p, held = _shift(p, M, moved, P[:, i] if stacked else None), False
+        elif stacked:
+            P[:, i] = p
         plain = step.scaling == 1.0 and step.offset == 0.0
         theta = qT[step.coordinate] if plain else qT[step.coordinate] * step.scaling + step.offset
         if step.prismatic:
-            p = (np.add if sign > 0 else np.subtract)(p, M[slot] * theta)
+            p, held = (np.add if sign > 0 else np.subtract)(p, M[slot] * theta), False
         else:  # Rz(θ) on M[pair] = (a, b) in place: (a c + b s, b c − a s)
             c, s = (0.0, 0.0) if plain else (np.cos(theta), np.sin(theta))
             turn = turns[:, :, step.coordinate] if plain else np.array([[c, c], [-s, s]])
             np.multiply(M[pair][None], turn[:, :, None], out=product)
             np.add(product[0], product[1, ::-1], out=M[pair])
-        if stacked:
+        if stacked and matrix is not None:  # axis in slot 2, p in slot 3
+            ZP[:, :, i] = M[2:]
+        elif stacked:
             _column(M, slot, sign, Z[:, i])
         elif jacobian:
-            joints.append((step, _column(M, slot, sign), p))
-    p_f = _shift(p, M, plan.shift)
-    if stacked and analytic is not None and not plan.shift:
-        p_f = p_f.copy()  # not the last row of P, which the Jacobian overwrites
+            joints.append((step, _column(M, slot, sign), p.copy() if held else p))
     if plan.matrix is not None:
-        other = buffers[1] if M is buffers[0] else buffers[0]
-        M = np.matmul(plan.matrix, M.reshape(3, 3 * n), out=other.reshape(3, 3 * n)).reshape(3, 3, n)
+        if not held:
+            M[3] = p
+        buffers.reverse()
+        M = np.matmul(plan.matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
+    p_f = M[3]
     if pose is not None:
-        pose[:, :3, :3] = M.transpose(2, 1, 0)  # M[k, r] = C_IF[r, k]; one call: calls cost more than bytes
-        pose[:, :3, 3] = p_f.T
+        pose[:, :3] = M.transpose(2, 1, 0)  # M[k, r] = T[r, k]; one call: calls cost more than bytes
         pose[:, 3] = (0.0, 0.0, 0.0, 1.0)
     if not jacobian:
         return
@@ -262,7 +260,7 @@ def evaluate_chain(
         _columns(joints, p_f, reference, target)
     if direct:
         return
-    R_f = list(M)
+    R_f = list(M[:3])
     if jac is not None:
         if reference == pin.LOCAL:  # [v; ω] in F: C_IFᵀ applied to both halves
             t = memory[: 2 * dof].reshape(2, dof, n)  # within the cos and sin rows, done with
@@ -314,7 +312,7 @@ _LOCAL = threading.local()
 
 def scratch_rows(chain: Chain, jacobian: bool, direct: bool) -> int:
     """Scratch float64 per configuration of a chunk (``direct``: J written in place, no LOCAL frame)."""
-    head = 4 * max(chain.dof, 2) + 9 * chain.plan.buffers + 12  # cos/sin | M | Rz's product
+    head = 4 * max(chain.dof, 2) + 36  # cos/sin | M, M' | Rz's product
     return head + (6 * len(chain.steps) + (0 if direct else 6 * chain.dof) if jacobian else 0)
 
 
