@@ -94,10 +94,11 @@ class Plan:
                 moved = () if matrix is not None else moved
             a, b = (slots[0], slots[1]) if signs[0] == signs[1] else (slots[1], slots[0])
             self.moves.append((moved, matrix, _PAIRS[a, b], (slots[2], signs[2])))
-        if steps:
-            self.matrix = rename(rotation, shift(translation), True)
+        if steps:  # no product for a signed permutation and no shift (C_IF's columns: slots × signs)
+            self.matrix = rename(rotation, shift(translation), bool(translation))
         else:
             (self.origin, start), self.matrix = _constant(rotation, translation), None
+        self.slots, self.signs = slots, signs
         self.start = np.vstack([start.T, self.origin.T])[:, :, None]  # slot k: column k; slot 3: p
         self.calls = 21 + sum(2 * len(m[0]) + 2 * (m[1] is not None) + 3 for m in self.moves)
 
@@ -239,9 +240,15 @@ def evaluate_chain(
             M[3] = p
         buffers.reverse()
         M = np.matmul(plan.matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
-    p_f = M[3]
-    if pose is not None:
+        p = M[3]
+    p_f = p.copy() if analytic is not None and stacked else p  # P is overwritten below
+    if pose is not None and plan.matrix is not None:
         pose[:, :3] = M.transpose(2, 1, 0)  # M[k, r] = T[r, k]; one call: calls cost more than bytes
+    elif pose is not None:
+        for k, (slot, sign) in enumerate(zip(plan.slots, plan.signs, strict=True)):
+            _column(M, slot, sign, pose[:, :3, k].T)
+        pose[:, :3, 3] = p_f.T
+    if pose is not None:
         pose[:, 3] = (0.0, 0.0, 0.0, 1.0)
     if not jacobian:
         return
@@ -251,16 +258,14 @@ def evaluate_chain(
     if stacked:
         cols = target[:, chain.columns]  # (6, m, n)
         temp = memory[: 2 * m].reshape(2, m, n)  # m <= dof: within cos and sin, done with
-        if reference == pin.WORLD:
-            _cross(P, Z, cols, temp)
-        else:  # p_f − p_i in place of p_i
-            _cross(Z, np.subtract(p_f[:, None], P, out=P), cols, temp)
+        a, b = (P, Z) if reference == pin.WORLD else (Z, np.subtract(p_f[:, None], P, out=P))  # p_f − p_i
+        _cross(a, b, cols, temp)
         cols[3:] = Z
     else:
         _columns(joints, p_f, reference, target)
     if direct:
         return
-    R_f = list(M[:3])
+    R_f = [_column(M, slot, sign) for slot, sign in zip(plan.slots, plan.signs, strict=True)]
     if jac is not None:
         if reference == pin.LOCAL:  # [v; ω] in F: C_IFᵀ applied to both halves
             t = memory[: 2 * dof].reshape(2, dof, n)  # within the cos and sin rows, done with
@@ -291,13 +296,9 @@ def _columns(joints: list, p_f: np.ndarray, reference: pin.ReferenceFrame | None
         rows = target[:, step.coordinate]  # (6, n)
         dst = np.empty_like(rows) if step.accumulate or step.scaling != 1.0 else rows
         if step.prismatic:
-            dst[:3] = z
-            dst[3:] = 0.0
+            dst[:3], dst[3:] = z, 0.0
         else:
-            if reference == pin.WORLD:
-                _cross(p_i, z, dst)
-            else:
-                _cross(z, p_f - p_i, dst)
+            _cross(*((p_i, z) if reference == pin.WORLD else (z, p_f - p_i)), dst)
             dst[3:] = z
         if step.scaling != 1.0:
             dst *= step.scaling
