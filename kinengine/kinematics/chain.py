@@ -54,12 +54,13 @@ class Step:
 
 
 class Plan:
-    """The chain's work on M (4, 3, n): slots 0-2 columns of S up to sign, slot 3 p when a product needs it.
-    M starts as ``start`` (the first step's K and t folded in); ``moves``, one per step: (shift: p +=
-    Σ value · M[slot], t_i before K_i; matrix (4, 4): M' = matrix · M into the other buffer, K_i and t_i
-    at once, or None: K_i only renamed slots; pair: M[pair] = the slots of columns 0 and 1, ordered so
-    that Rz is (a c + b s, b c − a s); axis: slot and sign of column 2). Last, M' = ``matrix`` · M holds
-    C_IF's columns and p_f in order."""
+    """The chain's work on M (4, 3, n): slots 0-2 the columns of S up to sign, slot 3 p. M starts as
+    ``start`` (the first step's K and t folded in); ``moves``, one per step: (matrix (4, 4): M' = matrix ·
+    M into the other buffer, K_i and t_i in one product (one call beats a multiply and an add per entry
+    of t_i, even at 1000 rows), or None when K_i is a signed permutation and t_i = 0: slots renamed; pair:
+    M[pair] = the slots of columns 0 and 1, ordered so that Rz is (a c + b s, b c − a s); axis: slot and
+    sign of column 2). Last, M' = ``matrix`` · M holds C_IF's columns and p_f in order (or, None: the
+    columns are ``slots`` × ``signs``)."""
 
     def __init__(self, steps: tuple[Step, ...], rotation: Terms, translation: tuple) -> None:
         slots: tuple[int, ...] = (0, 1, 2)
@@ -87,20 +88,18 @@ class Plan:
         for i, step in enumerate(steps):
             if i == 0:  # S = I and p = 0 until the first joint moves: K_1 and t_1 are constants
                 self.origin, start = _constant(step.rotation, step.translation)
-                moved, matrix = (), None
+                matrix = None
             else:
-                moved = shift(step.translation)
-                matrix = rename(step.rotation, moved)
-                moved = () if matrix is not None else moved
+                matrix = rename(step.rotation, shift(step.translation), bool(step.translation))
             a, b = (slots[0], slots[1]) if signs[0] == signs[1] else (slots[1], slots[0])
-            self.moves.append((moved, matrix, _PAIRS[a, b], (slots[2], signs[2])))
+            self.moves.append((matrix, _PAIRS[a, b], (slots[2], signs[2])))
         if steps:  # no product for a signed permutation and no shift (C_IF's columns: slots × signs)
             self.matrix = rename(rotation, shift(translation), bool(translation))
         else:
             (self.origin, start), self.matrix = _constant(rotation, translation), None
         self.slots, self.signs = slots, signs
         self.start = np.vstack([start.T, self.origin.T])[:, :, None]  # slot k: column k; slot 3: p
-        self.calls = 21 + sum(2 * len(m[0]) + 2 * (m[1] is not None) + 3 for m in self.moves)
+        self.calls = 21 + sum(4 + (m[0] is not None) for m in self.moves)  # cos/sin, Rz, z_i, p_i, T
 
 
 def _constant(rotation: Terms, translation: tuple) -> tuple[np.ndarray, np.ndarray]:
@@ -133,17 +132,6 @@ class Chain:
         self.columns = slice(first, first + len(steps)) if plain and steps else None
 
     full = property(lambda self: not self.unused, doc="Every coordinate drives a joint (no zero column).")
-
-
-def _shift(p: np.ndarray, M: np.ndarray, terms: tuple, out: np.ndarray | None = None) -> np.ndarray:
-    """p + Σ value · M[slot] (the last sum into ``out`` if given)."""
-    for i, (slot, value) in enumerate(terms):
-        last = out if i == len(terms) - 1 else None
-        if abs(value) == 1.0:
-            p = (np.add if value > 0 else np.subtract)(p, M[slot], out=last)
-        else:
-            p = np.add(p, M[slot] * value, out=last)
-    return p
 
 
 def _column(M: np.ndarray, slot: int, sign: float, out: np.ndarray | None = None) -> np.ndarray:
@@ -209,15 +197,13 @@ def evaluate_chain(
     p, held = M[3], True  # held: p is M[3]
     joints = []
     for i, (step, move) in enumerate(zip(chain.steps, plan.moves, strict=True)):
-        moved, matrix, pair, (slot, sign) = move
+        matrix, pair, (slot, sign) = move
         if matrix is not None:  # K_i and t_i in one product
             if not held:
                 M[3] = p
             buffers.reverse()
             M = np.matmul(matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
             p, held = M[3], True
-        elif moved:
-            p, held = _shift(p, M, moved, P[:, i] if stacked else None), False
         elif stacked:
             P[:, i] = p
         plain = step.scaling == 1.0 and step.offset == 0.0
