@@ -204,8 +204,6 @@ def evaluate_chain(
             buffers.reverse()
             M = np.matmul(matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
             p, held = M[3], True
-        elif stacked:
-            P[:, i] = p
         plain = step.scaling == 1.0 and step.offset == 0.0
         theta = qT[step.coordinate] if plain else qT[step.coordinate] * step.scaling + step.offset
         if step.prismatic:
@@ -215,10 +213,11 @@ def evaluate_chain(
             turn = turns[:, :, step.coordinate] if plain else np.array([[c, c], [-s, s]])
             np.multiply(M[pair][None], turn[:, :, None], out=product)
             np.add(product[0], product[1, ::-1], out=M[pair])
-        if stacked and matrix is not None:  # axis in slot 2, p in slot 3
+        if stacked and held and (slot, sign) == (2, 1.0):  # axis in slot 2, p in slot 3: one copy
             ZP[:, :, i] = M[2:]
         elif stacked:
             _column(M, slot, sign, Z[:, i])
+            P[:, i] = p
         elif jacobian:
             joints.append((step, _column(M, slot, sign), p.copy() if held else p))
     if plan.matrix is not None:
