@@ -8,13 +8,13 @@ Q_i is a constant rotation with Q_i e_z = a_i (its axis):
     S_i = S_parent · K_i · Rz(θ_i),   K_i = Q_parentᵀ · C_i⁰ · Q_i     (C_i⁰, p_i⁰: joint placement)
     p_i = p_parent + S_parent · t_i,  t_i = Q_parentᵀ · p_i⁰             (+ S_i e_z · d if prismatic)
 
-so the world axis of joint i is the third column of S_i. S lives in a (3, 3, n) buffer M, slot j one
-column up to sign, which slot and sign fixed at compile time (:class:`Plan`): a signed permutation K_i
-(axis-aligned joints) only renames slots, any other K_i (a real tilt, or a URDF's π/2 written with 11
-digits: 5e-12 off, which Pinocchio keeps) is one product A · M; Rz(θ_i) is one product and one sum on
-the pair of slots of columns 0 and 1. Numpy calls, not bytes, bound two threads (each call hands the GIL
-over). A mimic joint uses θ = multiplier · q_leader + offset and adds multiplier × its column to the
-leader's column.
+so the world axis of joint i is the third column of S_i. S and p live in a (4, 3, n) buffer M, slot j
+one column up to sign, which slot and sign fixed at compile time (:class:`Plan`), slot 3 p: a signed
+permutation K_i with t_i = 0 only renames slots; any other joint (a translation, a real tilt, or a
+URDF's π/2 written with 11 digits: 5e-12 off, which Pinocchio keeps) is one 4x4 product; Rz(θ_i) is one
+product and one sum on the pair of slots of columns 0 and 1. Numpy calls, more than bytes, bound the
+speed (each hands the GIL over). A mimic joint uses θ = multiplier · q_leader + offset and adds
+multiplier × its column to the leader's column.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ CHUNK = 8192
 """Most configurations per numpy pass: each call costs ~1 µs and hands the GIL to the other threads, so
 long passes win (ABB IRB 120 on 2 threads: 1.3 M configs/s in chunks of 1024, 2.2 in 4096, 3.0 in 8192),
 up to where two threads' scratch (8 · scratch_rows bytes per row each) crowds the shared L3 cache.
-An A · M product (27 · CHUNK multiply-adds) takes as long with OPENBLAS_NUM_THREADS=1: not split."""
+A 4x4 product (48 · CHUNK multiply-adds) takes as long with OPENBLAS_NUM_THREADS=1: not split."""
 Terms = tuple[tuple[tuple[int, float], ...], ...]
 _PAIRS = {(0, 1): slice(0, 2), (1, 0): slice(1, None, -1), (0, 2): slice(0, 3, 2)}
 _PAIRS |= {(2, 0): slice(2, None, -2), (1, 2): slice(1, 3), (2, 1): slice(2, 0, -1)}
