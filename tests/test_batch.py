@@ -539,3 +539,6 @@ def test_joints_off_axis_by_a_truncated_pi_cost_one_product_each_and_match_pinoc
             np.testing.assert_allclose(T[rows], T_ref, rtol=0, atol=1e-14)
             np.testing.assert_allclose(J[rows], J_ref, rtol=0, atol=1e-14)
     assert np.abs(truncated.frame_pose(Q[rows], "tip") - exact.frame_pose(Q[rows], "tip")).max() > 1e-13
+    kinova, abb = (_load(name) for name in ("kinova", "abb_irb120"))  # Kinova: 11-digit π/2 and π
+    calls = [batch.compiled_chain(r.engine, r.frame_id(r.end_effector)).pose_calls for r in (kinova, abb)]
+    assert calls[0] <= calls[1]
