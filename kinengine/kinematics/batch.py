@@ -36,10 +36,10 @@ MIN_CHUNK = 4096
 """Fewest rows per chunk (unless CHUNK is smaller): numpy's ~1 µs per call, and the GIL hand-over at
 every call, dominate shorter ones (ABB IRB 120, 10k rows on 2 threads: chunks of 1024 1.3, 2048 1.7,
 4096 2.2 M configs/s)."""
-MEMORY_SHARE = 0.2
-"""Chunks shrink (down to MIN_CHUNK) until the threads' scratch is within this share of the output
-(100k rows on 2 threads, median M configs/s at 0.1, 0.2, 0.3, measured interleaved: Kinova 6.48, 6.90,
-7.17; ABB IRB 120 5.83, 6.19, 6.50; UR5 5.51, 6.31, 6.33: longer chunks, fewer calls per row)."""
+MEMORY_SHARE = 0.1
+"""Chunks shrink (down to MIN_CHUNK) until the threads' scratch is within this share of the outputs, so a
+call's memory stays within its outputs + 10 %. (Longer chunks are faster: 100k rows on 2 threads, median
+M configs/s at 0.1, 0.2, 0.3 measured interleaved: Kinova 6.48, 6.90, 7.17; ABB IRB 120 5.83, 6.19, 6.50.)"""
 ROUNDING = 1e-15
 """Compiled constants within this (relative) of 0 or ±1 are taken as exactly that (see _snap)."""
 MIN_PER_WORKER = 4096
