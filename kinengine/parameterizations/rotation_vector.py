@@ -136,10 +136,9 @@ class RotationVector(RotationParameterization):
         t = x * x + y * y + z * z
         if t < SMALL_ANGLE_SQ:
             return None
-        half = 0.5 * math.sqrt(t)
-        theta = math.sqrt(t)
-        distance = abs(theta - _TWO_PI * (round(theta / _TWO_PI) or 1))
-        return distance, rotation_entries(-0.5, (1.0 - half / math.tan(half)) / t, x, y, z)
+        theta = math.sqrt(t)  # <= π (+ rounding): the nearest 2πk of _distance is 2π
+        half = 0.5 * theta
+        return _TWO_PI - theta, rotation_entries(-0.5, (1.0 - half / math.tan(half)) / t, x, y, z)
 
     def _to_rotation(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z
