@@ -5,7 +5,8 @@ single-configuration hot path (the rows act on J_e0's angular rows ω in the roo
   Cᵀ takes ω from I's axes to them), with θ = |φ| from cos θ = (tr C − 1)/2. Used for θ < 2.9 rad
   (NATIVE_MAX_ANGLE): against a 40-digit mpmath evaluation of E_R at random axes, Jlog3 is within 2.8e-15
   (relative) up to θ = 2.9, 1.4e-14 at 3.0 and 1.7e-13 at 3.1, where the scalar formulas of
-  :mod:`kinengine.parameterizations` stay within 3.2e-15 — so the scalar path takes over towards π.
+  :mod:`kinengine.parameterizations` stay within 3.2e-15 — so towards π E_R comes from those formulas
+  (the rotation vector's one-pass ``_fast_E``).
 * ``euler_zyx``: (roll, pitch, yaw) = matrixToRpy(C) and E_R = computeRpyJacobianInverse(rpy,
   LOCAL_WORLD_ALIGNED) with its rows reversed (χ = (yaw, pitch, roll) = (χ1, χ2, χ3)); distance |cos χ2|.
 
@@ -20,7 +21,9 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
+from ..parameterizations import ROTATION_PARAMETERIZATIONS
 from ..parameterizations.euler import GIMBAL_LOCK_TOLERANCE
+from ..parameterizations.rotation_vector import RotationVector
 
 NativeE = Callable[[np.ndarray], "tuple[float, np.ndarray] | None"]
 _TWO_PI, _HALF_PI = 2.0 * math.pi, 0.5 * math.pi
@@ -30,14 +33,18 @@ _MIN_COS = math.cos(NATIVE_MAX_ANGLE)
 
 
 def _rotation_vector() -> NativeE:
-    jlog3, acos = pin.Jlog3, math.acos
+    jlog3, acos, array = pin.Jlog3, math.acos, np.array
+    rotation_vector = ROTATION_PARAMETERIZATIONS["rotation_vector"]
+    assert isinstance(rotation_vector, RotationVector)
+    scalar = rotation_vector._fast_E  # the general formulas in one pass
 
     def native(C: np.ndarray) -> tuple[float, np.ndarray] | None:
-        (c00, _, _), (_, c11, _), (_, _, c22) = C.tolist()
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
         cos_theta = 0.5 * (c00 + c11 + c22 - 1.0)
-        if not cos_theta > _MIN_COS:  # θ >= NATIVE_MAX_ANGLE (or NaN)
-            return None
-        return _TWO_PI - acos(min(cos_theta, 1.0)), jlog3(C).dot(C.T)  # distance to |φ| = 2π
+        if cos_theta > _MIN_COS:  # θ < NATIVE_MAX_ANGLE: Jlog3; distance to |φ| = 2π
+            return _TWO_PI - acos(min(cos_theta, 1.0)), jlog3(C).dot(C.T)
+        found = scalar(c00, c01, c02, c10, c11, c12, c20, c21, c22)  # towards π: the scalar formulas
+        return None if found is None else (found[0], array(found[1]).reshape(3, 3))
 
     return native
 
