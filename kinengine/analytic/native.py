@@ -16,6 +16,7 @@ Each returns (distance to the singular set, E_R (3, 3)) or None where the genera
 from __future__ import annotations
 
 import math
+import struct
 from collections.abc import Callable
 
 import numpy as np
@@ -33,7 +34,13 @@ _MIN_COS = math.cos(NATIVE_MAX_ANGLE)
 
 
 def _rotation_vector() -> NativeE:
-    jlog3, acos, array = pin.Jlog3, math.acos, np.array
+    jlog3, acos, ndarray, f64, pack = (
+        pin.Jlog3,
+        math.acos,
+        np.ndarray,
+        np.dtype(np.float64),
+        struct.Struct("9d").pack,
+    )
     rotation_vector = ROTATION_PARAMETERIZATIONS["rotation_vector"]
     assert isinstance(rotation_vector, RotationVector)
     scalar = rotation_vector._fast_E  # the general formulas in one pass
@@ -44,7 +51,7 @@ def _rotation_vector() -> NativeE:
         if cos_theta > _MIN_COS:  # θ < NATIVE_MAX_ANGLE: Jlog3; distance to |φ| = 2π
             return _TWO_PI - acos(min(cos_theta, 1.0)), jlog3(C).dot(C.T)
         found = scalar(c00, c01, c02, c10, c11, c12, c20, c21, c22)  # towards π: the scalar formulas
-        return None if found is None else (found[0], array(found[1]).reshape(3, 3))
+        return None if found is None else (found[0], ndarray((3, 3), f64, pack(*found[1])))  # read-only
 
     return native
 
