@@ -14,7 +14,9 @@ length and magnitude passes with one scalar test), :meth:`CoordinateMap.check` f
 (converted, or refused with a ConfigurationError). With ``check_inputs=False`` the caller promises a
 float64 array of shape (dof,) with finite entries; anything else is undefined behaviour of Pinocchio
 (wrong numbers or an exception), never checked. ``batches=True`` (the Robot's own handles) also
-takes checked batches q (N, dof) to the vectorized batch path.
+takes checked batches q (N, dof) to the vectorized batch path. Where the C accelerator runs
+(:mod:`kinengine.model.accelerator`), a plain frame's ``pose``, ``jacobian`` and ``kinematics`` are its
+C calls, which make the same Pinocchio calls and hand every other call to the closures below.
 """
 
 from __future__ import annotations
