@@ -182,13 +182,13 @@ def evaluate_chain(
     jacobian = jac is not None or analytic is not None
     direct = analytic is None and reference != pin.LOCAL  # Jacobian columns straight into jac's view
     # this thread's scratch rows (see scratch_rows): cos, cos, −sin, sin (later the Jacobian's products) |
-    # the buffers M | Rz's product | z_i, p_i stacked (3, m, n) | J (6, dof, n) unless direct
-    head, body = 4 * max(dof, 2), 36
+    # the buffers M, M' (Rz's product goes to the one not holding M) | z_i, p_i stacked (3, m, n) |
+    # J (6, dof, n) unless direct
+    head, body = 4 * max(dof, 2), 24
     memory = _rows(n, scratch_rows(chain, jacobian, direct))
     _cos_sin(qT, memory[: 4 * dof])  # of every coordinate
     turns = memory[: 4 * dof].reshape(2, 2, dof, n)  # [[cos, cos], [−sin, sin]]
     buffers = list(memory[head : head + 24].reshape(2, 4, 3 * n))  # M, M' (4, 3 n) for the products
-    product = memory[head + 24 : head + body].reshape(2, 2, 3, n)
     stacked = jacobian and chain.columns is not None  # z_i, p_i stacked for the Jacobian
     if stacked:
         Z, P = ZP = memory[head + body : head + body + 6 * m].reshape(2, 3, m, n)
@@ -211,6 +211,7 @@ def evaluate_chain(
         else:  # Rz(θ) on M[pair] = (a, b) in place: (a c + b s, b c − a s)
             c, s = (0.0, 0.0) if plain else (np.cos(theta), np.sin(theta))
             turn = turns[:, :, step.coordinate] if plain else np.array([[c, c], [-s, s]])
+            product = buffers[1].reshape(2, 2, 3, n)  # M' is free: M lives in buffers[0]
             np.multiply(M[pair][None], turn[:, :, None], out=product)
             np.add(product[0], product[1, ::-1], out=M[pair])
         if stacked and held and (slot, sign) == (2, 1.0):  # axis in slot 2, p in slot 3: one copy
@@ -298,7 +299,7 @@ _LOCAL = threading.local()
 
 def scratch_rows(chain: Chain, jacobian: bool, direct: bool) -> int:
     """Scratch float64 per configuration of a chunk (``direct``: J written in place, no LOCAL frame)."""
-    head = 4 * max(chain.dof, 2) + 36  # cos/sin | M, M' | Rz's product
+    head = 4 * max(chain.dof, 2) + 24  # cos/sin | M, M' (Rz's product in the one not holding M)
     return head + (6 * len(chain.steps) + (0 if direct else 6 * chain.dof) if jacobian else 0)
 
 
