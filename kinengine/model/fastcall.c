@@ -277,10 +277,10 @@ thread_data(FrameCallsObject *self)
 }
 
 static PyObject *
-homogeneous(PyObject *model, PyObject *data, PyObject *place, PyObject *frame_id)
+homogeneous(FrameCallsObject *self, PyObject *data)
 {
-    PyObject *argv[3] = {model, data, frame_id};
-    PyObject *placement = PyObject_Vectorcall(place, argv, 3, NULL);
+    PyObject *argv[3] = {self->model, data, self->frame_id};
+    PyObject *placement = PyObject_Vectorcall(self->place, argv, 3, NULL);
     if (placement == NULL) {
         return NULL;
     }
@@ -308,10 +308,43 @@ frame_jacobian(FrameCallsObject *self, PyObject *data, PyObject *q, PyObject *re
     return PyObject_Vectorcall(self->frame_jacobian, argv, 5, NULL);
 }
 
+/* The reference frame of a plain call with a ready q (a borrowed reference), or NULL when the call is not
+ * plain: (q) or, with ``reference``, (q, reference) or (q, reference=...) naming a reference the table
+ * knows. Such calls go to the pure-Python closures, which accept or refuse everything else. */
+static PyObject *
+plain_call(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames, int reference)
+{
+    PyObject *given = NULL, *found = self->default_reference;
+    if (nargs < 1 || nargs > 1 + reference) {
+        return NULL;
+    }
+    if (kwnames != NULL) {
+        if (!reference || nargs != 1 || PyTuple_GET_SIZE(kwnames) != 1 ||
+            PyUnicode_Compare(PyTuple_GET_ITEM(kwnames, 0), str_reference) != 0) {
+            PyErr_Clear();
+            return NULL;
+        }
+        given = args[1];
+    }
+    else if (nargs == 2) {
+        given = args[1];
+    }
+    if (given != NULL) {
+        if (!PyUnicode_CheckExact(given) || (found = PyDict_GetItemWithError(self->references, given)) == NULL) {
+            PyErr_Clear();
+            return NULL;
+        }
+    }
+    if (self->checking && !is_ready(args[0], self->dof, self->limit)) {
+        return NULL;
+    }
+    return found;
+}
+
 static PyObject *
 calls_pose(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
-    if (nargs != 1 || kwnames != NULL || (self->checking && !is_ready(args[0], self->dof, self->limit))) {
+    if (plain_call(self, args, nargs, kwnames, 0) == NULL) {
         return PyObject_Vectorcall(self->slow_pose, args, nargs, kwnames);
     }
     PyObject *data = thread_data(self);
@@ -320,50 +353,17 @@ calls_pose(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyOb
     }
     PyObject *T = NULL;
     if (forward_kinematics(self, data, args[0]) == 0) {
-        T = homogeneous(self->model, data, self->place, self->frame_id);
+        T = homogeneous(self, data);
     }
     Py_DECREF(data);
     return T;
 }
 
-/* The reference frame of a plain call (a borrowed reference), or NULL when the call is not plain:
- * (q) or (q, reference) or (q, reference=...), with a reference the table knows. */
-static PyObject *
-plain_reference(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
-{
-    PyObject *given;
-    if (kwnames == NULL) {
-        if (nargs == 1) {
-            return self->default_reference;
-        }
-        if (nargs != 2) {
-            return NULL;
-        }
-        given = args[1];
-    }
-    else {
-        if (nargs != 1 || PyTuple_GET_SIZE(kwnames) != 1 ||
-            PyUnicode_Compare(PyTuple_GET_ITEM(kwnames, 0), str_reference) != 0) {
-            PyErr_Clear();
-            return NULL;
-        }
-        given = args[1];
-    }
-    if (!PyUnicode_CheckExact(given)) {
-        return NULL; /* the Python path accepts or refuses everything else */
-    }
-    PyObject *reference = PyDict_GetItemWithError(self->references, given);
-    if (reference == NULL) {
-        PyErr_Clear();
-    }
-    return reference;
-}
-
 static PyObject *
 calls_jacobian(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
-    PyObject *reference = nargs >= 1 ? plain_reference(self, args, nargs, kwnames) : NULL;
-    if (reference == NULL || (self->checking && !is_ready(args[0], self->dof, self->limit))) {
+    PyObject *reference = plain_call(self, args, nargs, kwnames, 1);
+    if (reference == NULL) {
         return PyObject_Vectorcall(self->slow_jacobian, args, nargs, kwnames);
     }
     PyObject *data = thread_data(self);
@@ -378,8 +378,8 @@ calls_jacobian(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, 
 static PyObject *
 calls_kinematics(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
 {
-    PyObject *reference = nargs >= 1 ? plain_reference(self, args, nargs, kwnames) : NULL;
-    if (reference == NULL || (self->checking && !is_ready(args[0], self->dof, self->limit))) {
+    PyObject *reference = plain_call(self, args, nargs, kwnames, 1);
+    if (reference == NULL) {
         return PyObject_Vectorcall(self->slow_kinematics, args, nargs, kwnames);
     }
     PyObject *data = thread_data(self);
@@ -389,12 +389,12 @@ calls_kinematics(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs
     PyObject *q = args[0], *T = NULL, *J = NULL, *result = NULL;
     if (reference == self->local_reference) { /* Pinocchio's LOCAL frame Jacobian does not place the joints */
         if (forward_kinematics(self, data, q) == 0 &&
-            (T = homogeneous(self->model, data, self->place, self->frame_id)) != NULL) {
+            (T = homogeneous(self, data)) != NULL) {
             J = frame_jacobian(self, data, q, reference);
         }
     }
     else if ((J = frame_jacobian(self, data, q, reference)) != NULL) {
-        T = homogeneous(self->model, data, self->place, self->frame_id);
+        T = homogeneous(self, data);
     }
     if (T != NULL && J != NULL) {
         result = PyTuple_Pack(2, T, J);
