@@ -189,6 +189,7 @@ def evaluate_chain(
     _cos_sin(qT, memory[: 4 * dof])  # of every coordinate
     turns = memory[: 4 * dof].reshape(2, 2, dof, n)  # [[cos, cos], [−sin, sin]]
     buffers = list(memory[head : head + 24].reshape(2, 4, 3 * n))  # M, M' (4, 3 n) for the products
+    products = [b.reshape(2, 2, 3, n) for b in buffers]  # Rz's product goes to the buffer not holding M
     stacked = jacobian and chain.columns is not None  # z_i, p_i stacked for the Jacobian
     if stacked:
         Z, P = ZP = memory[head + body : head + body + 6 * m].reshape(2, 3, m, n)
@@ -202,6 +203,7 @@ def evaluate_chain(
             if not held:
                 M[3] = p
             buffers.reverse()
+            products.reverse()
             M = np.matmul(matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
             p, held = M[3], True
         plain = step.scaling == 1.0 and step.offset == 0.0
@@ -211,7 +213,7 @@ def evaluate_chain(
         else:  # Rz(θ) on M[pair] = (a, b) in place: (a c + b s, b c − a s)
             c, s = (0.0, 0.0) if plain else (np.cos(theta), np.sin(theta))
             turn = turns[:, :, step.coordinate] if plain else np.array([[c, c], [-s, s]])
-            product = buffers[1].reshape(2, 2, 3, n)  # M' is free: M lives in buffers[0]
+            product = products[1]  # M' is free: M lives in buffers[0]
             np.multiply(M[pair][None], turn[:, :, None], out=product)
             np.add(product[0], product[1, ::-1], out=M[pair])
         if stacked and held and (slot, sign) == (2, 1.0):  # axis in slot 2, p in slot 3: one copy
@@ -225,6 +227,7 @@ def evaluate_chain(
         if not held:
             M[3] = p
         buffers.reverse()
+        products.reverse()
         M = np.matmul(plan.matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
         p = M[3]
     p_f = p.copy() if analytic is not None and stacked else p  # P is overwritten below
