@@ -1,8 +1,8 @@
 """The vectorized batch path equals Robot's single-configuration path (Pinocchio) row by row.
 
-Both evaluation strategies of kinengine.batch are exercised: the numpy chain (forced even for
-small N) and the Pinocchio loop it uses for small batches, on one thread and split over chunks
-and threads.
+Every evaluation strategy of kinengine.batch is exercised: the C chain (when built), the numpy chain
+(forced even for small N) and the Pinocchio loop used for small batches, on one thread and split over
+chunks and threads.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from urdf_strategies import random_urdfs
 
 import kinengine
 from kinengine.analytic import evaluate as evaluate_module
-from kinengine.kinematics import batch, chain
+from kinengine.kinematics import batch, chain, compiler
 from kinengine.reference import ReferenceKinematics
 
 REFERENCES = ("local_world_aligned", "local", "world")
@@ -79,10 +79,15 @@ def robot(request):
     return _load(request.param)
 
 
-@pytest.fixture(params=["numpy", "pinocchio"])
+@pytest.fixture(params=["kernel", "numpy", "pinocchio"])
 def strategy(request, monkeypatch):
     """Force one evaluation strategy whatever the batch size."""
-    monkeypatch.setattr(batch, "CALLS_PER_CONFIGURATION", 10**6 if request.param == "numpy" else 0)
+    if request.param == "kernel" and compiler.KERNEL is None:
+        pytest.skip("the C chain is not built here")
+    if request.param != "kernel":
+        monkeypatch.setattr(compiler, "KERNEL", None)
+    monkeypatch.setattr(batch, "KERNEL_FROM", 1 if request.param == "kernel" else 10**9)
+    monkeypatch.setattr(batch, "CALLS_PER_CONFIGURATION", 0 if request.param == "pinocchio" else 10**6)
     return request.param
 
 
@@ -287,7 +292,8 @@ def test_robot_batches_split_over_chunks_and_threads(monkeypatch, name):
 
 
 def test_robot_batch_routing_takes_the_fast_path_for_each_size(monkeypatch):
-    """Small batches loop (Pinocchio, or the single analytic call per row); large ones use the numpy chain."""
+    """Small batches loop (Pinocchio, or the single analytic call per row); large ones use the chain (the C
+    chain, where built, from KERNEL_FROM = 2 rows for poses and Jacobians)."""
     robot = kinengine.load("abb_irb120")
     used = []
 
@@ -295,7 +301,7 @@ def test_robot_batch_routing_takes_the_fast_path_for_each_size(monkeypatch):
         original = getattr(module, name)
         monkeypatch.setattr(module, name, lambda *args, **kw: used.append(label) or original(*args, **kw))
 
-    spy(batch, "run_chain", "numpy")
+    spy(batch, "run_chain", "chain")
     spy(batch, "_pinocchio_loop", "loop")
     spy(evaluate_module, "_analytic_loop", "analytic loop")
     for n in (1, 2, 1000):
@@ -303,7 +309,8 @@ def test_robot_batch_routing_takes_the_fast_path_for_each_size(monkeypatch):
         robot.frame_pose(Q)
         robot.jacobian(Q)
         robot.analytic_jacobian(Q, rotation="quaternion")
-    assert used == ["loop", "loop", "analytic loop"] * 2 + ["numpy", "numpy", "numpy"]
+    two = ["chain", "chain"] if compiler.KERNEL is not None else ["loop", "loop"]
+    assert used == ["loop", "loop", "analytic loop", *two, "analytic loop"] + ["chain"] * 3
 
 
 def test_empty_robot_batch_is_refused():

@@ -189,8 +189,12 @@ def test_file_names_carry_the_version(dists: dict[str, Path]) -> None:
         assert wheel == f"kinengine-{v}-py3-none-any.whl"
 
 
-def _is_accelerator(name: str) -> bool:
-    return re.fullmatch(r"kinengine/model/fastcall\.[^/]*(\.so|\.pyd)", name) is not None
+ACCELERATORS = ("kinengine/model/fastcall", "kinengine/kinematics/chainkernel")
+"""The optional C extensions (without the platform suffix)."""
+
+
+def _is_accelerator(name: str, module: str = ACCELERATORS[0]) -> bool:
+    return re.fullmatch(rf"{module}\.[^/]*(\.so|\.pyd)", name) is not None
 
 
 def _can_compile() -> bool:
@@ -220,11 +224,12 @@ def test_wheel_contents(wheel_names: list[str], tracked: list[str]) -> None:
         "kinengine/__init__.py",
         "kinengine/py.typed",
         "kinengine/robots/abb_irb120/abb_irb120.urdf",
-        "kinengine/model/fastcall.pyi",
+        *(f"{module}.pyi" for module in ACCELERATORS),
     ):
         assert required in names
     if _can_compile():  # pip builds the optional C accelerator where it can
-        assert any(_is_accelerator(n) for n in names), sorted(n for n in names if "fastcall" in n)
+        for module in ACCELERATORS:
+            assert any(_is_accelerator(n, module) for n in names), sorted(n for n in names if ".so" in n)
     assert {"abb_irb120", "planar_3dof", "scara"} <= set(SHIPPED_ROBOTS)
     for robot in SHIPPED_ROBOTS:
         assert f"kinengine/robots/{robot}/{robot}.urdf" in names
@@ -278,9 +283,13 @@ def test_installed_kinengine_is_the_wheel(venv: Path, elsewhere: Path) -> None:
 def test_installed_wheel_runs_the_accelerator_it_ships(
     venv: Path, elsewhere: Path, wheel_names: list[str]
 ) -> None:
-    code = "from kinengine.model import accelerator; print(accelerator.AVAILABLE)"
+    code = (
+        "from kinengine.model import accelerator; from kinengine.kinematics import compiler; "
+        "print(accelerator.AVAILABLE, compiler.KERNEL is not None)"
+    )
     proc = _run([venv / "python", "-c", code], cwd=elsewhere, timeout=120)
-    assert proc.stdout.strip() == str(any(_is_accelerator(n) for n in wheel_names))
+    shipped = [str(any(_is_accelerator(n, module) for n in wheel_names)) for module in ACCELERATORS]
+    assert proc.stdout.split() == shipped
 
 
 def test_installed_version(venv: Path, elsewhere: Path) -> None:

@@ -132,7 +132,7 @@ def analytic_batch(
     n = len(Q)
     out = np.empty((n, pmap.size, kin.dof))
     chain = (
-        batch.numpy_chain(kin, fid, n, True, ANALYTIC_CALLS, row_cost=2)
+        batch.numpy_chain(kin, fid, n, True, ANALYTIC_CALLS, row_cost=2, native=False)
         if kin.dof
         else batch.compiled_chain(kin, fid)
     )

@@ -20,13 +20,16 @@ import itertools
 import math
 import os
 import threading
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError
-from .chain import CHUNK, Chain, Step, Terms, evaluate_chain, scratch_rows
+from . import compiler
+from .chain import CHUNK, Chain, evaluate_chain, scratch_rows
+from .compiler import REFERENCE_CODES, compiled_chain
 from .engine import Kinematics
 
 if TYPE_CHECKING:  # imported when the first pool starts: concurrent.futures (and logging) cost ~5 ms
@@ -40,10 +43,13 @@ MEMORY_SHARE = 0.1
 """Chunks shrink (down to MIN_CHUNK) until the threads' scratch is within this share of the outputs, so a
 call's memory stays within its outputs + 10 %. (Longer chunks are faster: 100k rows on 2 threads, median
 M configs/s at 0.1, 0.2, 0.3 measured interleaved: Kinova 6.48, 6.90, 7.17; ABB IRB 120 5.83, 6.19, 6.50.)"""
-ROUNDING = 1e-15
-"""Compiled constants within this (relative) of 0 or ±1 are taken as exactly that (see _snap)."""
 MIN_PER_WORKER = 4096
 """Batches are split over several threads only when each gets at least this many rows."""
+KERNEL_FROM = 2
+"""Batches of this many rows or more run on the C chain when it is built (ABB IRB 120, robot.kinematics:
+2 rows 5.7 µs against 7.4 looping over Pinocchio, 64 rows 16 against 145; one row: equal)."""
+KERNEL_MIN_PER_WORKER = 1024
+"""The same for the C chain (~0.13 µs a row against ~30 µs to hand a share to a pool thread)."""
 WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
 """Threads per batch (this one included): the cores this process may use."""
 CALLS_PER_CONFIGURATION = 3
@@ -91,32 +97,53 @@ def run_chain(
     workers: int | None = None,
 ) -> None:
     """Evaluate Q in chunks of about chunk_rows rows, split evenly over up to ``workers`` (WORKERS)
-    threads, each reusing its own scratch from chunk to chunk."""
+    threads, each reusing its own scratch from chunk to chunk; or, with the C chain (not for analytic
+    Jacobians), in one share per thread, written straight into the outputs."""
+    if chain.kernel is not None and analytic is None and compiler.KERNEL is not None:
+        workers = max(1, min(WORKERS if workers is None else workers, len(Q) // KERNEL_MIN_PER_WORKER))
+        code = REFERENCE_CODES.get(reference, 0)  # reference None: no Jacobian asked
+        run = chain.kernel.run
+
+        def share(a: int, b: int) -> None:
+            run(Q[a:b], None if pose is None else pose[a:b], None if jac is None else jac[a:b], code)
+
+        _share(list(itertools.pairwise(len(Q) * i // workers for i in range(workers + 1))), share, workers)
+        return
     workers = max(1, min(WORKERS if workers is None else workers, len(Q) // MIN_PER_WORKER))
     chunk = chunk_rows(chain, len(Q), workers, pose is not None, jac is not None, analytic, reference)
     per = len(Q) / (workers * chunk)  # chunks per worker: rounded (2/3 to 3/2 × chunk rows), or up
     pieces = workers * max(1, math.ceil(per) if MIN_CHUNK < chunk < CHUNK else round(per))  # if memory binds
     chunks = list(itertools.pairwise(len(Q) * i // pieces for i in range(pieces + 1)))
 
-    def work(part: list[tuple[int, int]]) -> None:
-        for a, b in part:
-            evaluate_chain(
-                chain,
-                Q[a:b].T,  # a strided view: the chain reads its rows
-                None if pose is None else pose[a:b],
-                None if jac is None else jac[a:b],
-                reference,
-                None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]),
-            )
+    def evaluate_rows(a: int, b: int) -> None:
+        evaluate_chain(
+            chain,
+            Q[a:b].T,  # a strided view: the chain reads its rows
+            None if pose is None else pose[a:b],
+            None if jac is None else jac[a:b],
+            reference,
+            None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]),
+        )
 
-    per = pieces // workers
+    _share(chunks, evaluate_rows, workers)
+
+
+def _share(chunks: list[tuple[int, int]], work: Callable[[int, int], None], workers: int) -> None:
+    """work(a, b) for every chunk, in ``workers`` equal shares of consecutive chunks: the calling thread
+    takes the first, the pool the others."""
+
+    def part(shares: list[tuple[int, int]]) -> None:
+        for a, b in shares:
+            work(a, b)
+
+    per = len(chunks) // workers
     futures = []
-    for i in range(per, pieces, per):
+    for i in range(per, len(chunks), per):
         try:  # after interpreter shutdown (an atexit handler) no pool starts or takes work: do it here
-            futures.append(_pool(workers - 1).submit(work, chunks[i : i + per]))
+            futures.append(_pool(workers - 1).submit(part, chunks[i : i + per]))
         except RuntimeError:
-            work(chunks[i : i + per])
-    work(chunks[:per])  # the calling thread takes the first share
+            part(chunks[i : i + per])
+    part(chunks[:per])
     for future in futures:
         future.result()
 
@@ -189,63 +216,6 @@ def evaluate(
     return (T if pose else None), (J if jacobian else None)
 
 
-def _axis_basis(axis: np.ndarray) -> np.ndarray:
-    """A rotation Q with Q e_z = axis (exact signed permutation when the axis is a coordinate axis)."""
-    e = np.zeros(3)
-    e[int(np.argmin(np.abs(axis)))] = 1.0
-    x = e - (e @ axis) * axis
-    x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(axis, x), axis])
-
-
-def _snap(values: np.ndarray) -> np.ndarray:
-    """Rounding residue (|v| <= ROUNDING of the largest entry, e.g. cos(π/2) = 6e-17 from an rpy of π/2)
-    set to 0, and ±(1 − residue) to ±1: each costs a numpy pass per chunk for a change below 1e-15."""
-    residue = ROUNDING * float(np.abs(values).max(initial=0.0))
-    values = np.where(np.abs(values) <= residue, 0.0, values)
-    return np.where(np.abs(np.abs(values) - 1.0) <= ROUNDING, np.sign(values), values)
-
-
-def _terms(matrix: np.ndarray) -> Terms:
-    """Nonzero entries of a 3x3 rotation, column by column: ((row, value), ...) per column (snapped)."""
-    matrix = _snap(matrix)
-    return tuple(tuple((m, float(matrix[m, k])) for m in range(3) if matrix[m, k] != 0.0) for k in range(3))
-
-
-def _vector_terms(vector: np.ndarray) -> tuple[tuple[int, float], ...]:
-    vector = _snap(vector) if np.abs(vector).max(initial=0.0) > 0 else vector
-    return tuple((m, float(vector[m])) for m in range(3) if vector[m] != 0.0)
-
-
-def _compile(kin: Kinematics, fid: int) -> Chain:
-    """The chain of movable joints from the root to frame ``fid``, with its constants."""
-    model, coords = kin.model, kin.coordinates
-    joints = {j.name: j for j in kin.description.joints}
-    frame = model.frames[fid]
-    steps, seen = [], set()
-    Q_parent = np.eye(3)
-    for jid in list(model.supports[frame.parentJoint])[1:]:
-        k = model.joints[jid].idx_v  # Pinocchio's coordinate: row k of the coordinate map
-        joint = joints[model.names[jid]]
-        coordinate = int(coords.leader[k])
-        axis = np.asarray(joint.axis, dtype=float)
-        Q = _axis_basis(axis / np.linalg.norm(axis))
-        placement, scale = model.jointPlacements[jid], float(coords.multiplier[k])
-        K, t = _terms(Q_parent.T @ placement.rotation @ Q), _vector_terms(Q_parent.T @ placement.translation)
-        prismatic, offset = joint.type == "prismatic", float(coords.offset[k])
-        steps.append(Step(prismatic, coordinate, scale, offset, K, t, coordinate in seen))
-        seen.add(coordinate)
-        Q_parent = Q
-    rotation = _terms(Q_parent.T @ frame.placement.rotation)
-    translation = _vector_terms(Q_parent.T @ frame.placement.translation)
-    return Chain(tuple(steps), rotation, translation, kin.dof)
-
-
-def compiled_chain(kin: Kinematics, fid: int) -> Chain:
-    """The chain to frame ``fid``, compiled once per robot and frame."""
-    return kin.memoized(("batch chain", fid), lambda: _compile(kin, fid))
-
-
 def checked_workers(workers: object) -> int | None:
     """``workers`` as a thread count >= 1 (None: WORKERS); OptionError otherwise."""
     if workers is None:
@@ -282,13 +252,16 @@ def checked_out(out: object, n: int, dof: int) -> tuple[np.ndarray, np.ndarray] 
 
 
 def numpy_chain(
-    kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 0, row_cost: int = 1
+    kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 0, row_cost: int = 1, native: bool = True
 ) -> Chain | None:
-    """The compiled chain if numpy over the batch is the faster path, else None (loop row by row).
+    """The compiled chain if evaluating it over the batch is the faster path, else None (loop row by row).
 
-    A loop row costs ``row_cost`` × CALLS_PER_CONFIGURATION numpy calls; the numpy path costs the
-    chain's calls plus ``extra``.
+    ``native``: the caller runs poses and Jacobians, which the C chain (when built) evaluates faster than
+    Pinocchio's loop from KERNEL_FROM rows on. Otherwise a loop row costs ``row_cost`` ×
+    CALLS_PER_CONFIGURATION numpy calls and the numpy path the chain's calls plus ``extra``.
     """
+    if native and compiler.KERNEL is not None and n >= KERNEL_FROM:
+        return compiled_chain(kin, fid)
     budget = row_cost * n * CALLS_PER_CONFIGURATION
     if budget < MIN_CALLS + extra:  # the chain is not even looked up
         return None
@@ -299,6 +272,8 @@ def numpy_chain(
 __all__ = [
     "CALLS_PER_CONFIGURATION",
     "CHUNK",
+    "KERNEL_FROM",
+    "KERNEL_MIN_PER_WORKER",
     "MEMORY_SHARE",
     "MIN_CHUNK",
     "WORKERS",

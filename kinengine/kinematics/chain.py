@@ -2,7 +2,7 @@
 Jacobians (6, dof) evaluated column-wise over a chunk of n configurations at once (arrays (3, n)).
 
 The chain from the root to the frame is compiled once from the Pinocchio model
-(:func:`kinengine.kinematics.batch.compiled_chain`). Joint i is carried as S_i = C_Ii · Q_i, where
+(:func:`kinengine.kinematics.compiler.compiled_chain`). Joint i is carried as S_i = C_Ii · Q_i, where
 Q_i is a constant rotation with Q_i e_z = a_i (its axis):
 
     S_i = S_parent · K_i · Rz(θ_i),   K_i = Q_parentᵀ · C_i⁰ · Q_i     (C_i⁰, p_i⁰: joint placement)
@@ -21,9 +21,13 @@ from __future__ import annotations
 
 import itertools
 import threading
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+
+if TYPE_CHECKING:
+    from .chainkernel import Kernel
 
 CHUNK = 8192
 """Most configurations per numpy pass: each call costs ~1 µs and hands the GIL to the other threads, so
@@ -87,7 +91,7 @@ class Plan:
         self.moves: list[tuple] = []
         for i, step in enumerate(steps):
             if i == 0:  # S = I and p = 0 until the first joint moves: K_1 and t_1 are constants
-                self.origin, start = _constant(step.rotation, step.translation)
+                self.origin, start = constant_terms(step.rotation, step.translation)
                 matrix = None
             else:
                 matrix = rename(step.rotation, shift(step.translation), bool(step.translation))
@@ -96,13 +100,13 @@ class Plan:
         if steps:  # no product for a signed permutation and no shift (C_IF's columns: slots × signs)
             self.matrix = rename(rotation, shift(translation), bool(translation))
         else:
-            (self.origin, start), self.matrix = _constant(rotation, translation), None
+            (self.origin, start), self.matrix = constant_terms(rotation, translation), None
         self.slots, self.signs = slots, signs
         self.start = np.vstack([start.T, self.origin.T])[:, :, None]  # slot k: column k; slot 3: p
         self.calls = 21 + sum(4 + (m[0] is not None) for m in self.moves)  # cos/sin, Rz, z_i, p_i, T
 
 
-def _constant(rotation: Terms, translation: tuple) -> tuple[np.ndarray, np.ndarray]:
+def constant_terms(rotation: Terms, translation: tuple) -> tuple[np.ndarray, np.ndarray]:
     """(t (3, 1), K (3, 3)) from their nonzero entries."""
     p, K = np.zeros((3, 1)), np.zeros((3, 3))
     for k, column in enumerate(rotation):
@@ -115,7 +119,7 @@ class Chain:
     """The compiled chain: its steps, the frame placement after the last one (C_IF = S_last · rotation),
     the zero Jacobian columns, its :class:`Plan` and its numpy calls per chunk (pose; Jacobian)."""
 
-    __slots__ = ("columns", "dof", "jacobian_calls", "plan", "pose_calls",
+    __slots__ = ("columns", "dof", "jacobian_calls", "kernel", "plan", "pose_calls",
                  "rotation", "steps", "translation", "unused")  # fmt: skip
 
     def __init__(self, steps: tuple[Step, ...], rotation: Terms, translation: tuple, dof: int) -> None:
@@ -130,6 +134,7 @@ class Chain:
             for i, s in enumerate(steps)
         )
         self.columns = slice(first, first + len(steps)) if plain and steps else None
+        self.kernel: Kernel | None = None  # the C chain, set by kinengine.kinematics.compiler when built
 
     full = property(lambda self: not self.unused, doc="Every coordinate drives a joint (no zero column).")
 
@@ -315,4 +320,4 @@ def _rows(n: int, rows: int) -> np.ndarray:
     return memory[: rows * n].reshape(rows, n)
 
 
-__all__ = ["CHUNK", "Chain", "Step", "Terms", "evaluate_chain", "scratch_rows"]
+__all__ = ["CHUNK", "Chain", "Step", "Terms", "constant_terms", "evaluate_chain", "scratch_rows"]

@@ -1,10 +1,13 @@
 """The optional C accelerator of the hot path, and the switch between it and pure Python.
 
 ``kinengine/model/fastcall.c`` is built by ``pip install`` when a C compiler is present (an optional
-extension: without one the install goes on). It does two things the interpreter makes slow:
+extension: without one the install goes on). It does three things the interpreter makes slow:
 
 * the input check of a single q, :attr:`CoordinateMap.ready` (a float64 C-contiguous (dof,) array with
   every |q_i| <= MAX_MAGNITUDE): about 0.02 µs in C against 0.3 µs in Python;
+* the batch chain of :mod:`kinengine.kinematics.chain` (``kinengine/kinematics/chainkernel.c``, loaded
+  there): poses and Jacobians of N configurations one at a time without the GIL and without scratch
+  rows, where numpy needs ~80 passes over chunks of configurations and 84 float64 rows of scratch each;
 * a frame handle's plain calls ``pose(q)``, ``jacobian(q, reference)``, ``kinematics(q, reference)``:
   the same Pinocchio calls in the same order, on the same per-thread Data, without a Python frame.
   Anything else (a q that needs converting or refusing, a batch, another argument) goes to the
@@ -25,9 +28,12 @@ from typing import Any
 
 import numpy as np
 
+SWITCHED_OFF = os.environ.get("KINENGINE_PURE_PYTHON", "") not in ("", "0")
+"""KINENGINE_PURE_PYTHON is set: no C module is used."""
+
 
 def _load() -> ModuleType | None:
-    if os.environ.get("KINENGINE_PURE_PYTHON", "") not in ("", "0"):
+    if SWITCHED_OFF:
         return None
     try:
         from . import fastcall
@@ -63,4 +69,4 @@ def frame_calls(**bound: Any) -> tuple[Callable[..., Any], Callable[..., Any], C
     return calls.pose, calls.jacobian, calls.kinematics
 
 
-__all__ = ["AVAILABLE", "frame_calls", "native", "ready_check"]
+__all__ = ["AVAILABLE", "SWITCHED_OFF", "frame_calls", "native", "ready_check"]

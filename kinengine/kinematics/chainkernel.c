@@ -1,0 +1,433 @@
+/* kinengine.kinematics.chainkernel: the batch chain of kinengine/kinematics/chain.py in C (optional).
+ *
+ *   Kernel(dof, program)     a compiled chain (see chain.Chain.program for the layout of the bytes)
+ *   kernel.run(Q, T, J, reference)
+ *                            T[i] = T_IF(Q[i]) (4, 4) [m] and J[i] = J(Q[i]) (6, dof), rows [linear;
+ *                            angular], reference 0 "local_world_aligned", 1 "world", 2 "local"; T or J may
+ *                            be None. Any strides; the GIL is released while it runs.
+ *
+ * Same algorithm as the numpy chain, one configuration at a time, so nothing but the outputs is written
+ * (no scratch rows): for each movable joint i from the root,
+ *
+ *     p_i = p_parent + S_parent t_i,   S_i = S_parent K_i Rz(theta_i)    (+ S_i e_z theta_i if prismatic)
+ *
+ * with theta_i = scaling_i q[coordinate_i] + offset_i, the joint's axis z_i = S_i e_z; then
+ * C_IF = S_last R_f and p_f = p_last + S_last t_f. Jacobian column of joint i (LOCAL_WORLD_ALIGNED):
+ * revolute [z_i x (p_f - p_i); z_i], prismatic [z_i; 0]; WORLD: p_i x z_i for the revolute linear part;
+ * LOCAL: C_IF^T applied to both halves; a mimic joint adds scaling_i x its column to the leader's.
+ * sin and cos are libm's; results agree with Pinocchio to rounding (about 1e-15), as the numpy chain's.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#define STEP_DOUBLES 17 /* prismatic, coordinate, scaling, offset, accumulate, K (3x3 row-major), t (3) */
+#define TAIL_DOUBLES 12 /* R_f (3x3 row-major), t_f (3) */
+
+typedef struct {
+    int prismatic, accumulate, plain;
+    Py_ssize_t coordinate;
+    double scaling, offset, K[9], t[3];
+} Step;
+
+typedef struct {
+    PyObject_HEAD
+    Py_ssize_t dof, m;
+    Step *steps;
+    unsigned char *used; /* dof flags: some step writes this Jacobian column */
+    double R[9], t[3];
+} Kernel;
+
+static void
+kernel_dealloc(Kernel *self)
+{
+    PyMem_Free(self->steps);
+    PyMem_Free(self->used);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyObject *
+kernel_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
+{
+    static char *keywords[] = {"dof", "program", NULL};
+    Py_ssize_t dof;
+    Py_buffer program;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "ny*", keywords, &dof, &program)) {
+        return NULL;
+    }
+    Kernel *self = NULL;
+    const double *d = (const double *)program.buf;
+    Py_ssize_t count = program.len / (Py_ssize_t)sizeof(double);
+    if (dof < 0 || program.len % (Py_ssize_t)sizeof(double) || count < 1 + TAIL_DOUBLES) {
+        PyErr_SetString(PyExc_ValueError, "Kernel: a program of 1 + 17 m + 12 float64 values is needed");
+        goto done;
+    }
+    double steps = d[0];
+    if (!(steps >= 0 && steps == floor(steps) && count == 1 + STEP_DOUBLES * (Py_ssize_t)steps + TAIL_DOUBLES)) {
+        PyErr_SetString(PyExc_ValueError, "Kernel: the program's length does not match its step count");
+        goto done;
+    }
+    self = (Kernel *)type->tp_alloc(type, 0);
+    if (self == NULL) {
+        goto done;
+    }
+    self->dof = dof;
+    self->m = (Py_ssize_t)steps;
+    self->steps = PyMem_Calloc(self->m ? self->m : 1, sizeof(Step));
+    self->used = PyMem_Calloc(dof ? dof : 1, 1);
+    if (self->steps == NULL || self->used == NULL) {
+        Py_CLEAR(self);
+        PyErr_NoMemory();
+        goto done;
+    }
+    for (Py_ssize_t i = 0; i < self->m; i++) {
+        const double *s = d + 1 + STEP_DOUBLES * i;
+        Step *step = &self->steps[i];
+        if (!(s[1] >= 0 && s[1] < (double)dof && s[1] == floor(s[1]))) {
+            Py_CLEAR(self);
+            PyErr_SetString(PyExc_ValueError, "Kernel: a step's coordinate is not one of the dof columns");
+            goto done;
+        }
+        step->prismatic = s[0] != 0.0;
+        step->coordinate = (Py_ssize_t)s[1];
+        step->scaling = s[2];
+        step->offset = s[3];
+        step->accumulate = s[4] != 0.0;
+        step->plain = s[2] == 1.0 && s[3] == 0.0;
+        memcpy(step->K, s + 5, sizeof step->K);
+        memcpy(step->t, s + 14, sizeof step->t);
+        self->used[step->coordinate] = 1;
+    }
+    memcpy(self->R, d + 1 + STEP_DOUBLES * self->m, sizeof self->R);
+    memcpy(self->t, d + 1 + STEP_DOUBLES * self->m + 9, sizeof self->t);
+done:
+    PyBuffer_Release(&program);
+    return (PyObject *)self;
+}
+
+/* A float64 array's buffer with the given number of dimensions (writable if asked), or -1 and an error. */
+static int
+get_array(PyObject *obj, Py_buffer *view, int ndim, int writable, const char *what)
+{
+    if (PyObject_GetBuffer(obj, view, PyBUF_STRIDES | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0)) < 0) {
+        return -1;
+    }
+    if (view->ndim != ndim || view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0) {
+        PyErr_Format(PyExc_ValueError, "Kernel.run: %s must be a %d-dimensional float64 array", what, ndim);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+#define AT2(v, i, r) (*(double *)((char *)(v).buf + (i) * (v).strides[0] + (r) * (v).strides[1]))
+#define AT3(v, i, r, k) \
+    (*(double *)((char *)(v).buf + (i) * (v).strides[0] + (r) * (v).strides[1] + (k) * (v).strides[2]))
+
+/* out = a x b */
+static inline void
+cross(const double *a, const double *b, double *out)
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* out = C^T v for a row-major 3x3 C */
+static inline void
+rotate_back(const double *C, const double *v, double *out)
+{
+    for (int k = 0; k < 3; k++) {
+        out[k] = C[k] * v[0] + C[3 + k] * v[1] + C[6 + k] * v[2];
+    }
+}
+
+/* S (row-major) = S A, A row-major 3x3 */
+static inline void
+multiply(double *S, const double *A)
+{
+    double r[9];
+    for (int i = 0; i < 3; i++) {
+        for (int k = 0; k < 3; k++) {
+            r[3 * i + k] = S[3 * i] * A[k] + S[3 * i + 1] * A[3 + k] + S[3 * i + 2] * A[6 + k];
+        }
+    }
+    memcpy(S, r, sizeof r);
+}
+
+/* p += S t */
+static inline void
+translate(double *p, const double *S, const double *t)
+{
+    for (int i = 0; i < 3; i++) {
+        p[i] += S[3 * i] * t[0] + S[3 * i + 1] * t[1] + S[3 * i + 2] * t[2];
+    }
+}
+
+/* T[i] and J[i] from the joint angles theta (m), their sines and cosines; zp: 6 m doubles of scratch. */
+static void
+run_row(const Kernel *k, Py_ssize_t i, const double *theta, const double *sines, const double *cosines,
+        const Py_buffer *T, const Py_buffer *J, int reference, double *zp)
+{
+    double S[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, p[3] = {0, 0, 0};
+    for (Py_ssize_t j = 0; j < k->m; j++) {
+        const Step *s = &k->steps[j];
+        translate(p, S, s->t);
+        multiply(S, s->K);
+        if (s->prismatic) {
+            p[0] += S[2] * theta[j];
+            p[1] += S[5] * theta[j];
+            p[2] += S[8] * theta[j];
+        }
+        else {
+            double c = cosines[j], sn = sines[j];
+            for (int r = 0; r < 3; r++) { /* (a, b) -> (a c + b s, b c - a s) */
+                double a = S[3 * r], b = S[3 * r + 1];
+                S[3 * r] = a * c + b * sn;
+                S[3 * r + 1] = b * c - a * sn;
+            }
+        }
+        double *z = zp + 6 * j;
+        z[0] = S[2], z[1] = S[5], z[2] = S[8];
+        z[3] = p[0], z[4] = p[1], z[5] = p[2];
+    }
+    double C[9], pf[3] = {p[0], p[1], p[2]};
+    memcpy(C, S, sizeof C);
+    translate(pf, S, k->t);
+    multiply(C, k->R);
+    if (T->buf != NULL) {
+        for (int r = 0; r < 3; r++) {
+            AT3(*T, i, r, 0) = C[3 * r];
+            AT3(*T, i, r, 1) = C[3 * r + 1];
+            AT3(*T, i, r, 2) = C[3 * r + 2];
+            AT3(*T, i, r, 3) = pf[r];
+        }
+        AT3(*T, i, 3, 0) = 0.0, AT3(*T, i, 3, 1) = 0.0, AT3(*T, i, 3, 2) = 0.0, AT3(*T, i, 3, 3) = 1.0;
+    }
+    if (J->buf == NULL) {
+        return;
+    }
+    for (Py_ssize_t c = 0; c < k->dof; c++) {
+        if (!k->used[c]) {
+            for (int r = 0; r < 6; r++) {
+                AT3(*J, i, r, c) = 0.0;
+            }
+        }
+    }
+    for (Py_ssize_t j = 0; j < k->m; j++) {
+        const Step *s = &k->steps[j];
+        const double *z = zp + 6 * j, *pj = zp + 6 * j + 3;
+        double col[6];
+        if (s->prismatic) {
+            col[0] = z[0], col[1] = z[1], col[2] = z[2], col[3] = col[4] = col[5] = 0.0;
+        }
+        else {
+            if (reference == 1) {
+                cross(pj, z, col);
+            }
+            else {
+                double d[3] = {pf[0] - pj[0], pf[1] - pj[1], pf[2] - pj[2]};
+                cross(z, d, col);
+            }
+            col[3] = z[0], col[4] = z[1], col[5] = z[2];
+        }
+        if (reference == 2) {
+            double v[3], w[3];
+            rotate_back(C, col, v);
+            rotate_back(C, col + 3, w);
+            memcpy(col, v, sizeof v);
+            memcpy(col + 3, w, sizeof w);
+        }
+        if (s->scaling != 1.0) {
+            for (int r = 0; r < 6; r++) {
+                col[r] *= s->scaling;
+            }
+        }
+        for (int r = 0; r < 6; r++) {
+            if (s->accumulate) {
+                AT3(*J, i, r, s->coordinate) += col[r];
+            }
+            else {
+                AT3(*J, i, r, s->coordinate) = col[r];
+            }
+        }
+    }
+}
+
+/* sin and cos of angles in [-LIMIT, LIMIT] without a branch, so that the compiler runs several at once
+ * (SIMD): FreeBSD msun's (fdlibm's) reduction x = n pi/2 + (y0 + y1), good to 85 bits for |n| < 2^20, and
+ * its kernels on [-pi/4, pi/4] (error below 1 ulp); libm's sincos takes any other angle. */
+#define LIMIT 1e5
+static const double INVPIO2 = 6.36619772367581382433e-01, PIO2_1 = 1.57079632673412561417e+00,
+                    PIO2_1T = 6.07710050650619224932e-11, ROUND = 6755399441055744.0; /* 1.5 * 2^52 */
+static const double S1 = -1.66666666666666324348e-01, S2 = 8.33333333332248946124e-03,
+                    S3 = -1.98412698298579493134e-04, S4 = 2.75573137070700676789e-06,
+                    S5 = -2.50507602534068634195e-08, S6 = 1.58969099521155010221e-10;
+static const double C1 = 4.16666666666666019037e-02, C2 = -1.38888888888741095749e-03,
+                    C3 = 2.48015872894767294178e-05, C4 = -2.75573143513906633035e-07,
+                    C5 = 2.08757232129817482790e-09, C6 = -1.13596475577881948265e-11;
+
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__) && defined(__linux__)
+#define CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define CLONES
+#endif
+
+CLONES static void
+sin_cos(const double *restrict x, double *restrict sin_out, double *restrict cos_out, Py_ssize_t count)
+{
+    for (Py_ssize_t i = 0; i < count; i++) {
+        double a = x[i]; /* any other angle gives some number, replaced below */
+        double shifted = a * INVPIO2 + ROUND; /* its low bits: n, the nearest integer, in two's complement */
+        double n = shifted - ROUND;
+        double r = a - n * PIO2_1, w = n * PIO2_1T;
+        double y0 = r - w, y1 = (r - y0) - w;
+        double z = y0 * y0, zz = z * z;
+        double v = z * y0, rs = S2 + z * (S3 + z * S4) + z * zz * (S5 + z * S6);
+        double s = y0 - ((z * (0.5 * y1 - v * rs) - y1) - v * S1);
+        double rc = z * (C1 + z * (C2 + z * C3)) + zz * zz * (C4 + z * (C5 + z * C6));
+        double hz = 0.5 * z, h = 1.0 - hz;
+        double c = h + (((1.0 - h) - hz) + (z * rc - y0 * y1));
+        uint64_t q, sb, cb; /* quadrant n mod 4: (sin, cos) = (s, c), (c, -s), (-s, -c), (-c, s) */
+        memcpy(&q, &shifted, 8);
+        memcpy(&sb, &s, 8);
+        memcpy(&cb, &c, 8);
+        uint64_t odd = (uint64_t)0 - (q & 1);
+        uint64_t sin_bits = ((sb & ~odd) | (cb & odd)) ^ ((q & 2) << 62);
+        uint64_t cos_bits = ((cb & ~odd) | (sb & odd)) ^ (((q + 1) & 2) << 62);
+        memcpy(&sin_out[i], &sin_bits, 8);
+        memcpy(&cos_out[i], &cos_bits, 8);
+    }
+    for (Py_ssize_t i = 0; i < count; i++) {
+        if (!(fabs(x[i]) <= LIMIT)) {
+            sin_out[i] = sin(x[i]);
+            cos_out[i] = cos(x[i]);
+        }
+    }
+}
+
+#define BLOCK 64 /* configurations whose angles are turned to sin and cos together */
+
+static void
+run_rows(const Kernel *k, Py_ssize_t n, const Py_buffer *Q, const Py_buffer *T, const Py_buffer *J, int reference,
+         double *work)
+{
+    const Py_ssize_t m = k->m;
+    double *zp = work, *theta = work + 6 * m, *sines = theta + BLOCK * m, *cosines = sines + BLOCK * m;
+    for (Py_ssize_t start = 0; start < n; start += BLOCK) {
+        Py_ssize_t rows = n - start < BLOCK ? n - start : BLOCK;
+        for (Py_ssize_t b = 0; b < rows; b++) {
+            for (Py_ssize_t j = 0; j < m; j++) {
+                const Step *s = &k->steps[j];
+                double q = AT2(*Q, start + b, s->coordinate);
+                theta[b * m + j] = s->plain ? q : q * s->scaling + s->offset;
+            }
+        }
+        sin_cos(theta, sines, cosines, rows * m);
+        for (Py_ssize_t b = 0; b < rows; b++) {
+            run_row(k, start + b, theta + b * m, sines + b * m, cosines + b * m, T, J, reference, zp);
+        }
+    }
+}
+
+static PyObject *
+kernel_run(Kernel *self, PyObject *args)
+{
+    PyObject *q_obj, *t_obj, *j_obj;
+    int reference;
+    if (!PyArg_ParseTuple(args, "OOOi", &q_obj, &t_obj, &j_obj, &reference)) {
+        return NULL;
+    }
+    if (reference < 0 || reference > 2) {
+        PyErr_SetString(PyExc_ValueError, "Kernel.run: reference must be 0, 1 or 2");
+        return NULL;
+    }
+    Py_buffer Q = {0}, T = {0}, J = {0};
+    double *zp = NULL;
+    PyObject *result = NULL;
+    if (get_array(q_obj, &Q, 2, 0, "Q") < 0) {
+        return NULL;
+    }
+    Py_ssize_t n = Q.shape[0];
+    if (Q.shape[1] != self->dof) {
+        PyErr_SetString(PyExc_ValueError, "Kernel.run: Q must have dof columns");
+        goto done;
+    }
+    if (t_obj != Py_None) {
+        if (get_array(t_obj, &T, 3, 1, "T") < 0) {
+            goto done;
+        }
+        if (T.shape[0] != n || T.shape[1] != 4 || T.shape[2] != 4) {
+            PyErr_SetString(PyExc_ValueError, "Kernel.run: T must be (N, 4, 4)");
+            goto done;
+        }
+    }
+    if (j_obj != Py_None) {
+        if (get_array(j_obj, &J, 3, 1, "J") < 0) {
+            goto done;
+        }
+        if (J.shape[0] != n || J.shape[1] != 6 || J.shape[2] != self->dof) {
+            PyErr_SetString(PyExc_ValueError, "Kernel.run: J must be (N, 6, dof)");
+            goto done;
+        }
+    }
+    zp = PyMem_RawMalloc(sizeof(double) * (6 + 3 * BLOCK) * (self->m ? self->m : 1));
+    if (zp == NULL) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    Py_BEGIN_ALLOW_THREADS
+    run_rows(self, n, &Q, &T, &J, reference, zp);
+    Py_END_ALLOW_THREADS
+    result = Py_NewRef(Py_None);
+done:
+    PyMem_RawFree(zp);
+    PyBuffer_Release(&Q);
+    if (T.obj != NULL) {
+        PyBuffer_Release(&T);
+    }
+    if (J.obj != NULL) {
+        PyBuffer_Release(&J);
+    }
+    return result;
+}
+
+static PyMethodDef kernel_methods[] = {
+    {"run", (PyCFunction)kernel_run, METH_VARARGS,
+     "run(Q, T, J, reference): fill T (N, 4, 4) and/or J (N, 6, dof) for Q (N, dof); None skips one."},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyTypeObject KernelType = {
+    PyVarObject_HEAD_INIT(NULL, 0).tp_name = "kinengine.kinematics.chainkernel.Kernel",
+    .tp_basicsize = sizeof(Kernel),
+    .tp_dealloc = (destructor)kernel_dealloc,
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "Kernel(dof, program): a compiled chain; run(Q, T, J, reference) evaluates a batch.",
+    .tp_methods = kernel_methods,
+    .tp_new = kernel_new,
+};
+
+static struct PyModuleDef chainkernel_module = {
+    PyModuleDef_HEAD_INIT, "kinengine.kinematics.chainkernel",
+    "The batch chain in C: poses and Jacobians one configuration at a time, without scratch rows.", -1, NULL,
+};
+
+PyMODINIT_FUNC
+PyInit_chainkernel(void)
+{
+    if (PyType_Ready(&KernelType) < 0) {
+        return NULL;
+    }
+    PyObject *module = PyModule_Create(&chainkernel_module);
+    if (module == NULL) {
+        return NULL;
+    }
+    if (PyModule_AddObjectRef(module, "Kernel", (PyObject *)&KernelType) < 0) {
+        Py_DECREF(module);
+        return NULL;
+    }
+    return module;
+}

@@ -1,0 +1,112 @@
+"""The chain from the root to a frame, compiled once per robot and frame from Pinocchio's model.
+
+:func:`compiled_chain` gives a :class:`~kinengine.kinematics.chain.Chain`: its movable joints (axis, the
+constant rotation K_i and translation t_i before each, θ = scaling · q + offset for mimic joints) in the
+frames :mod:`kinengine.kinematics.chain` describes, evaluated by numpy (``chain.evaluate_chain``) or, when
+``kinengine/kinematics/chainkernel.c`` was built, by its C twin (``Chain.kernel``, fed the same constants
+by :func:`program`). The C chain is used unless ``KINENGINE_PURE_PYTHON`` is set.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..model import accelerator
+from .chain import Chain, Step, Terms, constant_terms
+from .engine import Kinematics
+
+ROUNDING = 1e-15
+"""Compiled constants within this (relative) of 0 or ±1 are taken as exactly that (see _snap)."""
+REFERENCE_CODES = {pin.LOCAL_WORLD_ALIGNED: 0, pin.WORLD: 1, pin.LOCAL: 2}
+"""The C chain's number for each Jacobian reference."""
+
+
+def _kernel_type() -> type | None:
+    """The C chain (kinengine/kinematics/chainkernel.c), or None: not built, or KINENGINE_PURE_PYTHON."""
+    if accelerator.SWITCHED_OFF:
+        return None
+    try:
+        from .chainkernel import Kernel
+    except ImportError:
+        return None
+    return Kernel
+
+
+KERNEL = _kernel_type()
+"""The C chain's type, or None: then every batch runs on numpy (tests set it to None to compare)."""
+
+
+def program(chain: Chain) -> bytes:
+    """The chain for the C kernel: float64 [m, per step (prismatic, coordinate, scaling, offset,
+    accumulate, K_i (3x3 row-major), t_i), C_IF's rotation after the last step (3x3 row-major), its
+    translation]."""
+    values: list[float] = [len(chain.steps)]
+    for s in chain.steps:
+        t, K = constant_terms(s.rotation, s.translation)
+        values += [s.prismatic, s.coordinate, s.scaling, s.offset, s.accumulate, *K.ravel(), *t.ravel()]
+    t, K = constant_terms(chain.rotation, chain.translation)
+    return np.array([*values, *K.ravel(), *t.ravel()], dtype=np.float64).tobytes()
+
+
+def _axis_basis(axis: np.ndarray) -> np.ndarray:
+    """A rotation Q with Q e_z = axis (exact signed permutation when the axis is a coordinate axis)."""
+    e = np.zeros(3)
+    e[int(np.argmin(np.abs(axis)))] = 1.0
+    x = e - (e @ axis) * axis
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(axis, x), axis])
+
+
+def _snap(values: np.ndarray) -> np.ndarray:
+    """Rounding residue (|v| <= ROUNDING of the largest entry, e.g. cos(π/2) = 6e-17 from an rpy of π/2)
+    set to 0, and ±(1 − residue) to ±1: each costs a numpy pass per chunk for a change below 1e-15."""
+    residue = ROUNDING * float(np.abs(values).max(initial=0.0))
+    values = np.where(np.abs(values) <= residue, 0.0, values)
+    return np.where(np.abs(np.abs(values) - 1.0) <= ROUNDING, np.sign(values), values)
+
+
+def _terms(matrix: np.ndarray) -> Terms:
+    """Nonzero entries of a 3x3 rotation, column by column: ((row, value), ...) per column (snapped)."""
+    matrix = _snap(matrix)
+    return tuple(tuple((m, float(matrix[m, k])) for m in range(3) if matrix[m, k] != 0.0) for k in range(3))
+
+
+def _vector_terms(vector: np.ndarray) -> tuple[tuple[int, float], ...]:
+    vector = _snap(vector) if np.abs(vector).max(initial=0.0) > 0 else vector
+    return tuple((m, float(vector[m])) for m in range(3) if vector[m] != 0.0)
+
+
+def _compile(kin: Kinematics, fid: int) -> Chain:
+    """The chain of movable joints from the root to frame ``fid``, with its constants."""
+    model, coords = kin.model, kin.coordinates
+    joints = {j.name: j for j in kin.description.joints}
+    frame = model.frames[fid]
+    steps, seen = [], set()
+    Q_parent = np.eye(3)
+    for jid in list(model.supports[frame.parentJoint])[1:]:
+        k = model.joints[jid].idx_v  # Pinocchio's coordinate: row k of the coordinate map
+        joint = joints[model.names[jid]]
+        coordinate = int(coords.leader[k])
+        axis = np.asarray(joint.axis, dtype=float)
+        Q = _axis_basis(axis / np.linalg.norm(axis))
+        placement, scale = model.jointPlacements[jid], float(coords.multiplier[k])
+        K, t = _terms(Q_parent.T @ placement.rotation @ Q), _vector_terms(Q_parent.T @ placement.translation)
+        prismatic, offset = joint.type == "prismatic", float(coords.offset[k])
+        steps.append(Step(prismatic, coordinate, scale, offset, K, t, coordinate in seen))
+        seen.add(coordinate)
+        Q_parent = Q
+    rotation = _terms(Q_parent.T @ frame.placement.rotation)
+    translation = _vector_terms(Q_parent.T @ frame.placement.translation)
+    chain = Chain(tuple(steps), rotation, translation, kin.dof)
+    if KERNEL is not None:
+        chain.kernel = KERNEL(kin.dof, program(chain))
+    return chain
+
+
+def compiled_chain(kin: Kinematics, fid: int) -> Chain:
+    """The chain to frame ``fid``, compiled once per robot and frame."""
+    return kin.memoized(("batch chain", fid), lambda: _compile(kin, fid))
+
+
+__all__ = ["KERNEL", "REFERENCE_CODES", "ROUNDING", "compiled_chain", "program"]
