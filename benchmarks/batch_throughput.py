@@ -9,7 +9,8 @@ machine only slows a call, so the best one is the least disturbed) for ``robot.k
 and for the same call with ``out=(T, J)`` preallocated, the minor page faults of one call
 (``ru_minflt`` delta) and its peak extra memory beyond the outputs (``tracemalloc``: numpy reports its
 allocations to it), fresh and with ``out=``, after a first call; "scratch" is what the threads keep
-between calls (workers x MiB each, allocated by the first call of that size and reused). The floor is
+between calls (workers x MiB each, allocated by the first call of that size and reused; none when the
+C chain runs: it writes only the outputs). The floor is
 the inline Pinocchio loop
 
     for i, q in enumerate(Q):
@@ -93,8 +94,19 @@ def faults_and_memory(fn) -> tuple[int, float]:
     return faults, (peak - kept) / 2**20
 
 
+def _c_chain() -> bool:
+    """Whether batches run on the C chain (kinengine.kinematics.chainkernel)."""
+    try:
+        from kinengine.kinematics import compiler
+    except ImportError:  # an older kinengine
+        return False
+    return compiler.KERNEL is not None
+
+
 def _scratch(robot: kinengine.Robot, n: int) -> str:
     """The threads' reused scratch [MiB] for a batch of n (kept between calls; not in "extra")."""
+    if _c_chain():
+        return "none"
     if not hasattr(batch, "chunk_rows"):
         return "?"
     c = batch.compiled_chain(robot.engine, robot.frame_id(robot.end_effector))
@@ -114,6 +126,7 @@ def run(name: str, repeats: int) -> None:
     floor = floor_rate(robot, Q_all[:10_000])
     print(
         f"\n{name} ({robot.dof} dof, frame {frame!r}); workers {batch.WORKERS}; "
+        f"chain {'C' if _c_chain() else 'numpy'}; "
         f"Pinocchio loop floor {floor / 1e6:.3f} M configs/s"
     )
     print(
