@@ -54,6 +54,11 @@ def _run(kernel, Q: np.ndarray, dof: int, code: int) -> tuple[np.ndarray, np.nda
     return T, J
 
 
+def _same(got: tuple, expected: tuple) -> bool:
+    """Every array of ``got`` equals its counterpart bit for bit."""
+    return all(np.array_equal(a, b) for a, b in zip(got, expected, strict=True))
+
+
 def _configurations(robot: kinengine.Robot, rng: np.random.Generator) -> np.ndarray:
     """200 random rows; every coordinate at each special angle; special angles mixed; large angles on
     the continuous joints."""
@@ -153,25 +158,21 @@ def test_strided_inputs_and_outputs_equal_contiguous_bit_for_bit(axes, code):
     wide = np.zeros((2 * n, dof + 3))
     wide[::2, 2 : 2 + dof] = Q
     for view in (np.asfortranarray(Q), wide[::2, 2 : 2 + dof], wide[::2].copy()[:, 2 : 2 + dof]):
-        T2, J2 = _run(kernel, view, dof, code)
-        assert np.array_equal(T2, T) and np.array_equal(J2, J)
-    T2, J2 = _run(kernel, Q[::-1], dof, code)
-    assert np.array_equal(T2[::-1], T) and np.array_equal(J2[::-1], J)
+        assert _same(_run(kernel, view, dof, code), (T, J))
+    assert _same([a[::-1] for a in _run(kernel, Q[::-1], dof, code)], (T, J))
     T2, J2 = _run(kernel, np.broadcast_to(Q[3], Q.shape), dof, code)  # zero stride
-    assert np.array_equal(T2, np.broadcast_to(T[3], T.shape)) and np.array_equal(
-        J2, np.broadcast_to(J[3], J.shape)
-    )
+    assert _same((T2, J2), (np.broadcast_to(T[3], T.shape), np.broadcast_to(J[3], J.shape)))
     T_buffer, J_buffer = np.full((4, 4, n), np.nan), np.full((6, dof, n), np.nan)  # as the IK batch
     kernel.run(Q, T_buffer.transpose(2, 0, 1), J_buffer.transpose(2, 0, 1), code)
-    assert np.array_equal(T_buffer.transpose(2, 0, 1), T) and np.array_equal(J_buffer.transpose(2, 0, 1), J)
+    assert _same((T_buffer.transpose(2, 0, 1), J_buffer.transpose(2, 0, 1)), (T, J))
     T_every, J_every = np.full((2 * n, 4, 4), 7.0), np.full((n, 6, dof, 2), 7.0)
     kernel.run(Q, T_every[::-2], J_every[..., 1], code)
-    assert np.array_equal(T_every[::-2], T) and np.array_equal(J_every[..., 1], J)
+    assert _same((T_every[::-2], J_every[..., 1]), (T, J))
     assert (T_every[::2] == 7.0).all() and (J_every[..., 0] == 7.0).all()  # nothing written in between
     T_only, J_only = np.full_like(T, np.nan), np.full_like(J, np.nan)
     kernel.run(Q, T_only, None, code)
     kernel.run(Q, None, J_only, code)
-    assert np.array_equal(T_only, T) and np.array_equal(J_only, J)
+    assert _same((T_only, J_only), (T, J))
     kernel.run(Q[:0], np.empty((0, 4, 4)), np.empty((0, 6, dof)), code)
     kernel.run(Q, None, None, code)
 
@@ -194,22 +195,12 @@ def test_frame_fixed_to_the_root_and_zero_dof(axes):
 STEP = [0, 0, 1, 0, 0, *IDENTITY]
 
 
-@pytest.mark.parametrize(
-    "dof, values",
-    [
-        (1, [1, *STEP, *IDENTITY][:-1]),  # one value short
-        (1, [2, *STEP, *IDENTITY]),  # step count and length disagree
-        (1, [1.5, *STEP, *IDENTITY]),
-        (1, [np.nan, *STEP, *IDENTITY]),
-        (1, [-1, *IDENTITY]),
-        (1, []),
-        (1, [1, 0, 0.5, *STEP[2:], *IDENTITY]),  # coordinate not an integer
-        (1, [1, 0, 1, *STEP[2:], *IDENTITY]),  # coordinate out of range
-        (1, [1, 0, -1, *STEP[2:], *IDENTITY]),
-        (1, [1, 0, np.nan, *STEP[2:], *IDENTITY]),
-        (-1, [0, *IDENTITY]),
-    ],
-)
+BAD_PROGRAMS = [(1, [1, *STEP, *IDENTITY][:-1]), (1, [2, *STEP, *IDENTITY]), (1, [1.5, *STEP, *IDENTITY])]
+BAD_PROGRAMS += [(1, [np.nan, *STEP, *IDENTITY]), (1, [-1, *IDENTITY]), (1, []), (-1, [0, *IDENTITY])]
+BAD_PROGRAMS += [(1, [1, 0, c, *STEP[2:], *IDENTITY]) for c in (0.5, 1, -1, np.nan, np.inf)]  # coordinate
+
+
+@pytest.mark.parametrize("dof, values", BAD_PROGRAMS)
 def test_bad_programs_are_refused(dof, values):
     with pytest.raises(ValueError, match="Kernel"):
         Kernel(dof, np.array(values, float).tobytes())
@@ -283,7 +274,7 @@ def test_threads_on_disjoint_slices_equal_one_thread_bit_for_bit():
         thread.start()
     for thread in threads:
         thread.join()
-    assert np.array_equal(T4, T) and np.array_equal(J4, J)
+    assert _same((T4, J4), (T, J))
 
 
 class _Spy:
@@ -309,7 +300,7 @@ def test_kinematics_routes_to_the_kernel_and_equals_numpy(monkeypatch):
     monkeypatch.setattr(batch, "WORKERS", 3)
     T3, J3 = robot.kinematics(Q, reference="world")
     assert sorted(spy.rows[1:]) == [333, 334, 334]
-    assert np.array_equal(T3, T1) and np.array_equal(J3, J1)
+    assert _same((T3, J3), (T1, J1))
     spy.rows.clear()
     robot.kinematics(Q[:1])  # one row: Pinocchio's loop
     robot.kinematics(Q[: batch.KERNEL_FROM])
