@@ -208,14 +208,8 @@ def test_bad_programs_are_refused(dof, values):
         Kernel(dof, np.array(values, float).tobytes() + b"\0")  # not a whole number of float64
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=MemoryError,
-    reason="chainkernel.c kernel_new: 17 * (Py_ssize_t)steps overflows (undefined behaviour) and wraps; "
-    "a step count of 1085102592571150336 with 1 + 4096 + 12 values passes the length check, then the "
-    "step array's allocation fails: MemoryError instead of the length ValueError",
-)
 def test_step_count_that_overflows_the_length_check_is_refused():
+    """17 × the step count would wrap around 2^64 to the program's length: bounded before it is multiplied."""
     values = np.zeros(1 + 4096 + 12)
     values[0] = 1085102592571150336.0  # 17 x this = 2^64 + 4096: 4096 modulo 2^64
     with pytest.raises(ValueError, match="Kernel"):

@@ -65,7 +65,8 @@ kernel_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
         goto done;
     }
     double steps = d[0];
-    if (!(steps >= 0 && steps == floor(steps) && count == 1 + STEP_DOUBLES * (Py_ssize_t)steps + TAIL_DOUBLES)) {
+    if (!(steps >= 0 && steps == floor(steps) && steps <= (double)(count - 1 - TAIL_DOUBLES) / STEP_DOUBLES &&
+          count == 1 + STEP_DOUBLES * (Py_ssize_t)steps + TAIL_DOUBLES)) { /* bounded first: no overflow */
         PyErr_SetString(PyExc_ValueError, "Kernel: the program's length does not match its step count");
         goto done;
     }
