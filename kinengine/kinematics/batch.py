@@ -48,8 +48,9 @@ MIN_PER_WORKER = 4096
 KERNEL_FROM = 2
 """Batches of this many rows or more run on the C chain when it is built (ABB IRB 120, robot.kinematics:
 2 rows 5.7 µs against 7.4 looping over Pinocchio, 64 rows 16 against 145; one row: equal)."""
-KERNEL_MIN_PER_WORKER = 1024
-"""The same for the C chain (~0.13 µs a row against ~30 µs to hand a share to a pool thread)."""
+KERNEL_MIN_PER_WORKER = 600
+"""The same for the C chain: handing a share to a pool thread costs ~60 µs (ABB IRB 120, robot.kinematics
+into out=: 500 rows 77 µs on one thread, 110 on two; 1000 rows 149 and 144; 2000 rows 289 and 213)."""
 WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
 """Threads per batch (this one included): the cores this process may use."""
 CALLS_PER_CONFIGURATION = 3
