@@ -431,6 +431,21 @@ def test_large_threaded_batches_match_single_calls_and_the_reference(name):
             np.testing.assert_allclose(J[rows], ref.jacobian(Q[rows], frame, reference), rtol=0, atol=1e-12)
 
 
+def test_q_inside_the_out_arrays_gives_the_answer_of_a_copy(strategy):
+    """Q may be a view into the memory the outputs are written to (here J's): it is read as it was."""
+    robot = _load("abb_irb120")
+    n = 300
+    Q = robot.random_configuration(9, size=n)
+    expected = robot.kinematics(Q, reference="local")
+    for target in (0, 1):
+        out = (np.empty((n, 4, 4)), np.empty((n, 6, 6)))
+        inside = out[target].reshape(-1)[: 6 * n].reshape(n, 6)  # a C-contiguous Q at the outputs' start
+        inside[...] = Q
+        T, J = robot.kinematics(inside, reference="local", out=out)
+        np.testing.assert_allclose(T, expected[0], rtol=0, atol=1e-14)
+        np.testing.assert_allclose(J, expected[1], rtol=0, atol=1e-14)
+
+
 def test_strided_batches_give_the_contiguous_answer_bit_for_bit():
     robot = _load("abb_irb120")
     Q = robot.random_configuration(5, size=9000)

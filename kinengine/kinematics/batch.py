@@ -205,6 +205,8 @@ def evaluate(
     """
     n = len(Q)
     T, J = out if out is not None else (None, None)
+    if out is not None and any(a is not None and np.may_share_memory(Q, a) for a in out):
+        Q = Q.copy()  # the outputs are written while Q is still read: read a copy
     if pose and T is None:
         T = np.empty((n, 4, 4))
     if jacobian and J is None:
