@@ -300,6 +300,31 @@ def test_arms_load_without_a_floating_base_warning(abb_path):
     assert _warnings_of(lambda: kinengine.load("panda")) == []
 
 
+PROPS = """<?xml version="1.0"?>
+<robot name="{name}"><link name="base_link"/>
+  {links}
+</robot>
+"""
+
+
+@pytest.mark.parametrize(
+    ("name", "links", "flying"),
+    [
+        ("wx250s", ["wx250s/gripper_prop_link", "wx250s/left_finger_link"], False),  # Interbotix's gripper
+        ("quad", ["prop_0", "prop_1", "prop_2", "prop_3"], True),
+        ("hex", ["rotor_0_link"], True),
+    ],
+)
+def test_a_gripper_prop_is_not_a_propeller(name, links, flying):
+    text = "\n  ".join(
+        f'<link name="{link}"/><joint name="j{i}" type="fixed"><parent link="base_link"/>'
+        f'<child link="{link}"/></joint>'
+        for i, link in enumerate(links)
+    )
+    messages = _warnings_of(lambda: kinengine.load_urdf_string(PROPS.format(name=name, links=text)))
+    assert any("looks like a flying robot" in m for m in messages) == flying, messages
+
+
 def test_talos_loads_with_one_warning():
     path = _erd("talos_data/robots/talos_reduced.urdf")
     messages = _warnings_of(lambda: kinengine.load(path))

@@ -5,7 +5,8 @@ world (the inertial frame I of the Robot Dynamics lecture notes, ETH Zurich, sec
 how such a file is loaded. For a robot that walks or flies this is a choice the user should see, so
 :func:`floating_base_note` recognizes one from the words in its link and joint names (hip, knee, ankle,
 foot, leg, pelvis, thigh, calf; ANYmal's HAA/HFE/KFE), rotors (rotor, propeller, flying) or wheels
-(base_footprint, wheel, caster) and says so in one sentence. Arms, hands and grippers use none of these words.
+(base_footprint, wheel, caster) and says so in one sentence. Arms, hands and grippers use none of these words,
+but for "prop" in a gripper's part (Interbotix arms' ``gripper_prop_link``), which does not count.
 """
 
 from __future__ import annotations
@@ -35,6 +36,8 @@ LEGGED_WORDS = frozenset(
 )
 FLYING_WORDS = frozenset({"rotor", "propeller", "prop", "flying", "quadrotor", "multirotor", "drone"})
 MOBILE_WORDS = frozenset({"footprint", "wheel", "caster"})
+GRIPPER_WORDS = frozenset({"gripper", "finger", "hand", "jaw"})
+"""A name with one of these is a gripper's part: its "prop" is not a propeller."""
 _WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+|[0-9]+")
 
 
@@ -49,7 +52,8 @@ def floating_base_note(description: RobotDescription) -> str | None:
     (legs, rotors or wheels named in its links or joints); None otherwise."""
     words: set[str] = set()
     for name in [link.name for link in description.links] + [joint.name for joint in description.joints]:
-        words |= name_words(name)
+        found = name_words(name)
+        words |= found - {"prop"} if found & GRIPPER_WORDS else found
     for kind, vocabulary in (
         ("a legged or humanoid robot", LEGGED_WORDS),
         ("a flying robot", FLYING_WORDS),
@@ -65,4 +69,11 @@ def floating_base_note(description: RobotDescription) -> str | None:
     return None
 
 
-__all__ = ["FLYING_WORDS", "LEGGED_WORDS", "MOBILE_WORDS", "floating_base_note", "name_words"]
+__all__ = [
+    "FLYING_WORDS",
+    "GRIPPER_WORDS",
+    "LEGGED_WORDS",
+    "MOBILE_WORDS",
+    "floating_base_note",
+    "name_words",
+]
