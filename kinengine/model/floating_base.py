@@ -52,8 +52,8 @@ def floating_base_note(description: RobotDescription) -> str | None:
     (legs, rotors or wheels named in its links or joints); None otherwise."""
     words: set[str] = set()
     for name in [link.name for link in description.links] + [joint.name for joint in description.joints]:
-        found = name_words(name)
-        words |= found - {"prop"} if found & GRIPPER_WORDS else found
+        parts = name_words(name)
+        words |= parts - {"prop"} if parts & GRIPPER_WORDS else parts
     for kind, vocabulary in (
         ("a legged or humanoid robot", LEGGED_WORDS),
         ("a flying robot", FLYING_WORDS),
