@@ -179,9 +179,10 @@ def _couple(model: Any, names: MJCFNames, joints: list[Joint], notes: list[str],
             ignored.append(label + " (inactive)")
             continue
         i = by_name[follower]
-        if joints[i].mimic is not None:
+        first = joints[i].mimic
+        if first is not None:
             raise MJCFError(
-                f"joint {follower!r} is coupled twice (to {joints[i].mimic.joint!r} and {leader!r})",
+                f"joint {follower!r} is coupled twice (to {first.joint!r} and {leader!r})",
                 source=source,
                 element=label,
             )
