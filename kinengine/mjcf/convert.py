@@ -42,7 +42,6 @@ FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
 EQ_JOINT = 2  # mjtEq.mjEQ_JOINT
 UNLIMITED_SLIDE = 1e16
 """[m] the limits written for a slide joint without a range (a URDF prismatic joint needs limits)."""
-_OBJ_BODY, _OBJ_JOINT, _OBJ_SITE = 1, 3, 6  # mjtObj
 
 
 def describe(
@@ -58,7 +57,8 @@ def describe(
     in_tree = [False] * model.nbody
     in_tree[0] = True
     for b in range(1, model.nbody):
-        if b != top and not in_tree[model.body_parentid[b]]:
+        parent = int(model.body_parentid[b])
+        if (b != top and parent == 0) or not in_tree[parent]:
             continue
         in_tree[b] = True
         _add_body(model, b, names, links, joints, notes, source)
@@ -69,6 +69,13 @@ def describe(
             links.append(Link(name=link))
             joints.append(_fixed(names, link, names.body[body], _pose(model.site_pos[s], model.site_quat[s])))
     joints = _couple(model, names, joints, notes, source)
+    others = [names.body[b] for b in range(1, model.nbody) if model.body_parentid[b] == 0 and b != top]
+    if others and root is None:
+        listed = ", ".join(repr(n) for n in others[:5]) + (", ..." if len(others) > 5 else "")
+        notes.append(
+            f"the world body holds {len(others) + 1} trees: loaded the first, of body {names.body[top]!r}, "
+            f"not {listed}; pass root= to load another"
+        )
     check_magnitudes(links, joints, source=source, limits=limits)
     description = assemble(names.model, links, joints, source=source, warnings=notes, limits=limits)
     return description
