@@ -139,6 +139,29 @@ def test_reference_positions_are_mujocos_qpos():
     np.testing.assert_allclose(robot.frame_pose(q, "link2")[:3, 3], data.body("link2").xpos, atol=1e-15)
 
 
+def test_the_viewer_gets_the_visible_geoms_where_mujoco_draws_them():
+    from kinengine.presentation.viewer_scene import read_visuals
+
+    robot = _load(FEATURES)
+    model = mujoco.MjModel.from_xml_path(str(FEATURES))
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    q = robot.configuration({"j2": math.radians(20)}, base=np.zeros(robot.dof))  # MuJoCo's qpos0
+    visuals = read_visuals(robot.urdf_text, robot.source)
+    assert visuals.failures == [] and visuals.error is None
+    mesh = visuals.links["base"][0]
+    T = robot.frame_pose(q, "base") @ mesh.origin
+    placed = np.asarray(mesh.mesh.vertices) @ T[:3, :3].T + T[:3, 3]
+    compiled = model.mesh_vert[: model.mesh_vertnum[0]] @ data.geom("base_mesh").xmat.reshape(3, 3).T
+    np.testing.assert_allclose(placed, compiled + data.geom("base_mesh").xpos, rtol=0, atol=1e-6)  # float32
+    kinds = [v.kind for v in visuals.links["link1"]]
+    assert kinds == ["cylinder", "sphere", "sphere"]  # the capsule; the group-3 box is not drawn
+    cylinder = robot.frame_pose(q, "link1") @ visuals.links["link1"][0].origin
+    np.testing.assert_allclose(cylinder[:3, 3], data.geom("capsule").xpos, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(cylinder[:3, :3], data.geom("capsule").xmat.reshape(3, 3), rtol=0, atol=1e-12)
+    assert visuals.links["link1"][0].size == (0.01, 0.1)
+
+
 # -- trees, bases, warnings ---------------------------------------------------------------------------
 def test_a_free_base_is_held_with_a_warning_and_root_picks_the_tree():
     with pytest.warns(UserWarning, match="free joint 'float'.*held at its pose in the file"):

@@ -1,6 +1,6 @@
 """Reading an MJCF file as untrusted input, then compiling it with MuJoCo's own compiler.
 
-Before MuJoCo sees anything, the file and every file it ``<include>``\\ s are read once each and parsed
+Before MuJoCo sees anything, the file and every file it includes are read once each and parsed
 by kinengine's safe XML parser (:mod:`kinengine.urdf.safe_xml`: no DTD, no entity, bounded size, tags,
 depth and attributes by :class:`~kinengine.urdf.Limits`); the total size and tag count of all of them
 are bounded as one document's. The compiled model is then bounded too (bodies, joints, coordinates).
@@ -52,9 +52,10 @@ def is_mjcf(path: str | os.PathLike[str]) -> bool:
     return match is None or match.group(1) != b"robot"
 
 
-def compile_mjcf(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> tuple[str, Any]:
-    """(the path as text, MuJoCo's compiled ``MjModel``) of the MJCF file at ``path``; MJCFError (or
-    URDFError for a missing or oversized file) naming the file otherwise."""
+def compile_mjcf(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> tuple[str, Any, str]:
+    """(the path as text, MuJoCo's compiled ``MjModel``, the ``<compiler meshdir>`` or ``assetdir`` of the
+    file or its includes, "" if none) of the MJCF file at ``path``; MJCFError (or URDFError for a missing
+    or oversized file) naming the file otherwise."""
     source, data = read_bytes_once(path, limits)
     try:
         root = parse_xml(data, source=source, limits=limits)
@@ -64,7 +65,11 @@ def compile_mjcf(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> tu
         raise MJCFError(str(exc)) from None
     if root.tag != "mujoco":
         raise MJCFError(f"the root element is <{root.tag}>, expected <mujoco>", source=source)
-    _check_includes(root, Path(source).parent, source, limits, len(data))
+    documents = _check_includes(root, Path(source).parent, source, limits, len(data))
+    meshdir = ""
+    for document in documents:
+        for compiler in document.iter("compiler"):
+            meshdir = compiler.get("meshdir", compiler.get("assetdir", meshdir))
     mujoco = mujoco_module()
     try:
         model = mujoco.MjModel.from_xml_path(source)
@@ -72,12 +77,13 @@ def compile_mjcf(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> tu
         message = " ".join(str(exc).split())
         raise MJCFError(f"MuJoCo's compiler refused the model: {message}", source=source) from None
     _check_size(model, source, limits)
-    return source, model
+    return source, model, meshdir
 
 
-def _check_includes(root: Any, folder: Path, source: str, limits: Limits, size: int) -> None:
-    """Every ``<include file=...>`` below ``root``, transitively, read and parsed safely; the files
+def _check_includes(root: Any, folder: Path, source: str, limits: Limits, size: int) -> list[Any]:
+    """``root`` and every document it includes, transitively, read and parsed safely; the files
     together within ``limits.max_bytes`` and ``limits.max_tags``; at most MAX_INCLUDES of them."""
+    documents = [root]
     pending = [(root, source)]
     seen = 0
     tags = int(root.xpath("count(//*)"))
@@ -109,6 +115,8 @@ def _check_includes(root: Any, folder: Path, source: str, limits: Limits, size: 
                     source=source,
                 )
             pending.append((sub, included))
+            documents.append(sub)
+    return documents
 
 
 def _check_size(model: Any, source: str, limits: Limits) -> None:

@@ -67,7 +67,9 @@ def describe(
         if in_tree[body]:
             link = names.site[s]
             links.append(Link(name=link))
-            joints.append(_fixed(names, link, names.body[body], _pose(model.site_pos[s], model.site_quat[s])))
+            joints.append(
+                _fixed(names, link, names.body[body], pose_matrix(model.site_pos[s], model.site_quat[s]))
+            )
     joints = _couple(model, names, joints, notes, source)
     others = [names.body[b] for b in range(1, model.nbody) if model.body_parentid[b] == 0 and b != top]
     if others and root is None:
@@ -111,7 +113,7 @@ def _add_body(
         )
     moving = [j for j in _joints_of(model, b) if model.jnt_type[j] in (HINGE, SLIDE)]
     parent = names.body[int(model.body_parentid[b])]
-    pending = _pose(model.body_pos[b], model.body_quat[b])
+    pending = pose_matrix(model.body_pos[b], model.body_quat[b])
     for k, j in enumerate(moving):
         axis = np.asarray(model.jnt_axis[j], dtype=float)
         q0 = float(model.qpos0[model.jnt_qposadr[j]])
@@ -119,9 +121,7 @@ def _add_body(
         anchor = np.asarray(model.jnt_pos[j], dtype=float) if hinge else np.zeros(3)
         at_origin = not anchor.any()
         child = body if k == len(moving) - 1 and at_origin else names.new_link(f"{body}__{names.joint[j]}")
-        origin = (
-            pending @ _translation(anchor) @ (_rotation(axis, -q0) if hinge else _translation(-q0 * axis))
-        )
+        origin = pending @ translation(anchor) @ (_rotation(axis, -q0) if hinge else translation(-q0 * axis))
         lower = upper = None
         kind = "prismatic"
         if hinge:
@@ -146,7 +146,7 @@ def _add_body(
         )
         if child != body:
             links.append(Link(name=child))
-        parent, pending = child, _translation(-anchor)
+        parent, pending = child, translation(-anchor)
     links.append(Link(name=body, inertial=_inertial(model, b)))
     if parent != body:
         joints.append(_fixed(names, body, parent, pending))
@@ -232,12 +232,12 @@ def _fixed(names: MJCFNames, child: str, parent: str, origin: npt.NDArray[np.flo
 
 
 def _inertial(model: Any, b: int) -> Inertial:
-    xyz, rpy = _xyz_rpy(_pose(model.body_ipos[b], model.body_iquat[b]))
+    xyz, rpy = _xyz_rpy(pose_matrix(model.body_ipos[b], model.body_iquat[b]))
     ixx, iyy, izz = (float(v) for v in model.body_inertia[b])
     return Inertial(mass=float(model.body_mass[b]), xyz=xyz, rpy=rpy, inertia=(ixx, 0.0, 0.0, iyy, 0.0, izz))
 
 
-def _pose(position: npt.ArrayLike, quaternion: npt.ArrayLike) -> npt.NDArray[np.float64]:
+def pose_matrix(position: npt.ArrayLike, quaternion: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """(4, 4) transform of a position [m] and a unit quaternion (w, x, y, z), MuJoCo's order."""
     w, x, y, z = (float(v) for v in np.asarray(quaternion, dtype=float))
     T = np.eye(4)
@@ -250,7 +250,7 @@ def _pose(position: npt.ArrayLike, quaternion: npt.ArrayLike) -> npt.NDArray[np.
     return T
 
 
-def _translation(p: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+def translation(p: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     T = np.eye(4)
     T[:3, 3] = p
     return T
@@ -311,4 +311,4 @@ class MJCFNames:
         return name
 
 
-__all__ = ["UNLIMITED_SLIDE", "MJCFNames", "describe"]
+__all__ = ["UNLIMITED_SLIDE", "MJCFNames", "describe", "pose_matrix", "translation"]

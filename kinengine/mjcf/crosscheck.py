@@ -43,7 +43,7 @@ def cross_check(robot: Any, samples: int = 20, seed: int = 0) -> CrossCheck:
     """Compare ``robot`` (loaded from an MJCF file: ``robot.source``) with MuJoCo's kinematics of that file
     at ``samples`` random in-range configurations (seeded) and q = neutral."""
     mujoco = mujoco_module()
-    source, model = compile_mjcf(robot.source, limits=LIMITS)
+    source, model, _ = compile_mjcf(robot.source, limits=LIMITS)
     names = MJCFNames(model, source, LIMITS)
     data = mujoco.MjData(model)
     frames = set(robot.frame_names)
