@@ -129,6 +129,40 @@ def test_the_command_line_loads_and_verifies_an_mjcf_file(capsys):
     assert "features" in capsys.readouterr().out
 
 
+def test_the_command_line_takes_root_for_a_tree(capsys):
+    assert main(["info", str(TWO_TREES), "--root", "table"]) == 0
+    out = capsys.readouterr().out
+    assert "slide" in out and "shoulder" not in out
+
+
+def test_an_mjcf_robot_pickles_and_takes_the_model_edits():
+    import pickle
+
+    robot = _load(FEATURES)
+    q = robot.random_configuration(5)
+    twin = pickle.loads(pickle.dumps(robot))
+    np.testing.assert_allclose(twin.frame_pose(q, "tool"), robot.frame_pose(q, "tool"), rtol=0, atol=0)
+    locked = robot.locked({"j4": 0.3})
+    assert locked.joint_names == ("j1", "j2", "j3", "fa")
+    q4 = np.delete(q, robot.joint_names.index("j4"))
+    q5 = q.copy()
+    q5[robot.joint_names.index("j4")] = 0.3
+    np.testing.assert_allclose(
+        locked.frame_pose(q4, "tool"), robot.frame_pose(q5, "tool"), rtol=0, atol=1e-15
+    )
+
+
+def test_the_check_script_reports_every_model_of_a_folder(capsys):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("check_mjcf", DATA.parents[2] / "scripts" / "check_mjcf.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.main([str(DATA), "--samples", "3"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and ".xml" in line]
+    assert [r.split(" | ")[0] for r in rows] == ["| features.xml", "| two_trees.xml"]
+
+
 def test_reference_positions_are_mujocos_qpos():
     """ref="20" (degrees) on j2: q is MuJoCo's qpos, so at q = ref the body sits where the file puts it."""
     robot = _load(FEATURES)
