@@ -263,6 +263,15 @@ def test_untrusted_files_are_bounded_before_mujoco_reads_them(tmp_path):
     missing = _write(tmp_path, ARM, '<include file="nowhere.xml"/>', name="inc.xml")
     with pytest.raises(URDFError, match="nowhere.xml: no such file"):
         kinengine.load(missing)
+    device = _write(tmp_path, ARM, '<asset><mesh name="m" file="/dev/zero"/></asset>', name="device.xml")
+    with pytest.raises(MJCFError, match="<mesh file='/dev/zero'> is not a regular file"):
+        kinengine.load(device)  # MuJoCo would read it forever
+    big = _write(tmp_path, ARM, '<asset><mesh name="m" file="big.stl"/></asset>', name="big.xml")
+    (tmp_path / "big.stl").write_bytes(b"\0" * 4096)
+    with pytest.raises(
+        MJCFError, match="<mesh file='big.stl'> is 4096 bytes, more than Limits.max_bytes = 2048"
+    ):
+        kinengine.load(big, limits=Limits(max_bytes=2048))
     not_mjcf = tmp_path / "other.xml"
     not_mjcf.write_text("<scene/>")
     with pytest.raises(MJCFError, match="the root element is <scene>, expected <mujoco>"):

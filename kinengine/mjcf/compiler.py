@@ -3,7 +3,8 @@
 Before MuJoCo sees anything, the file and every file it includes are read once each and parsed
 by kinengine's safe XML parser (:mod:`kinengine.urdf.safe_xml`: no DTD, no entity, bounded size, tags,
 depth and attributes by :class:`~kinengine.urdf.Limits`); the total size and tag count of all of them
-are bounded as one document's. The compiled model is then bounded too (bodies, joints, coordinates).
+are bounded as one document's, and every asset file (mesh, texture, ...) must be a regular file within
+``Limits.max_bytes``. The compiled model is then bounded too (bodies, joints, coordinates).
 MuJoCo's compiler errors become an :class:`~kinengine.errors.MJCFError` naming the file. MuJoCo is an
 optional extra: ``pip install 'kinengine[mjcf]'``.
 """
@@ -12,6 +13,7 @@ from __future__ import annotations
 
 import os
 import re
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -65,11 +67,14 @@ def compile_mjcf(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> tu
         raise MJCFError(str(exc)) from None
     if root.tag != "mujoco":
         raise MJCFError(f"the root element is <{root.tag}>, expected <mujoco>", source=source)
-    documents = _check_includes(root, Path(source).parent, source, limits, len(data))
-    meshdir = ""
+    folder = Path(source).parent
+    documents = _check_includes(root, folder, source, limits, len(data))
+    dirs: dict[str, str] = {}
     for document in documents:
         for compiler in document.iter("compiler"):
-            meshdir = compiler.get("meshdir", compiler.get("assetdir", meshdir))
+            dirs.update({k: v for k in ("assetdir", "meshdir", "texturedir") if (v := compiler.get(k))})
+    meshdir = dirs.get("meshdir", dirs.get("assetdir", ""))
+    _check_asset_files(documents, folder, dirs, source, limits)
     mujoco = mujoco_module()
     try:
         model = mujoco.MjModel.from_xml_path(source)
@@ -117,6 +122,39 @@ def _check_includes(root: Any, folder: Path, source: str, limits: Limits, size: 
             pending.append((sub, included))
             documents.append(sub)
     return documents
+
+
+def _check_asset_files(
+    documents: list[Any], folder: Path, dirs: dict[str, str], source: str, limits: Limits
+) -> None:
+    """Every file an asset names (mesh, texture, height field, skin, ...) that exists is a regular file of
+    at most ``limits.max_bytes``: MuJoCo reads each whole, so /dev/zero or a FIFO would never end."""
+    for document in documents:
+        for element in document.iter():
+            name = element.get("file") if element.tag != "include" else None
+            if not name:
+                continue
+            kind = "texturedir" if element.tag in ("texture", "hfield") else "meshdir"
+            base = dirs.get(kind, dirs.get("assetdir", ""))
+            for candidate in (folder / base / name, folder / name):
+                try:
+                    info = os.stat(candidate)
+                except (OSError, ValueError):
+                    continue
+                if not stat.S_ISREG(info.st_mode):
+                    raise MJCFError(
+                        f"<{element.tag} file={name!r}> is not a regular file",
+                        source=source,
+                        line=element.sourceline,
+                    )
+                if info.st_size > limits.max_bytes:
+                    raise MJCFError(
+                        f"<{element.tag} file={name!r}> is {info.st_size} bytes, more than "
+                        f"Limits.max_bytes = {limits.max_bytes}",
+                        source=source,
+                        line=element.sourceline,
+                    )
+                break
 
 
 def _check_size(model: Any, source: str, limits: Limits) -> None:
