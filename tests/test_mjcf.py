@@ -211,6 +211,14 @@ def test_a_free_base_is_held_with_a_warning_and_root_picks_the_tree():
         kinengine.load(TWO_TREES, root="nope")
 
 
+def test_a_ball_joint_on_the_top_body_is_held_like_a_free_one(tmp_path):
+    body = f'<body name="top" euler="0.3 0 0"><joint name="s" type="ball"/><geom size=".05"/>{ARM}</body>'
+    with pytest.warns(UserWarning, match="by a ball joint 's'.*held at its pose in the file"):
+        robot = kinengine.load(_write(tmp_path, body))
+    assert robot.joint_names == ("j",)
+    assert cross_check(robot, samples=5).worst <= 1e-12
+
+
 def test_root_is_only_for_mjcf_files():
     with pytest.raises(URDFError, match="root= is for MJCF"):
         kinengine.load("abb_irb120", root="base")
