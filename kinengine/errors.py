@@ -62,6 +62,12 @@ class URDFError(KinematicsError, ValueError):
         super().__init__(f"{prefix}: {message}" if prefix else message)
 
 
+class MJCFError(URDFError):
+    """An MJCF (MuJoCo XML) model is unreadable, refused by MuJoCo's compiler, or holds what a fixed-base
+    kinematic tree cannot (a ball joint, a nonlinear joint coupling). A :class:`URDFError`, so code that
+    catches a bad description catches it; ``source`` names the MJCF file, ``element`` the body or joint."""
+
+
 class FrameNotFoundError(KinematicsError, KeyError):
     """A frame (or joint) name is not part of the model.
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("errors and array types", ("kinengine.errors", "kinengine.arrays")),
     ("description and math", ("kinengine.urdf", "kinengine.parameterizations", "kinengine.reference")),
-    ("model", ("kinengine.model",)),
+    ("model", ("kinengine.model", "kinengine.mjcf")),
     ("kinematics", ("kinengine.kinematics",)),
     ("analytic", ("kinengine.analytic",)),
     ("control", ("kinengine.control",)),

@@ -1,4 +1,4 @@
-"""Entry points that turn a robot name, a URDF or xacro file or URDF text into a :class:`Robot`.
+"""Entry points that turn a robot name, a URDF, xacro or MJCF file or URDF text into a :class:`Robot`.
 
 Every path goes through kinengine's own strict parser and validator first
 (:mod:`kinengine.urdf`); Pinocchio only ever parses the canonical XML regenerated
@@ -6,7 +6,8 @@ from the validated description. A .xacro file is expanded in-process first
 (:func:`kinengine.urdf.xacro.expand_xacro`, no ROS needed). Each load issues at most one
 warning: what the parser corrected or ignored (all of it in ``description.warnings``) and,
 for a floating-base robot, that its root link is held fixed
-(:func:`kinengine.model.floating_base.floating_base_note`).
+(:func:`kinengine.model.floating_base.floating_base_note`). An MJCF (MuJoCo XML) file is compiled by
+MuJoCo and converted by :mod:`kinengine.mjcf` (extra ``[mjcf]``).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from pathlib import Path
 from typing import TypeVar
 
 from .errors import OptionError, URDFError
+from .mjcf import is_mjcf
 from .model import catalog_entry, find_entry
 from .model.floating_base import floating_base_note
 from .robot import Robot
@@ -38,8 +40,9 @@ def load(
     limits: Limits = LIMITS,
     xacro_args: Mapping[str, str | float | int] | None = None,
     packages: Mapping[str, str | os.PathLike[str]] | None = None,
+    root: str | None = None,
 ) -> Robot:
-    """A robot by short name (see :func:`available_robots`) or by path to a .urdf or .xacro file.
+    """A robot by short name (see :func:`available_robots`) or by path to a .urdf, .xacro or MJCF .xml file.
 
     ``limits``: the size limits the file must respect (:class:`kinengine.urdf.Limits`; pass a bigger
     one to load a bigger model, e.g. ``Limits(max_movable_joints=256)``).
@@ -48,6 +51,9 @@ def load(
     ``packages``: ROS package name -> folder, for ``$(find pkg)`` and ``package://`` URIs; packages not
     named are looked up in ``ROS_PACKAGE_PATH``, then in the folders above the file. Kept on the robot
     as ``robot.packages`` (meshes are resolved with it).
+    ``root``: for an MJCF file (a ``<mujoco>`` model, compiled by MuJoCo: ``pip install 'kinengine[mjcf]'``),
+    the top body (a child of the world body) of the tree to load; default: the first one. Poses are in
+    MuJoCo's world frame, link ``world``; see docs/loading.md.
     """
     if not isinstance(target, (str, os.PathLike)):
         raise URDFError(f"load() takes a robot name or a path to a .urdf file, got {type(target).__name__}")
@@ -58,6 +64,13 @@ def load(
     if xacro_args is not None and not is_xacro:
         raise URDFError(f"xacro_args= is for .xacro files; {text_target!r} is not one (drop xacro_args=)")
     entry = find_entry(text_target) if isinstance(target, str) else None
+    if entry is None and is_mjcf(text_target):
+        from .mjcf.reader import read_mjcf_file  # here: numpy's model editing is imported for MJCF only
+
+        description, text = _warn_once(lambda: read_mjcf_file(text_target, root=root, limits=limits))
+        return Robot(description, text, end_effector=end_effector, packages=packages)
+    if root is not None:
+        raise URDFError(f"root= is for MJCF (.xml) files; {text_target!r} is not one (drop root=)")
     if entry is not None:
         description, text = _warn_once(lambda: _read(entry.path, limits))
         robot = Robot(
@@ -71,7 +84,7 @@ def load(
     path = Path(text_target)
     if (
         not isinstance(target, os.PathLike)
-        and path.suffix.lower() not in (".urdf", ".xacro")
+        and path.suffix.lower() not in (".urdf", ".xacro", ".xml")
         and not _exists(path)
     ):
         catalog_entry(text_target)  # raises: unknown robot, listing the names

@@ -59,6 +59,15 @@ def test_rpy_round_trip_at_gimbal_lock(pitch):
     np.testing.assert_allclose(matrix_from_rpy(rpy_from_matrix(C)), C, atol=1e-12)
 
 
+@pytest.mark.parametrize("gap", [1e-15, 1e-12, 1e-9, 1e-7, 1e-5, 1e-3])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_rpy_round_trip_near_gimbal_lock(gap, sign):
+    """Near pitch = ±π/2 the yaw read from C is off by ε/cos(pitch); the roll must absorb it (it did not:
+    5e-5 off at gap 1e-8, e.g. an MJCF quat="0.707107 0 0.707107 0")."""
+    C = Rotation.from_euler("xyz", (0.3, sign * (np.pi / 2 - gap), -0.7)).as_matrix()
+    np.testing.assert_allclose(matrix_from_rpy(rpy_from_matrix(C)), C, rtol=0, atol=1e-15)
+
+
 # -- with_frame ------------------------------------------------------------------------------------
 def test_with_frame_composes_the_placement(abb):
     T = _transform((0.01, -0.02, 0.15), (0.1, -0.4, 1.2))

@@ -7,7 +7,8 @@ folder, a read-only file, a dangling link, a device other than /dev/null). :clas
 prints argparse's own errors as one line (exit status 2), like every other kinengine error.
 
 Also the robot options every robot-taking command shares (:func:`add_robot_arguments`,
-:func:`load_robot`): ``--xacro-arg NAME=VALUE`` and ``--package NAME=PATH``, both repeatable.
+:func:`load_robot`): ``--xacro-arg NAME=VALUE`` and ``--package NAME=PATH``, both repeatable, and
+``--root BODY`` for an MJCF file.
 """
 
 from __future__ import annotations
@@ -161,7 +162,7 @@ def name_value(text: str) -> tuple[str, str]:
 
 
 def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
-    """The options of a robot given as a .xacro file or with package:// paths (repeatable)."""
+    """The options of a robot given as a .xacro file, with package:// paths (repeatable) or as MJCF."""
     parser.add_argument(
         "--xacro-arg",
         dest="xacro_args",
@@ -181,6 +182,13 @@ def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
         help="folder of ROS package NAME for $(find NAME) and "
         "package://NAME/... (repeatable; default: ROS_PACKAGE_PATH, then the file's folders)",
     )
+    parser.add_argument(
+        "--root",
+        default=None,
+        metavar="BODY",
+        help="of an MJCF (.xml) file: the top body of the tree to load (default: the first child of the "
+        "world body)",
+    )
 
 
 def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
@@ -190,6 +198,7 @@ def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
         args.robot if target is None else target,
         xacro_args=None if args.xacro_args is None else dict(args.xacro_args),
         packages=None if args.packages is None else dict(args.packages),
+        root=args.root,
     )
 
 

@@ -199,12 +199,16 @@ def matrix_from_rpy(rpy: Vector3) -> npt.NDArray[np.float64]:
 
 
 def rpy_from_matrix(C: np.ndarray) -> Vector3:
-    """(roll, pitch, yaw) [rad] with C = Rz(yaw) · Ry(pitch) · Rx(roll); at pitch = ±π/2 yaw is 0."""
+    """(roll, pitch, yaw) [rad] with C = Rz(yaw) · Ry(pitch) · Rx(roll); at pitch = ±π/2 yaw is 0.
+
+    Roll is read from Ry(pitch)ᵀ · Rz(yaw)ᵀ · C, not from C's last row: near pitch = ±π/2 the yaw
+    read from C is off by ε/cos(pitch), and this roll absorbs that error, so that
+    ``matrix_from_rpy(rpy_from_matrix(C))`` is C to rounding at every pitch."""
     cp = math.hypot(C[0, 0], C[1, 0])
     pitch = math.atan2(-C[2, 0], cp)
-    if cp > 1e-12:
-        return (math.atan2(C[2, 1], C[2, 2]), pitch, math.atan2(C[1, 0], C[0, 0]))
-    return (math.atan2(-C[1, 2], C[1, 1]), pitch, 0.0)
+    yaw = math.atan2(C[1, 0], C[0, 0]) if cp > 0.0 else 0.0
+    A = matrix_from_rpy((0.0, pitch, yaw)).T @ np.asarray(C, dtype=float)  # Rx(roll) to rounding
+    return (math.atan2(A[2, 1], A[2, 2]), pitch, yaw)
 
 
 def _fold(joint: Joint, value: float) -> Joint:
