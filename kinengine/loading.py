@@ -38,6 +38,7 @@ def load(
     limits: Limits = LIMITS,
     xacro_args: Mapping[str, str | float | int] | None = None,
     packages: Mapping[str, str | os.PathLike[str]] | None = None,
+    trust_xacro: bool = False,
 ) -> Robot:
     """A robot by short name (see :func:`available_robots`) or by path to a .urdf or .xacro file.
 
@@ -48,6 +49,9 @@ def load(
     ``packages``: ROS package name -> folder, for ``$(find pkg)`` and ``package://`` URIs; packages not
     named are looked up in ``ROS_PACKAGE_PATH``, then in the folders above the file. Kept on the robot
     as ``robot.packages`` (meshes are resolved with it).
+    ``trust_xacro``: a .xacro file's expressions are evaluated by kinengine's restricted evaluator
+    (:mod:`kinengine.urdf.xacro_eval`) unless this is True, which runs xacro's own Python ``eval``:
+    only for files you would also build with ROS (it can run any command).
     """
     if not isinstance(target, (str, os.PathLike)):
         raise URDFError(f"load() takes a robot name or a path to a .urdf file, got {type(target).__name__}")
@@ -82,7 +86,7 @@ def load(
         )
         from .urdf.xacro import expand_xacro  # here: xacro and xml.dom are imported for .xacro files only
 
-        text = expand_xacro(path, args=as_text, packages=packages)
+        text = expand_xacro(path, args=as_text, packages=packages, limits=limits, trust_xacro=trust_xacro)
         description, _ = _warn_once(lambda: (parse_urdf(text, source=text_target, limits=limits), None))
     else:
         description, text = _warn_once(lambda: _read(path, limits))

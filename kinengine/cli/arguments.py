@@ -181,6 +181,12 @@ def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
         help="folder of ROS package NAME for $(find NAME) and "
         "package://NAME/... (repeatable; default: ROS_PACKAGE_PATH, then the file's folders)",
     )
+    parser.add_argument(
+        "--trust-xacro",
+        action="store_true",
+        help="evaluate a .xacro file's expressions with xacro's own Python eval, which can run any "
+        "command (default: kinengine's restricted evaluator); only for files you would build with ROS",
+    )
 
 
 def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
@@ -190,6 +196,7 @@ def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
         args.robot if target is None else target,
         xacro_args=None if args.xacro_args is None else dict(args.xacro_args),
         packages=None if args.packages is None else dict(args.packages),
+        trust_xacro=bool(getattr(args, "trust_xacro", False)),
     )
 
 
