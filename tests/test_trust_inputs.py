@@ -1,0 +1,144 @@
+"""Controller, model-editing, viewer and command-line inputs at the trust boundary (issue 25 items 3-5)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import kinengine
+from kinengine.control import ik_seeds
+from kinengine.control.ik import inverse_kinematics
+
+# --- inverse_kinematics targets ----------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def abb():
+    return kinengine.load("abb_irb120")
+
+
+def test_complex_targets_are_refused(abb):
+    T = abb.frame_pose(abb.neutral())
+    for target in (T.astype(complex), T + 1e-3j, [list(row) for row in T.astype(complex)]):
+        with pytest.raises(kinengine.ParameterizationError, match="holds complex numbers"):
+            abb.inverse_kinematics(target)
+    with pytest.raises(kinengine.ParameterizationError, match="holds complex numbers"):
+        abb.inverse_kinematics(np.stack([T, T]).astype(complex))
+    params = np.array([0.3, 0.0, 0.5, 0.0, 0.0, 0.0]) + 0j
+    with pytest.raises(kinengine.ParameterizationError, match="holds complex numbers"):
+        abb.inverse_kinematics(params, position="cartesian", rotation="euler_zyx")
+    assert abb.inverse_kinematics(T.astype(complex).real).success  # the real part alone is a fine target
+
+
+@pytest.mark.parametrize("bottom", [[0, 0, 0, 2], [1, 0, 0, 1], [0, 0, 1e-6, 1], [0, 0, 0, 0]])
+def test_a_pose_whose_bottom_row_is_not_0001_is_refused(abb, bottom):
+    T = abb.frame_pose(abb.neutral())
+    bad = T.copy()
+    bad[3] = bottom
+    with pytest.raises(kinengine.ParameterizationError, match=r"bottom row is .*expected \[0, 0, 0, 1\]"):
+        abb.inverse_kinematics(bad)
+    with pytest.raises(kinengine.ParameterizationError, match=r"`target`\[1\]'s bottom row"):
+        abb.inverse_kinematics(np.stack([T, bad]))
+
+
+def test_batched_seed_tables_are_bounded(mixed):
+    """One table per frame was kept without bound; now an LRU of BATCH_SEED_TABLES per robot."""
+    frames = [f for f in mixed.frame_names if f != mixed.description.root]
+    assert len(frames) > ik_seeds.BATCH_SEED_TABLES
+    for frame in frames * 2:
+        T = mixed.frame_pose(mixed.neutral(), frame)
+        inverse_kinematics(mixed, np.stack([T, T]), frame, max_iterations=1, restarts=1)
+    tables = mixed.engine.memoized("ik batch seed tables", ik_seeds.SeedTables)
+    assert 0 < len(tables.tables) <= ik_seeds.BATCH_SEED_TABLES
+    last = (frames[-1], True, True)
+    assert last in tables.tables  # the most recent frame is kept
+    for configs, tree in tables.tables.values():
+        assert configs.nbytes + tree.data.nbytes <= 2 * ik_seeds.BATCH_SEED_TABLE_BYTES
+    T = mixed.frame_pose(mixed.neutral(), frames[0])  # a dropped table is made again on demand
+    assert inverse_kinematics(mixed, np.stack([T, T]), frames[0]).success.all()
+
+
+# --- model editing ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["tool\x00", "a\x01b", "half\ud800", "x" * 300])
+def test_with_frame_names_xml_cannot_hold_are_option_errors(abb, name):
+    with pytest.raises(kinengine.OptionError, match="a character XML cannot hold|Limits.max_name_length"):
+        abb.with_frame(name, "tool0", np.eye(4))
+
+
+def test_with_frame_offsets_get_the_urdf_bound(abb):
+    """Two frames at 1e308 m gave poses [nan nan -inf]; placements get Limits.max_offset like URDF origins."""
+    far = np.eye(4)
+    far[:3, 3] = (1e308, 0.0, -1e308)
+    with pytest.raises(kinengine.OptionError, match=r"beyond ±1e\+06 m \(Limits.max_offset"):
+        abb.with_frame("a", "tool0", far)
+    with pytest.raises(kinengine.OptionError, match="Limits.max_offset"):
+        abb.with_frame("a", "tool0", ([0.0, 2e6, 0.0], [0.0, 0.0, 0.0]))
+    edge = np.eye(4)
+    edge[0, 3] = 1e6
+    tool = abb.with_frame("a", "tool0", edge).with_frame("b", "a", edge)
+    q = abb.neutral()
+    expected = abb.frame_pose(q, "tool0") @ edge @ edge
+    np.testing.assert_allclose(tool.frame_pose(q, "b"), expected, rtol=1e-12, atol=1e-6)
+
+
+def test_locking_a_locked_joint_says_it_is_locked(abb):
+    locked = abb.locked({"joint_1": 0.1})
+    with pytest.raises(kinengine.ConfigurationError, match="joint 'joint_1' is already fixed"):
+        locked.locked({"joint_1": 0.2})
+    with pytest.raises(kinengine.FrameNotFoundError, match="nope"):
+        locked.locked({"nope": 0.2})
+
+
+# --- robots with 0 and 1 degrees of freedom -----------------------------------------------------------------
+
+_ONE = (
+    '<robot name="one"><link name="a"/><link name="b"/><joint name="j" type="{kind}"><parent link="a"/>'
+    '<child link="b"/><origin xyz="0 0 0.5"/><axis xyz="{axis}"/>'
+    '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>'
+)
+_ZERO = (
+    '<robot name="zero"><link name="a"/><link name="b"/><joint name="f" type="fixed"><parent link="a"/>'
+    '<child link="b"/><origin xyz="0 0 0.5"/></joint></robot>'
+)
+
+
+@pytest.mark.parametrize(
+    "urdf", [_ZERO, _ONE.format(kind="revolute", axis="0 0 1"), _ONE.format(kind="prismatic", axis="1 0 0")]
+)
+def test_zero_and_one_dof_robots_through_every_pinocchio_call(urdf):
+    """Poses, Jacobians, their derivatives, relative kinematics, manipulability and IK on nv = 0 and nv = 1
+    (a subprocess: Pinocchio's C++ could crash), against the closed forms of a joint 0.5 m above the root."""
+    import subprocess
+    import sys
+
+    code = f"""
+import numpy as np, kinengine, warnings
+warnings.simplefilter("ignore")
+r = kinengine.load_urdf_string({urdf!r})
+q = np.full(r.dof, 0.3)
+T = r.frame_pose(q, "b")
+expected = np.eye(4); expected[2, 3] = 0.5
+if r.dof and r.description.joints[0].type == "revolute":
+    c, s = np.cos(0.3), np.sin(0.3); expected[:2, :2] = [[c, -s], [s, c]]
+elif r.dof:
+    expected[0, 3] = 0.3
+np.testing.assert_allclose(T, expected, atol=1e-15)
+J = r.jacobian(q, "b")
+column = [0, 0, 0, 0, 0, 1] if r.dof and r.description.joints[0].type == "revolute" else [1, 0, 0, 0, 0, 0]
+np.testing.assert_allclose(J, np.array([column] * r.dof).T.reshape(6, r.dof), atol=1e-15)
+assert r.jacobian(np.stack([q, q]), "b").shape == (2, 6, r.dof)
+assert r.kinematic_hessian(q, "b").shape[-1] == r.dof
+assert r.jacobian_time_variation(q, np.ones(r.dof), "b").shape == (6, r.dof)
+assert r.analytic_jacobian(q, "b", position="cartesian", rotation="euler_zyx").shape == (6, r.dof)
+np.testing.assert_allclose(r.relative_pose(q, "b", relative_to="a"), expected, atol=1e-15)
+assert r.relative_jacobian(q, "b", relative_to="a").shape == (6, r.dof)
+assert r.manipulability(q, "b") == 0.0
+result = r.inverse_kinematics(T, "b")
+assert result.success == (r.dof > 0 or np.allclose(T, expected)), result
+assert r.inverse_kinematics(np.stack([T, T]), "b").success.all()
+print("done")
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0 and done.stdout.strip() == "done", done.stderr[-2000:]
