@@ -142,3 +142,129 @@ print("done")
 """
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0 and done.stdout.strip() == "done", done.stderr[-2000:]
+
+
+# --- viewer host and port ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("host", [None, "", "   ", 127])
+def test_viewer_refuses_an_empty_or_missing_host(abb, host):
+    pytest.importorskip("viser")
+    from kinengine.presentation.viewer import view
+
+    with pytest.raises(kinengine.OptionError, match="host must be an address to listen on"):
+        view(abb, host=host, meshes=False)
+
+
+@pytest.mark.parametrize("port", [True, False, -1, 65536, 80.0, "8080"])
+def test_viewer_ports_are_ints_not_bools(abb, port):
+    pytest.importorskip("viser")
+    from kinengine.presentation.viewer import view
+
+    with pytest.raises(kinengine.OptionError, match="port must be an integer 0..65535"):
+        view(abb, port=port, meshes=False)
+
+
+@pytest.mark.parametrize(
+    "host, fragment",
+    [("no-such-host.invalid", "does not resolve"), ("192.0.2.1", "cannot listen on host '192.0.2.1'")],
+)
+def test_viewer_unresolvable_or_foreign_host_fails_within_seconds(host, fragment):
+    """viser retried ports without end; now one OptionError (a subprocess: the old code never returned)."""
+    import subprocess
+    import sys
+
+    code = f"""
+import kinengine
+from kinengine.presentation.viewer import view
+try:
+    view(kinengine.load("abb_irb120"), host={host!r}, meshes=False)
+except kinengine.OptionError as exc:
+    print(exc)
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert fragment in done.stdout
+
+
+def test_viewer_on_every_interface_warns_and_says_where_it_listens(abb):
+    pytest.importorskip("viser")
+    from kinengine.presentation.viewer import view
+
+    with pytest.warns(UserWarning, match="listens on every interface") as record:
+        viewer = view(abb, host="0.0.0.0", port=0, meshes=False)
+    try:
+        assert len([w for w in record if "listens on" in str(w.message)]) == 1
+        assert "\n" not in str(record[0].message)
+        assert viewer.address == "0.0.0.0"
+        assert viewer.url == f"http://127.0.0.1:{viewer.port}"
+    finally:
+        viewer.close()
+
+
+def test_viewer_on_loopback_is_quiet(abb, recwarn):
+    pytest.importorskip("viser")
+    from kinengine.presentation.viewer import view
+
+    viewer = view(abb, host="localhost", port=0, meshes=False)
+    try:
+        assert viewer.address in ("127.0.0.1", "::1")
+        assert viewer.url.endswith(f":{viewer.port}")
+        assert not [w for w in recwarn if "listens on" in str(w.message)]
+    finally:
+        viewer.close()
+
+
+# --- command line ------------------------------------------------------------------------------------------
+
+
+def test_cli_with_stdout_closed_says_so_in_one_line():
+    import os
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-m", "kinengine", "list"],
+        stderr=subprocess.PIPE,
+        text=True,
+        timeout=120,
+        preexec_fn=lambda: os.close(1),  # `kinengine list >&-`
+    )
+    assert done.returncode == 2
+    assert done.stderr.splitlines() == [
+        "kinengine: error: standard output is closed; run with an open stdout"
+    ]
+
+
+@pytest.mark.parametrize("urdf", [_ZERO, _ONE.format(kind="revolute", axis="0 0 1")])
+def test_cli_bench_on_0_and_1_dof_robots_is_one_line_and_exit_2(tmp_path, capsys, urdf):
+    from kinengine.cli import main
+
+    path = tmp_path / "small.urdf"
+    path.write_text(urdf)
+    assert main(["bench", "--quick", str(path)]) == 2
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("kinengine: error: no configuration of"), lines
+    assert "singular set of every rotation parameterization" in lines[0]
+
+
+def test_cli_view_with_an_empty_host_is_one_line(capsys):
+    pytest.importorskip("viser")
+    from kinengine.cli import main
+
+    assert main(["view", "abb_irb120", "--host", "", "--no-meshes"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 1 and "host must be an address to listen on" in lines[0], lines
+
+
+def test_cli_prints_warnings_of_a_command_that_succeeds(capsys):
+    """Warnings are kept until the command ends, then printed one line each (dropped only on an error)."""
+    from pathlib import Path
+
+    from kinengine.cli import main
+
+    path = Path(__file__).parent / "data" / "xacro" / "errors" / "emits_warning.xacro"
+    assert main(["info", str(path)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"kinengine: warning: {path}: xacro: xacro:property: unknown attribute(s): colour"]
