@@ -41,8 +41,8 @@ class Limits:
     - ``max_offset`` [m]: |x| of every joint and inertial origin coordinate and mimic offset, and
       ``max_multiplier``: |m| of every mimic multiplier (see :mod:`kinengine.urdf.magnitudes`): numbers
       finite one by one must not overflow a pose together.
-    - ``max_macro_calls``: xacro macro calls one expansion may make (the most among 140 vendor robot
-      xacros tried is 117, franka's multi_arm; a macro that calls the next twice makes 2^depth).
+    - ``max_macro_calls``: xacro macro calls one expansion may make (the most among the 133 vendor robot
+      xacros that load is 117, franka's multi_arm; a macro that calls the next twice makes 2^depth).
     - ``max_xacro_seconds`` [s]: wall time of one xacro expansion (vendor robot xacros take well under
       a second each); both refused with :class:`~kinengine.errors.ResourceLimitError`.
 
