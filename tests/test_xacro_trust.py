@@ -337,3 +337,29 @@ def test_cli_trust_xacro_option(tmp_path):
     trusted = subprocess.run([*base, "--trust-xacro"], capture_output=True, text=True, timeout=120, cwd=REPO)
     assert trusted.returncode == 0, trusted.stderr
     assert "l2" in trusted.stdout
+
+
+def test_trusted_expression_that_does_not_finish_is_stopped_by_the_time_bound():
+    """xacro's own eval of 9**9**9 runs for hours; the trusted expansion's child process is stopped."""
+    done = run_python(
+        f"""
+        import kinengine
+        from kinengine.urdf import Limits
+        try:
+            kinengine.load({str(HOSTILE / "huge_power.xacro")!r}, trust_xacro=True, limits=Limits(max_xacro_seconds=1))
+        except kinengine.errors.ResourceLimitError as exc:
+            print(exc)
+        """,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "the trusted xacro expansion takes more than Limits.max_xacro_seconds = 1 s" in done.stdout
+
+
+def test_trusted_expansion_reports_the_childs_errors_and_warnings(tmp_path):
+    with pytest.raises(URDFError, match="missing xacro argument 'ur_type'"):
+        expand_xacro(DATA / "errors" / "needs_arg.xacro", trust_xacro=True)
+    with pytest.warns(UserWarning, match="unknown attribute"):
+        text = expand_xacro(DATA / "errors" / "emits_warning.xacro", trust_xacro=True)
+    with pytest.warns(UserWarning, match="unknown attribute"):
+        assert text == expand_xacro(DATA / "errors" / "emits_warning.xacro")

@@ -16,9 +16,9 @@ Trust model: xacro itself evaluates ``${...}`` and ``$(eval ...)`` with Python's
 file can turn into running any command. By default its two evaluation points are replaced by the
 restricted evaluator of :mod:`.xacro_eval` (the ``simpleeval`` package narrowed to xacro's
 allow-list); ``trust_xacro=True`` keeps xacro's own evaluation for files you would build with ROS
-anyway (the bounds above still hold between evaluations; one Python expression of a trusted file,
-e.g. ``9**9**9``, is not interrupted). Either way ``$(env ...)``, ``$(optenv ...)`` and
-``load_yaml`` read the environment and files.
+anyway, in a child process (:mod:`.xacro_trusted`) stopped after ``Limits.max_xacro_seconds``, so
+that even one Python expression that does not finish (``9**9**9``) is bounded. Either way
+``$(env ...)``, ``$(optenv ...)`` and ``load_yaml`` read the environment and files.
 """
 
 from __future__ import annotations
@@ -61,7 +61,8 @@ def expand_xacro(
     ``$(find pkg)``, which is otherwise resolved from ``ROS_PACKAGE_PATH`` and then the
     folders above ``path`` (see :func:`.packages.resolve_package`). Expressions are evaluated by
     the restricted evaluator of :mod:`.xacro_eval` unless ``trust_xacro=True`` (xacro's own Python
-    ``eval``: only for files you would build with ROS). Refused: a missing
+    ``eval``, run in a child process stopped after ``limits.max_xacro_seconds``: only for files you
+    would build with ROS). Refused: a missing
     argument, an unknown macro, an undefined property or block, an expression outside the
     allow-list, an unreadable, non-regular or malformed file, a DTD or entity declaration in any
     file read, a file (or all files together) over ``limits.max_bytes`` bytes, and a result whose
@@ -98,12 +99,33 @@ def expand_xacro(
         raise URDFError(
             f"expanding xacro files needs the xacro package: pip install {XACRO_REQUIREMENT}", source=source
         ) from None
+    if trust_xacro:  # xacro's own eval: in a child process, stopped after the time bound
+        from .xacro_trusted import run_trusted
+
+        text, messages = run_trusted(source, mappings, packages, limits)
+    else:
+        text, messages = expand_in_process(xacro, source, mappings, packages, limits, trust_xacro)
+    for message in dict.fromkeys(messages):
+        warnings.warn(f"{source}: xacro: {message}", UserWarning, stacklevel=2)
+    _check_result(text, source, limits)
+    return text
+
+
+def expand_in_process(
+    xacro: ModuleType,
+    source: str,
+    mappings: dict[str, str],
+    packages: Mapping[str, str | os.PathLike[str]] | None,
+    limits: Limits,
+    trusted: bool,
+) -> tuple[str, list[str]]:
+    """(the expanded text, xacro's messages) of ``source``, expanded in this process."""
     messages: list[str] = []
     budget = Budget(limits)
-    with _LOCK, _xacro_hooks(xacro, packages, budget, messages, trust_xacro):
+    with _LOCK, _xacro_hooks(xacro, packages, budget, messages, trusted):
         try:
             xacro.init_stacks(source)
-            xacro.macrostack = MacroStack(budget)  # xacro pushes each macro it expands: counted there
+            setattr(xacro, "macrostack", MacroStack(budget))  # noqa: B010 (each macro xacro expands is pushed)
             document = xacro.parse(None, source)
             xacro.process_doc(document, mappings=mappings, verbosity=0)
             text = document.documentElement.toprettyxml(indent="  ")  # as the xacro command writes it
@@ -115,10 +137,7 @@ def expand_xacro(
             ) from None
         except Exception as exc:  # xacro raises XacroException, and lets anything from eval() through
             raise _translate(exc, source) from None
-    for message in dict.fromkeys(messages):
-        warnings.warn(f"{source}: xacro: {message}", UserWarning, stacklevel=2)
-    _check_result(text, source, limits)
-    return text
+    return text, messages
 
 
 def _arguments(args: object, source: str) -> dict[str, str]:
