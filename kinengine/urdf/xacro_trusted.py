@@ -15,7 +15,7 @@ import json
 import os
 import subprocess
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from ..errors import KinematicsError, OptionError, ResourceLimitError, URDFError
@@ -53,7 +53,8 @@ def run_trusted(
                 sys.executable,
                 "-c",
                 "import sys; sys.path.insert(0, sys.argv[1]); "
-                "from kinengine.urdf.xacro_trusted import main; main()",
+                "from kinengine.urdf.xacro import expand_in_process; "
+                "from kinengine.urdf.xacro_trusted import serve; serve(expand_in_process)",
                 root,
             ],
             input=json.dumps(request),
@@ -84,27 +85,24 @@ def run_trusted(
     return reply["text"], list(reply["messages"])
 
 
-def main() -> None:
-    """The child: one request on stdin, one JSON line on stdout."""
+def serve(expand: Callable[..., tuple[str, list[str]]]) -> None:
+    """The child: one request on stdin, expanded by ``expand`` (:func:`.xacro.expand_in_process`), one
+    JSON line on stdout."""
     request = json.load(sys.stdin)
     os.chdir(request["cwd"])
     try:
         import xacro
 
-        from .xacro import expand_in_process
-
-        text, messages = expand_in_process(
+        text, messages = expand(
             xacro, request["source"], request["args"], request["packages"], Limits(**request["limits"]), True
         )
         reply: dict[str, object] = {"text": text, "messages": messages}
     except KinematicsError as exc:
         reply = {"error": type(exc).__name__, "message": str(exc)}
     except MemoryError:
-        reply = {
-            "error": "ResourceLimitError",
-            "message": f"{request['source']}: out of memory in the expansion",
-        }
+        message = f"{request['source']}: the trusted xacro expansion ran out of memory"
+        reply = {"error": "ResourceLimitError", "message": message}
     sys.stdout.write("\n" + json.dumps(reply) + "\n")
 
 
-__all__ = ["MARGIN_SECONDS", "run_trusted"]
+__all__ = ["MARGIN_SECONDS", "run_trusted", "serve"]
