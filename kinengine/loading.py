@@ -41,6 +41,7 @@ def load(
     xacro_args: Mapping[str, str | float | int] | None = None,
     packages: Mapping[str, str | os.PathLike[str]] | None = None,
     root: str | None = None,
+    trust_xacro: bool = False,
 ) -> Robot:
     """A robot by short name (see :func:`available_robots`) or by path to a .urdf, .xacro or MJCF .xml file.
 
@@ -54,6 +55,9 @@ def load(
     ``root``: for an MJCF file (a ``<mujoco>`` model, compiled by MuJoCo: ``pip install 'kinengine[mjcf]'``),
     the top body (a child of the world body) of the tree to load; default: the first one. Poses are in
     MuJoCo's world frame, link ``world``; see docs/loading.md.
+    ``trust_xacro``: a .xacro file's expressions are evaluated by kinengine's restricted evaluator
+    (:mod:`kinengine.urdf.xacro_eval`) unless this is True, which runs xacro's own Python ``eval``:
+    only for files you would also build with ROS (it can run any command).
     """
     if not isinstance(target, (str, os.PathLike)):
         raise URDFError(f"load() takes a robot name or a path to a .urdf file, got {type(target).__name__}")
@@ -95,7 +99,7 @@ def load(
         )
         from .urdf.xacro import expand_xacro  # here: xacro and xml.dom are imported for .xacro files only
 
-        text = expand_xacro(path, args=as_text, packages=packages)
+        text = expand_xacro(path, args=as_text, packages=packages, limits=limits, trust_xacro=trust_xacro)
         description, _ = _warn_once(lambda: (parse_urdf(text, source=text_target, limits=limits), None))
     else:
         description, text = _warn_once(lambda: _read(path, limits))

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import kinengine
-from kinengine.errors import URDFError
+from kinengine.errors import ResourceLimitError, URDFError
 from kinengine.urdf.packages import resolve_package, resolve_uri
 from kinengine.urdf.xacro import expand_xacro
 
@@ -204,11 +204,8 @@ def test_packages_entry_that_is_not_a_folder():
     assert_one_line(exc, "packages= maps ROS package 'kin_parts'", "not a folder")
 
 
-def test_exponential_macro_is_stopped_by_the_element_budget(tmp_path, monkeypatch):
-    """2**39 links; the budget is Limits.max_tags elements (lowered here: xacro needs ~1 s per 10,000)."""
-    import kinengine.urdf.xacro
-
-    monkeypatch.setattr(kinengine.urdf.xacro, "LIMITS", kinengine.urdf.Limits(max_tags=2000))
+def test_exponential_macro_is_stopped_by_the_macro_call_budget(tmp_path):
+    """2**39 links; the budget is Limits.max_macro_calls (lowered here: xacro needs ~1 s per 10,000)."""
     levels = "\n".join(
         f'<xacro:macro name="m{i}"><xacro:m{i - 1}/><xacro:m{i - 1}/></xacro:macro>' for i in range(1, 40)
     )
@@ -216,9 +213,9 @@ def test_exponential_macro_is_stopped_by_the_element_budget(tmp_path, monkeypatc
         '<robot name="bomb" xmlns:xacro="http://www.ros.org/wiki/xacro">'
         f'<xacro:macro name="m0"><link name="l"/></xacro:macro>{levels}<xacro:m39/></robot>'
     )
-    with pytest.raises(URDFError) as exc:
-        expand_xacro(tmp_path / "bomb.xacro")
-    assert_one_line(exc, "more than Limits.max_tags = 2000 elements")
+    with pytest.raises(ResourceLimitError) as exc:
+        expand_xacro(tmp_path / "bomb.xacro", limits=kinengine.urdf.Limits(max_macro_calls=2000))
+    assert_one_line(exc, "more than Limits.max_macro_calls = 2000 macro calls")
 
 
 # --- package lookup and URIs ---------------------------------------------------------------------------

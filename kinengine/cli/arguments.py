@@ -189,6 +189,12 @@ def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
         help="of an MJCF (.xml) file: the top body of the tree to load (default: the first child of the "
         "world body)",
     )
+    parser.add_argument(
+        "--trust-xacro",
+        action="store_true",
+        help="evaluate a .xacro file's expressions with xacro's own Python eval, which can run any "
+        "command (default: kinengine's restricted evaluator); only for files you would build with ROS",
+    )
 
 
 def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
@@ -199,9 +205,39 @@ def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
         xacro_args=None if args.xacro_args is None else dict(args.xacro_args),
         packages=None if args.packages is None else dict(args.packages),
         root=args.root,
+        trust_xacro=bool(getattr(args, "trust_xacro", False)),
     )
 
 
 def summary(doc: str | None) -> str:
     """A module docstring's first line without reST markup, for --help."""
     return doc.splitlines()[0].replace("``", "") if doc else ""
+
+
+_PENDING: list[str] = []  # warnings of the running command, printed when it succeeds (flush_warnings)
+
+
+def defer_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: object = None,
+    line: str | None = None,
+) -> None:
+    """``warnings.showwarning`` of the command line: keep the warning as one line until the command ends,
+    so that a command that fails prints its one error line only (a library's warning about the same
+    input, e.g. a gimbal lock, would otherwise come first)."""
+    _PENDING.append(f"kinengine: warning: {one_line(message)}")
+
+
+def flush_warnings() -> None:
+    """Print the warnings kept so far (each once) on stderr; a long-running command calls it first."""
+    for text in dict.fromkeys(_PENDING):
+        print(text, file=sys.stderr)
+    _PENDING.clear()
+
+
+def drop_warnings() -> None:
+    """Forget the warnings kept so far (the command failed: its error line says what went wrong)."""
+    _PENDING.clear()

@@ -5,7 +5,9 @@ ends in one line on stderr, ``kinengine: error: ...``, and exit status 2: argpar
 (:class:`~kinengine.cli.arguments.OneLineParser`), kinengine errors, an output that cannot be
 written (a full disk, /dev/full as stdout) and memory that runs out. Names are printed with their
 control characters escaped; stdout and stderr escape what their encoding cannot show
-(``PYTHONIOENCODING=ascii``). An unexpected exception is one line too, with exit status 1.
+(``PYTHONIOENCODING=ascii``). An unexpected exception is one line too, with exit status 1. Warnings
+are kept until the command ends: printed (one line each) when it succeeds, dropped when it fails, so
+that a failing command prints its error line alone. A closed stdout is one error line, exit status 2.
 """
 
 from __future__ import annotations
@@ -17,11 +19,10 @@ import re
 import sys
 import warnings
 from collections.abc import Sequence
-from typing import TextIO
 
 from .. import KinematicsError, __version__
 from . import bench, catalog, info, pose, show, verify, view
-from .arguments import OneLineParser, one_line, summary
+from .arguments import OneLineParser, defer_warning, drop_warnings, flush_warnings, one_line, summary
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -49,27 +50,21 @@ def join_negative_values(argv: Sequence[str]) -> list[str]:
     return out
 
 
-def _one_line_warning(
-    message: Warning | str,
-    category: type[Warning],
-    filename: str,
-    lineno: int,
-    file: TextIO | None = None,
-    line: str | None = None,
-) -> None:
-    print(f"kinengine: warning: {one_line(message)}", file=sys.stderr)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     for stream in (sys.stdout, sys.stderr):  # e.g. PYTHONIOENCODING=ascii and a robot named "bras_é"
         if hasattr(stream, "reconfigure"):
             stream.reconfigure(errors="backslashreplace")
+    if sys.stdout is None:  # started with stdout closed (`kinengine list >&-`)
+        if sys.stderr is not None:
+            print("kinengine: error: standard output is closed; run with an open stdout", file=sys.stderr)
+        return 2
     args = build_parser().parse_args(join_negative_values(sys.argv[1:] if argv is None else argv))
     with warnings.catch_warnings():
-        warnings.showwarning = _one_line_warning
+        warnings.showwarning = defer_warning
         try:
             code = int(args.handler(args))
             sys.stdout.flush()  # a full disk or /dev/full as stdout fails here, not at exit
+            flush_warnings()
             return code
         except KinematicsError as exc:
             return _error(exc)
@@ -84,12 +79,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         except KeyboardInterrupt:
             return 130
         except Exception as exc:  # a bug: still one line, and a distinct exit status
+            drop_warnings()
             print(f"kinengine: internal error: {type(exc).__name__}: {one_line(exc)}", file=sys.stderr)
             return 1
 
 
 def _error(message: object, silence: bool = False) -> int:
-    """Print ``kinengine: error: <message on one line>`` to stderr; exit status 2."""
+    """Print ``kinengine: error: <message on one line>`` to stderr (the command's warnings dropped);
+    exit status 2."""
+    drop_warnings()
     if silence:
         _silence_stdout()
     print(f"kinengine: error: {one_line(message)}", file=sys.stderr)

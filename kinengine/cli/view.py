@@ -15,7 +15,7 @@ import logging
 import time
 
 from ..presentation.viewer import view
-from .arguments import add_robot_arguments, load_robot, parse_vector, summary
+from .arguments import add_robot_arguments, flush_warnings, load_robot, parse_vector, summary
 
 
 def _names(text: str) -> list[str]:
@@ -92,7 +92,12 @@ def handle(args: argparse.Namespace) -> int:
         meshes=args.meshes,
     )
     try:
-        print(f"kinengine: viewing {robot.name} at {viewer.url} (Ctrl-C to stop)", flush=True)
+        print(
+            f"kinengine: viewing {robot.name} at {viewer.url} (listening on {viewer.address} port "
+            f"{viewer.port}; Ctrl-C to stop)",
+            flush=True,
+        )
+        flush_warnings()  # e.g. that the page is served to the network: now, not after Ctrl-C
         while True:
             time.sleep(3600)
     except KeyboardInterrupt:

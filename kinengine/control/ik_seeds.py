@@ -27,6 +27,9 @@ SEED_TABLE_RNG = 0x5EED_7AB1E
 BATCH_SEED_TABLE_SIZE = 32768
 BATCH_SEED_TABLE_BYTES = 1 << 23
 """The batched solver's seed table (one per robot and frame): up to 8 MiB."""
+BATCH_SEED_TABLES = 4
+"""At most this many batched seed tables (frames) are kept per robot, least recently used dropped: with
+their KD-trees ~40 MiB at most (kept per frame without bound, 60 frames of a 30-dof chain held 550 MiB)."""
 BATCH_SEED_EPS = 1.0
 """Approximate nearest entries for batches: within (1 + this) of the nearest distance (cKDTree's eps)."""
 BATCH_SEED_FURTHER_EPS = 4.0
@@ -41,9 +44,11 @@ SeedTable = tuple[np.ndarray, Any]
 
 
 class SeedTables:
-    """A small LRU of seed tables (bounded: SEED_TABLES tables of at most SEED_TABLE_BYTES each)."""
+    """A small LRU of seed tables (bounded: ``most`` tables, SEED_TABLES by default, of at most
+    SEED_TABLE_BYTES each; BATCH_SEED_TABLES of BATCH_SEED_TABLE_BYTES for the batched solver)."""
 
-    def __init__(self) -> None:
+    def __init__(self, most: int = SEED_TABLES) -> None:
+        self.most = most
         self.lock = threading.Lock()
         self.tables: OrderedDict[tuple[str, bool, bool], SeedTable] = OrderedDict()
 
@@ -55,7 +60,7 @@ class SeedTables:
         table = make()
         with self.lock:
             self.tables[key] = table
-            while len(self.tables) > SEED_TABLES:
+            while len(self.tables) > self.most:
                 self.tables.popitem(last=False)
         return table
 
@@ -140,8 +145,9 @@ class BatchSeeds:
         if self.given is not None:
             return
         self.first = _default_start(robot, problem)
-        self.configs, self.tree = robot.engine.memoized(
-            ("ik batch seed table", problem.frame),
+        tables = robot.engine.memoized("ik batch seed tables", lambda: SeedTables(BATCH_SEED_TABLES))
+        self.configs, self.tree = tables.get(
+            (problem.frame, True, True),
             lambda: _seed_table(
                 robot, problem.frame, True, True, BATCH_SEED_TABLE_SIZE, BATCH_SEED_TABLE_BYTES
             ),
@@ -182,6 +188,7 @@ class BatchSeeds:
 __all__ = [
     "BATCH_SEED_EPS",
     "BATCH_SEED_FURTHER_EPS",
+    "BATCH_SEED_TABLES",
     "BATCH_SEED_TABLE_BYTES",
     "BATCH_SEED_TABLE_SIZE",
     "NEAREST_SEEDS",

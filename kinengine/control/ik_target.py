@@ -192,6 +192,30 @@ def _rotation_ok(
     )
 
 
+_BOTTOM = np.array([0.0, 0.0, 0.0, 1.0])
+
+
+def _bottom_ok(row: list[float]) -> bool:
+    """A pose's bottom row is [0, 0, 0, 1] (to 1e-9)."""
+    return all(abs(v - w) <= 1e-9 for v, w in zip(row, (0.0, 0.0, 0.0, 1.0), strict=True))
+
+
+def _real(target: object, expected: str) -> np.ndarray:
+    """``target`` as a float array; complex numbers are refused (a cast would drop their imaginary parts)."""
+    try:
+        raw = np.asarray(target)
+        complex_ = np.iscomplexobj(raw)
+        value = None if complex_ else np.asarray(raw, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterizationError(f"Expected `target` to be {expected}, got {target!r:.80}") from None
+    if value is None:
+        raise ParameterizationError(
+            f"`target` holds complex numbers; expected {expected} of real numbers (the imaginary parts "
+            "would be dropped)"
+        )
+    return value
+
+
 def _position_ok(p: np.ndarray) -> None:
     if not float(np.max(np.abs(p), initial=0.0)) <= MAX_TARGET_DISTANCE:
         _too_far()
@@ -208,12 +232,7 @@ def single_target(
     target: object, position: str | None, rotation: str | None
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """(p_d (3,) or None, C_d (3, 3) or None) from a pose (4, 4) or parameters χ."""
-    try:
-        value = np.asarray(target, dtype=float)
-    except (TypeError, ValueError):
-        raise ParameterizationError(
-            f"Expected `target` to be a (4, 4) pose or parameters χ, got {target!r:.80}"
-        ) from None
+    value = _real(target, "a (4, 4) pose or parameters χ")
     if position is None and rotation is None:
         flat = value.ravel().tolist() if value.shape == (4, 4) else [math.nan]
         if not all(map(math.isfinite, flat)):
@@ -226,6 +245,11 @@ def single_target(
         if not _rotation_ok(a, b, c, d, e, f, g, h, i):
             raise ParameterizationError(
                 "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+            )
+        if not _bottom_ok(flat[12:]):
+            raise ParameterizationError(
+                f"`target`'s bottom row is {flat[12:]}, expected [0, 0, 0, 1]: a pose T_IF (4, 4) is a "
+                "homogeneous transform"
             )
         if not max(abs(x), abs(y), abs(z)) <= MAX_TARGET_DISTANCE:
             _too_far()
@@ -265,10 +289,7 @@ def single_target(
 
 def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
     """(p_d (N, 3), C_d (N, 3, 3)) from a batch of poses (N, 4, 4), every one checked."""
-    try:
-        value = np.asarray(target, dtype=float)
-    except (TypeError, ValueError):
-        raise ParameterizationError("Expected `target` to be a batch of poses (N, 4, 4) of numbers") from None
+    value = _real(target, "a batch of poses (N, 4, 4)")
     if value.ndim != 3 or value.shape[1:] != (4, 4) or not len(value) or not np.isfinite(value).all():
         raise ParameterizationError(
             f"Expected `target` to be a finite batch of poses (N >= 1, 4, 4), got {value.shape}"
@@ -281,6 +302,12 @@ def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
     if len(bad):
         raise ParameterizationError(
             f"`target`[{bad[0]}]'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+        )
+    bottom = np.flatnonzero(np.abs(value[:, 3, :] - _BOTTOM).max(axis=1) > 1e-9)
+    if len(bottom):
+        raise ParameterizationError(
+            f"`target`[{bottom[0]}]'s bottom row is {value[bottom[0], 3].tolist()}, expected [0, 0, 0, 1]: "
+            "a pose T_IF (4, 4) is a homogeneous transform"
         )
     _position_ok(value[:, :3, 3])
     return np.ascontiguousarray(value[:, :3, 3]), np.ascontiguousarray(C)

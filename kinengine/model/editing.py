@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import warnings
 from collections.abc import Mapping
 from xml.sax.saxutils import quoteattr
@@ -22,13 +23,15 @@ import numpy.typing as npt
 from lxml import etree
 
 from ..errors import ConfigurationError, FrameNotFoundError, OptionError, URDFError
-from ..urdf import Joint, Link, RobotDescription
+from ..urdf import LIMITS, Joint, Link, RobotDescription
 from ..urdf.safe_xml import parse_xml
 from ..urdf.tree import assemble
 from .coordinates import CoordinateMap
 
 Vector3 = tuple[float, float, float]
 
+_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+"""A character XML 1.0 cannot hold (NUL and other C0 controls, lone surrogates, U+FFFE, U+FFFF)."""
 _ORTHONORMAL_TOLERANCE = 1e-9  # |CᵀC − 1| allowed in a (4, 4) placement's rotation block
 
 
@@ -49,13 +52,25 @@ def add_frame(
     link frame sits at the joint, after the joint's motion), so the new link hangs from that child.
     ``placement``: the new frame's pose in the parent frame, a homogeneous (4, 4) T_parent,new [m],
     or a pair (xyz [m], rpy [rad]). The fixed joint is named ``<name>_joint`` (``<name>_joint_2``, ...
-    if that is taken). FrameNotFoundError for an unknown parent, URDFError for a taken or invalid name,
-    OptionError for a malformed placement.
+    if that is taken). FrameNotFoundError for an unknown parent, URDFError for a taken or empty name,
+    OptionError for a name with a character XML cannot hold (e.g. NUL) or over ``Limits.max_name_length``,
+    a malformed placement, or one beyond ``Limits.max_offset`` [m] (the bound URDF origins get).
     """
     known = frame_names(description)
     if not isinstance(name, str) or not name or name != name.strip() or name == "universe":
         raise URDFError(
             f"a new frame needs a non-empty name without surrounding spaces (not 'universe'), got {name!r}"
+        )
+    bad = _NOT_XML.search(name)
+    if bad or len(name) > LIMITS.max_name_length:
+        shown = f"frame name {name[:80]!r}{'...' if len(name) > 80 else ''}"
+        if bad:
+            raise OptionError(
+                f"{shown} holds {bad.group()!r}, a character XML cannot hold (URDF text is XML); "
+                "use printable characters"
+            )
+        raise OptionError(
+            f"{shown} has {len(name)} characters, more than Limits.max_name_length = {LIMITS.max_name_length}"
         )
     if name in known:
         raise URDFError(
@@ -65,6 +80,11 @@ def add_frame(
     if not isinstance(parent, str) or parent not in known:
         raise FrameNotFoundError(parent, known)
     xyz, rpy = placement_xyz_rpy(placement)
+    if not max(map(abs, xyz)) <= LIMITS.max_offset:
+        raise OptionError(
+            f"placement's xyz {list(xyz)} is beyond ±{LIMITS.max_offset:g} m (Limits.max_offset, the bound "
+            "every URDF origin gets): chained frames could overflow every pose; give metres within it"
+        )
     link_names = {link.name for link in description.links}
     parent_link = parent if parent in link_names else description.joint(parent).child
     joint_name, k = f"{name}_joint", 2
@@ -81,8 +101,8 @@ def lock_joints(description: RobotDescription, values: Mapping[str, float]) -> R
     ``values``: joint name -> value [rad or m] for joints that own a coordinate. The value is folded into
     the fixed joint's origin: origin · Rot(axis, v) (revolute, continuous) or origin · Trans(v · axis)
     (prismatic). ConfigurationError for a value outside the joint's limits (as narrowed by its mimic
-    followers' limits), for a mimic joint (lock its leader) or a non-number; FrameNotFoundError for an
-    unknown joint.
+    followers' limits), for a mimic joint (lock its leader), an already fixed (or locked) joint or a
+    non-number; FrameNotFoundError for an unknown joint.
     """
     with warnings.catch_warnings():  # the robot being edited has already said what its mimic limits imply
         warnings.simplefilter("ignore")
@@ -92,6 +112,13 @@ def lock_joints(description: RobotDescription, values: Mapping[str, float]) -> R
             f"locked() takes a mapping of joint name to value, e.g. "
             f"{{{coords.names[-1]!r}: 0.0}}, got {type(values).__name__}"
         )
+    fixed_joints = {j.name for j in description.joints if j.type == "fixed"}
+    for joint_name in values:
+        if isinstance(joint_name, str) and joint_name in fixed_joints:
+            raise ConfigurationError(
+                f"joint {joint_name!r} is already fixed (locked earlier, or fixed in the URDF): it has no "
+                f"coordinate left to lock; the movable joints are {', '.join(coords.names) or 'none'}"
+            )
     q = coords.from_mapping(values, np.clip(np.zeros(coords.dof), coords.lower, coords.upper))
     fixed: dict[str, float] = {}
     for joint_name in values:

@@ -31,6 +31,7 @@ import numpy.typing as npt
 
 from ..errors import KinematicsError
 from ..parameterizations import ROTATION_PARAMETERIZATIONS, get_rotation
+from . import viewer_host as host_
 from . import viewer_nodes as nodes
 from . import viewer_scene as scene
 
@@ -85,8 +86,8 @@ class Viewer:
         for name in (*frames, *([ellipsoid] if ellipsoid is not None else [])):
             robot.frame_id(name)  # FrameNotFoundError with suggestions
         get_rotation(parameterization)  # ParameterizationError naming the choices
-        if port is not None and (not isinstance(port, int) or not 0 <= port <= 65535):
-            raise KinematicsError(f"port must be an integer 0..65535 (0: any free port), got {port!r}")
+        port = host_.checked_port(port)
+        self.address = host_.listen_address(host)  # bounded wait; warns when not loopback
         self.frames, self.ellipsoid_frame = tuple(frames), ellipsoid
         self.readout_frame = ellipsoid if ellipsoid is not None else robot.end_effector
         self.singularity_warning = float(singularity_warning)
@@ -117,7 +118,7 @@ class Viewer:
 
         with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner; the URL is self.url
             self._server = server = viser.ViserServer(
-                host=host,
+                host=self.address,
                 port=DEFAULT_PORT if port is None else port,
                 label=f"kinengine: {robot.name}",
                 verbose=False,
@@ -127,7 +128,8 @@ class Viewer:
         except BaseException:
             self.close()
             raise
-        self.url = f"http://{'127.0.0.1' if host in ('0.0.0.0', '') else host}:{server.get_port()}"
+        self.port: int = server.get_port()
+        self.url = host_.url(self.address, self.port)
 
     # -- scene -------------------------------------------------------------------------------
     def _build(self, server: Any, visuals: scene.Visuals, q: np.ndarray, parameterization: str) -> None:
@@ -290,7 +292,9 @@ def view(
     parameterization of the readout; ``meshes=False`` draws URDF primitives and the skeleton only;
     ``packages`` maps ROS package names to folders for ``package://`` mesh files (default: the robot's
     ``packages``, then ``ROS_PACKAGE_PATH``, then the folders above the robot's file); ``host``
-    "0.0.0.0" serves the network.
+    "0.0.0.0" serves the network (with a one-line warning; None or "" is refused, a name that does not
+    resolve within a few seconds or an address of another machine too: OptionError).
+    ``Viewer.address`` is the numeric address listened on, ``Viewer.port`` the port.
     """
     return Viewer(
         robot,

@@ -41,6 +41,10 @@ class Limits:
     - ``max_offset`` [m]: |x| of every joint and inertial origin coordinate and mimic offset, and
       ``max_multiplier``: |m| of every mimic multiplier (see :mod:`kinengine.urdf.magnitudes`): numbers
       finite one by one must not overflow a pose together.
+    - ``max_macro_calls``: xacro macro calls one expansion may make (the most among the 133 vendor robot
+      xacros that load is 117, franka's multi_arm; a macro that calls the next twice makes 2^depth).
+    - ``max_xacro_seconds`` [s]: wall time of one xacro expansion (vendor robot xacros take well under
+      a second each); both refused with :class:`~kinengine.errors.ResourceLimitError`.
 
     Each field is checked when a Limits is made (OptionError): a whole number (a finite real for the last
     two) between 1 (0 for ``max_movable_joints``) and the bound in :data:`BOUNDS`.
@@ -57,6 +61,8 @@ class Limits:
     max_tree_depth: int = 128
     max_offset: float = 1e6
     max_multiplier: float = 1e6
+    max_macro_calls: int = 5_000
+    max_xacro_seconds: float = 60.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -85,6 +91,8 @@ BOUNDS: dict[str, tuple[float, float]] = {
     "max_tree_depth": (1, 10**6),  # the build thread's stack grows with the depth
     "max_offset": (1e-9, 1e100),
     "max_multiplier": (1e-9, 1e100),
+    "max_macro_calls": (1, 10**9),
+    "max_xacro_seconds": (1e-3, 1e6),
 }
 """(smallest, largest) value of each Limits field."""
 

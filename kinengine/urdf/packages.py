@@ -16,9 +16,11 @@ from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
 from ..errors import URDFError
+from .limits import Limits
+from .source import read_bytes_once
 
 SEARCH_DEPTH = 3  # folder levels below each ROS_PACKAGE_PATH root that are searched
-_MANIFEST_BYTES = 1 << 20  # a package.xml is read up to this size
+_MANIFEST_LIMITS = Limits(max_bytes=1 << 20)  # a larger package.xml is not read
 _VALID_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
 _COMMENT = re.compile(rb"<!--.*?-->", re.DOTALL)
 _NAME = re.compile(rb"<name>\s*([^<\s]+)\s*</name>")
@@ -76,7 +78,9 @@ def resolve_uri(
 ) -> Path:
     """The absolute path a URDF/xacro file name points to; URDFError (one line) otherwise.
 
-    ``package://pkg/rel/path`` is ``resolve_package(pkg, packages=, start=) / rel/path``;
+    ``package://pkg/rel/path`` is ``resolve_package(pkg, packages=, start=) / rel/path`` with symbolic
+    links resolved, which must stay inside the package's folder (``..``, ``%2e%2e`` or a link that
+    leads out of it is refused);
     ``file:///abs/path`` (or ``file://localhost/...``) is that path, percent-decoded;
     a plain path is taken relative to ``start`` (a folder, or a file whose folder is
     used; the current directory without one). The file itself need not exist.
@@ -88,7 +92,7 @@ def resolve_uri(
         rel = parts.path.lstrip("/")
         if not parts.netloc or not rel:
             raise URDFError(f"{uri!r} is not a package URI: expected package://<package>/<path in it>")
-        return resolve_package(parts.netloc, packages=packages, start=start) / unquote(rel)
+        return _inside(resolve_package(parts.netloc, packages=packages, start=start), unquote(rel), uri)
     if parts.scheme == "file":
         if parts.netloc not in ("", "localhost"):
             raise URDFError(f"{uri!r} names a remote host: only local file:// URIs are read")
@@ -103,13 +107,29 @@ def resolve_uri(
     return Path(os.path.abspath(base / uri))
 
 
-def _package_name(folder: Path) -> str | None:
-    """The ``<name>`` in ``folder/package.xml`` (comments skipped), None without one."""
+def _inside(root: Path, rel: str, uri: str) -> Path:
+    """``root / rel`` with symbolic links resolved; URDFError naming ``uri`` if it is not inside ``root``."""
     try:
-        with open(folder / "package.xml", "rb") as f:
-            text = _COMMENT.sub(b"", f.read(_MANIFEST_BYTES))
-    except OSError:
+        base = root.resolve()
+        target = (base / rel).resolve()
+    except (OSError, ValueError, RuntimeError) as exc:  # ValueError: NUL; RuntimeError: a link loop
+        raise URDFError(f"{uri!r} cannot be resolved: {exc}") from None
+    if target != base and base not in target.parents:
+        raise URDFError(
+            f"{uri!r} leads out of the folder of its package ({str(base)!r}) through '..' or a symbolic "
+            "link: package:// URIs may only name files inside the package"
+        )
+    return target
+
+
+def _package_name(folder: Path) -> str | None:
+    """The ``<name>`` in ``folder/package.xml`` (comments skipped), None without one or when it is not
+    a regular file (opened without blocking: a FIFO there cannot hang the search) or over 1 MiB."""
+    try:
+        _, data = read_bytes_once(folder / "package.xml", _MANIFEST_LIMITS)
+    except URDFError:
         return None
+    text = _COMMENT.sub(b"", data)
     found = _NAME.search(text)
     return found.group(1).decode("utf-8", "replace") if found else None
 
