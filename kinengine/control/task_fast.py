@@ -1,8 +1,8 @@
 """The fast path of :meth:`Task.update(q[, qdot]) <kinengine.control.task.Task.update>` for the common
 task: one absolute frame, all rows, Cartesian position and one rotation parameterization.
 
-One closure does the whole update with few numpy calls: the input checks, one
-``computeForwardKinematicsDerivatives`` (returns nothing: no allocation), the frame placement, χ_R, its
+One closure does the whole update with few numpy calls: the input checks, one Pinocchio call for the
+joint Jacobians (:func:`~kinengine.control.task_frame.joint_jacobians`), the frame placement, χ_R, its
 distance to the singular set and E_R(χ) by the parameterization's own scalar formulas (see
 :func:`rotation_function`), then J_e0 and J_A = E·J_e0 = (E·X)·J_w by *one* product of the stacked
 (6 + 3 + m, 6) matrix [X; E·X] with J_w into one buffer whose rows are the Task's ``jacobian`` and
@@ -31,7 +31,7 @@ import pinocchio as pin
 
 from ..parameterizations.base import RotationParameterization
 from .continuity import Rule, continuity_rule
-from .task_frame import FrameBlock, FrameKinematics
+from .task_frame import FrameBlock, FrameKinematics, joint_jacobians
 
 Write = Callable[[list[list[float]], list[float], float, "list[float] | None"], "list[float] | None"]
 """(C_IF's rows, p, threshold, previous χ or None) -> χ (3 + m), written with everything else into the Task's
@@ -135,7 +135,7 @@ def fast_update(
     G, dG, tmp = np.empty((6, n)), np.empty((6, n)), np.empty((rows, n))
     product, product_T, product_rates = S.dot, T.dot, stacked.dot
     twist = rates[:6]
-    fkd, place = pin.computeForwardKinematicsDerivatives, pin.updateFramePlacement
+    place = pin.updateFramePlacement
     ready, check_q = coords.ready, coords.check
     fold_q = coords.matrix
 
@@ -157,7 +157,7 @@ def fast_update(
             if qdot is not None:
                 np.dot(fold_q, qdot, out=vp)
                 v = vp
-        fkd(model, data, q, v, zero)
+        joint_jacobians(model, data, q, None if qdot is None else v, zero)
         place(model, data, fid)
         chi = write(R.tolist(), p.tolist(), threshold, block.previous)
         if chi is None:
