@@ -76,23 +76,22 @@ def analytic_function(
     if kin.dof == 0:
         return lambda q: analytic_single(kin, q, fid, pmap, threshold)
     local = threading.local()
-    jacobian_single, rotation, rows = pmap.jacobian_single, pmap.rotation, pmap.size
+    jacobian_single, rotation = pmap.jacobian_single, pmap.rotation
     plain = pmap.rows is None and (pmap.position is None or pmap.position.name == "cartesian")
     rate = None if rotation is None or not plain else rotation.pose_rate
-    first = 0 if pmap.position is None else 3  # E_R's first row in E
+    _, _, _, template, pack_into, offset, shape = pmap.layout.fast
+    first = shape[0] - (0 if rotation is None else rotation.size)  # E_R's first row in E
 
     def thread_path() -> tuple[np.ndarray, np.ndarray, Callable[..., np.ndarray], np.ndarray]:
         """This thread's (C, p) views, unchecked frame Jacobian and E = blockdiag(I, E_R) (m, 6) buffer."""
         (C, p), jacobian = _single_path(kin, fid)
-        E = np.zeros((rows, 6))  # used when rate is not None: the map is all rows of (cartesian,) rotation
-        if rate is not None:
-            E[:first, :first] = np.eye(first)
-        local.path = C, p, jacobian, E
+        local.path = C, p, jacobian, np.frombuffer(bytearray(template)).reshape(shape)
         return local.path
 
     def evaluate(q: np.ndarray) -> npt.NDArray[np.float64]:
-        """J_A = E·J_e0 with E_R from the rotation's :meth:`pose_rate` at regular poses; any other pose map
-        or pose takes :meth:`PoseMap.jacobian_single` (the error, or position formulas and row selections)."""
+        """J_A = E·J_e0 with E_R from the rotation's :meth:`pose_rate` at regular poses (written into this
+        thread's E); any other pose map or pose takes :meth:`PoseMap.jacobian_single` (the error, or
+        position formulas and row selections)."""
         try:
             C, p, jacobian, E = local.path
         except AttributeError:
@@ -101,7 +100,11 @@ def analytic_function(
         found = None if rate is None else rate(C)
         if found is None or not found[0] >= threshold:
             return jacobian_single(C.tolist(), p.tolist(), J, threshold)
-        E[first:, 3:] = found[1]
+        E_R = found[1]
+        if type(E_R) is tuple:  # the formulas' entries
+            pack_into(E, offset, *E_R)
+        else:
+            E[first:, 3:] = E_R
         return E.dot(J)
 
     return evaluate

@@ -268,15 +268,13 @@ class RotationParameterization(Parameterization):
         except ZeroDivisionError:
             return None
 
-    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray] | None:
-        """(distance to the singular set, E_R (m, 3), read-only) at one pose C_IE (3, 3) float64: χ̇_R = E_R·ω
-        with ω [rad/s] in I. :meth:`chart`'s E as an array; euler_zyx and rotation_vector take it from
-        Pinocchio. None as for :meth:`chart`."""
+    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
+        """(distance to the singular set, E_R) at one pose C_IE (3, 3) float64: χ̇_R = E_R·ω with ω [rad/s]
+        in I. E_R is :meth:`chart`'s row-major entries (Python floats), or an (m, 3) array where Pinocchio
+        computes it (euler_zyx; rotation_vector below JLOG3_MAX_ANGLE). None as for :meth:`chart`."""
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
         found = self.chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
-        if found is None:
-            return None
-        return found[1], _ND(self._E_shape, _F8, self._pack(*found[2]))
+        return None if found is None else (found[1], found[2])
 
     def to_rotation(self, chi: npt.ArrayLike) -> FloatArray:
         """C_IE from χ_R: (m,) -> (3, 3), (..., m) -> (..., 3, 3)."""

@@ -161,6 +161,16 @@ class EulerAngles(RotationParameterization):
         chi = [chi1, chi2, self._third(math, c1, s1, C)]
         return chi, distance, self._rate_entries(c1, s1, c2, s2)
 
+    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
+        # chart without χ3: E does not depend on it
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
+        chi1, chi2, locked = self._leading(math, (c00, c01, c02, c10, c11, c12, c20, c21, c22))
+        if locked:
+            return None
+        c1, s1, c2, s2 = math.cos(chi1), math.sin(chi1), math.cos(chi2), math.sin(chi2)
+        distance = abs(s2) if self._proper else abs(c2)
+        return (distance, self._rate_entries(c1, s1, c2, s2)) if distance != 0.0 else None
+
     def _to_rotation(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         a, b, c = self._axes
         return _matmul(_matmul(_elementary(xp, a, chi1), _elementary(xp, b, chi2)), _elementary(xp, c, chi3))
@@ -253,7 +263,7 @@ class EulerZYX(EulerAngles):
             return pin.rpy.computeRpyJacobian(chi[::-1], pin.WORLD)[:, ::-1]
         return super().E_inverse(chi)
 
-    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray] | None:
+    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
         # (roll, pitch, yaw) = matrixToRpy(C); E = computeRpyJacobianInverse(rpy, WORLD), rows reversed
         rpy = pin.rpy.matrixToRpy(C)
         pitch = float(rpy[1])

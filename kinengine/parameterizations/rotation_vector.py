@@ -125,15 +125,21 @@ class RotationVector(RotationParameterization):
             scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.atan2(s, w) / s)
         return scale * x, scale * y, scale * z
 
-    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray] | None:
+    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
         # θ < JLOG3_MAX_ANGLE: E_R = Jlog3(C)·Cᵀ (Jlog3 maps the angular velocity in the frame's own axes to
         # φ̇; Cᵀ takes ω from I's axes to them), θ from cos θ = (tr C − 1)/2, distance 2π − θ. Towards π the
         # scalar formulas (see JLOG3_MAX_ANGLE).
-        (c00, _, _), (_, c11, _), (_, _, c22) = C.tolist()
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
         cos_theta = 0.5 * (c00 + c11 + c22 - 1.0)
         if cos_theta > _JLOG3_MIN_COS:
             return _TWO_PI - math.acos(min(cos_theta, 1.0)), pin.Jlog3(C).dot(C.T)
-        return super().pose_rate(C)
+        found = self.chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        return None if found is None else (found[1], found[2])
+
+    def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
+        # _from_rotation keeps θ <= π (+ rounding): _distance's nearest 2πk is 2π, so the distance is 2π − θ
+        x, y, z = self._from_rotation(math, False, *C)
+        return [x, y, z], _TWO_PI - math.sqrt(x * x + y * y + z * z), self._E(math, x, y, z)
 
     def _to_rotation(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z
