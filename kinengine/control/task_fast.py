@@ -1,13 +1,14 @@
 """The fast path of :meth:`Task.update(q[, qdot]) <kinengine.control.task.Task.update>` for the common
 task: one absolute frame, all rows, Cartesian position and one rotation parameterization.
 
-One closure does the whole update with few numpy calls: the input checks, one Pinocchio call for the
-joint Jacobians (:func:`~kinengine.control.task_frame.joint_jacobians`), the frame placement, χ_R, its
-distance to the singular set and E_R(χ) by the parameterization's own scalar formulas (see
-:func:`rotation_function`), then J_e0 and J_A = E·J_e0 = (E·X)·J_w by *one* product of the stacked
-(6 + 3 + m, 6) matrix [X; E·X] with J_w into one buffer whose rows are the Task's ``jacobian`` and
-``analytic_jacobian`` (X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]). With q̇: [twist; χ̇] by
-one product and [J̇_e0; J̇_A] by two (see :func:`fast_update`).
+One closure does the whole update with few numpy calls: the input checks, one Pinocchio call (without q̇
+computeFrameJacobian, which also places the frame; with q̇ the joint Jacobians and their rates of
+:func:`~kinengine.control.task_frame.joint_jacobians`, then the frame placement), χ_R, its distance to the
+singular set and E_R(χ) by the parameterization's :meth:`chart` (see :func:`rotation_function`), then
+J_e0 and J_A = E·J_e0 by *one* product of the stacked (6 + 3 + m, 6) matrix [X; E·X] with J_e0 (X = I) or
+with J_w (X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]) into one buffer whose rows are the Task's
+``jacobian`` and ``analytic_jacobian``. With q̇: [twist; χ̇] by one product and [J̇_e0; J̇_A] by two (see
+:func:`fast_update`).
 
 It computes what :class:`~kinengine.control.task_frame.FrameBlock` computes, with the same scalar
 formulas and the same continuity rule: the same floats for χ, the distances and the pose; J_e0, J_A and
@@ -33,10 +34,12 @@ from ..parameterizations.base import RotationParameterization
 from .continuity import Rule, continuity_rule
 from .task_frame import FrameBlock, FrameKinematics, joint_jacobians
 
-Write = Callable[[list[list[float]], list[float], float, "list[float] | None"], "list[float] | None"]
-"""(C_IF's rows, p, threshold, previous χ or None) -> χ (3 + m), written with everything else into the Task's
-buffer (see :func:`fast_update`), or None (not a regular pose: nothing written)."""
+Write = Callable[[list[list[float]], list[float], float, "list[float] | None", bool], "list[float] | None"]
+"""(C_IF's rows, p, threshold, previous χ or None, world) -> χ (3 + m), written with everything else into the
+Task's buffer (see :func:`fast_update`), or None (not a regular pose: nothing written). ``world``: [X; E·X]
+will multiply the joint Jacobians J_w at I's origin (X = [[I, −[p]x], [0, I]]); else J_e0 (X = I)."""
 _INF = math.inf
+_ORIGIN = (0.0, 0.0, 0.0)
 
 
 def rotation_function(
@@ -50,7 +53,7 @@ def rotation_function(
     by_columns = itemgetter(*(3 * r + c for c in range(3) for r in range(m)))  # E_R (m, 3) column-major
 
     def generic(
-        C: list[list[float]], p: list[float], threshold: float, previous: list[float] | None
+        C: list[list[float]], p: list[float], threshold: float, previous: list[float] | None, world: bool
     ) -> list[float] | None:
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
         found = chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
@@ -65,9 +68,10 @@ def rotation_function(
             return None
         E = by_columns(entries)
         px, py, pz = p
+        ox, oy, oz = p if world else _ORIGIN  # X moves the twist from I's origin to p, or is the identity
         # fmt: off
-        pack(buffer, 0, -pz, py, 1.0, -pz, py, *E[:m], pz, -px, 1.0, pz, -px, *E[m : 2 * m],
-             -py, px, 1.0, -py, px, *E[2 * m :], px, py, pz, *chi, _INF, distance,
+        pack(buffer, 0, -oz, oy, 1.0, -oz, oy, *E[:m], oz, -ox, 1.0, oz, -ox, *E[m : 2 * m],
+             -oy, ox, 1.0, -oy, ox, *E[2 * m :], px, py, pz, *chi, _INF, distance,
              c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
         # fmt: on
         return [px, py, pz, *chi]
@@ -135,7 +139,12 @@ def fast_update(
     G, dG, tmp = np.empty((6, n)), np.empty((6, n)), np.empty((rows, n))
     product, product_T, product_rates = S.dot, T.dot, stacked.dot
     twist = rates[:6]
-    place = pin.updateFramePlacement
+    place, frame_jacobian, LWA, nv = (
+        pin.updateFramePlacement,
+        pin.computeFrameJacobian,
+        pin.LOCAL_WORLD_ALIGNED,
+        model.nv,
+    )
     ready, check_q = coords.ready, coords.check
     fold_q = coords.matrix
 
@@ -157,18 +166,23 @@ def fast_update(
             if qdot is not None:
                 np.dot(fold_q, qdot, out=vp)
                 v = vp
-        joint_jacobians(model, data, q, None if qdot is None else v, zero)
-        place(model, data, fid)
-        chi = write(R.tolist(), p.tolist(), threshold, block.previous)
+        if qdot is None and nv:  # J_e0 from Pinocchio (it places the frame too): S = [I; blockdiag(I, E_R)]
+            J = frame_jacobian(model, data, q, fid, LWA).reshape(6, nv)  # eigenpy: (6,) for nv = 1
+            chi = write(R.tolist(), p.tolist(), threshold, block.previous, False)
+        else:  # J_w and J̇_w at I's origin: S = [X; E·X]
+            joint_jacobians(model, data, q, v, zero)
+            place(model, data, fid)
+            J = Jw
+            chi = write(R.tolist(), p.tolist(), threshold, block.previous, True)
         if chi is None:
             return False
-        J, dJ = Jw, dJw
+        dJ = dJw
         if fold is not None:
-            J, dJ = G, dG
-            Jw.dot(fold, G)
+            Jw_folded, J, dJ = J, G, dG
+            Jw_folded.dot(fold, G)
         elif mask is not None:
+            np.multiply(J, mask, out=G)
             J, dJ = G, dG
-            np.multiply(Jw, mask, out=G)
         product(J, stacked)
         if continuous:
             block.previous = chi
