@@ -324,3 +324,48 @@ def test_pure_python_switch_turns_the_kernel_off():
     assert done.returncode == 0, done.stderr
     kernel, error = done.stdout.split()
     assert kernel == "None" and float(error) <= 1e-14
+
+
+@pytest.mark.parametrize("offset", [1, 3, 4, 7])
+def test_unaligned_batches_and_outputs_equal_pure_python(monkeypatch, offset):
+    """A C-contiguous float64 Q (and out=) at an odd byte offset (np.frombuffer) runs on the C chain through an
+    aligned copy: bit for bit the C chain's T and J of the aligned Q, and the numpy chain's to rounding."""
+    robot = kinengine.load("ur5")
+    Q = robot.random_configuration(11, 300)
+    unaligned = np.frombuffer(bytearray(offset + Q.nbytes), np.float64, count=Q.size, offset=offset)
+    unaligned = unaligned.reshape(Q.shape)
+    unaligned[...] = Q
+    assert not unaligned.flags.aligned and unaligned.flags.c_contiguous
+    outputs = tuple(
+        np.frombuffer(bytearray(offset + 8 * int(np.prod(shape))), np.float64, offset=offset).reshape(shape)
+        for shape in ((len(Q), 4, 4), (len(Q), 6, robot.dof))
+    )
+    spy = _Spy(_chain(robot, robot.end_effector).kernel)
+    monkeypatch.setattr(_chain(robot, robot.end_effector), "kernel", spy)
+    expected = robot.kinematics(Q)
+    assert _same(robot.kinematics(unaligned), expected)
+    robot.kinematics(unaligned, out=outputs)
+    assert _same(outputs, expected) and sum(spy.rows) == 3 * len(Q)  # all three on the C chain
+    monkeypatch.setattr(compiler, "KERNEL", None)  # the numpy chain
+    for got, numpy_chain in zip(outputs, robot.kinematics(unaligned), strict=True):
+        np.testing.assert_allclose(got, numpy_chain, rtol=0, atol=1e-14)
+
+
+def test_kernel_sin_cos_agree_with_libm_and_a_wrong_one_is_refused_with_one_warning(monkeypatch):
+    """The import-time check: the built kernel's sin/cos are within SIN_COS_TOLERANCE of math.sin/math.cos; a
+    kernel whose sin/cos are off (as -ffast-math made them) is not used, with one RuntimeWarning."""
+    from kinengine.kinematics import chainkernel
+
+    assert compiler.sin_cos_error(chainkernel.sin_check) <= compiler.SIN_COS_TOLERANCE
+
+    right = chainkernel.sin_check
+
+    def off(angles: bytes) -> bytes:
+        values = np.frombuffer(right(angles)).copy()
+        values[7] += 0.707
+        return values.tobytes()
+
+    monkeypatch.setattr(chainkernel, "sin_check", off)
+    with pytest.warns(RuntimeWarning, match="fast-math") as caught:
+        assert compiler._kernel_type() is None
+    assert len(caught) == 1

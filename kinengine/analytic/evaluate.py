@@ -15,7 +15,6 @@ import pinocchio as pin
 from ..kinematics import batch, relative
 from ..kinematics.engine import Kinematics
 from ..kinematics.handle import FrameHandle
-from .native import NATIVE_E
 from .pose_map import PoseMap
 
 ANALYTIC_CALLS = 100
@@ -77,38 +76,38 @@ def analytic_function(
     if kin.dof == 0:
         return lambda q: analytic_single(kin, q, fid, pmap, threshold)
     local = threading.local()
-    jacobian_single = pmap.jacobian_single
+    jacobian_single, rotation = pmap.jacobian_single, pmap.rotation
     plain = pmap.rows is None and (pmap.position is None or pmap.position.name == "cartesian")
-    make_native = NATIVE_E.get(pmap.rotation.name) if pmap.rotation is not None and plain else None
+    rate = None if rotation is None or not plain else rotation.pose_rate
+    _, _, _, template, pack_into, offset, shape = pmap.layout.fast
+    first = shape[0] - (0 if rotation is None else rotation.size)  # E_R's first row in E
+
+    def thread_path() -> tuple[np.ndarray, np.ndarray, Callable[..., np.ndarray], np.ndarray]:
+        """This thread's (C, p) views, unchecked frame Jacobian and E = blockdiag(I, E_R) (m, 6) buffer."""
+        (C, p), jacobian = _single_path(kin, fid)
+        local.path = C, p, jacobian, np.frombuffer(bytearray(template)).reshape(shape)
+        return local.path
 
     def evaluate(q: np.ndarray) -> npt.NDArray[np.float64]:
+        """J_A = E·J_e0 with E_R from the rotation's :meth:`pose_rate` at regular poses (written into this
+        thread's E); any other pose map or pose takes :meth:`PoseMap.jacobian_single` (the error, or
+        position formulas and row selections)."""
         try:
-            (C, p), jacobian = local.path
+            C, p, jacobian, E = local.path
         except AttributeError:
-            (C, p), jacobian = local.path = _single_path(kin, fid)
+            C, p, jacobian, E = thread_path()
         J = jacobian(q, "local_world_aligned")  # also places the frame: C and p show T_IF at q
-        return jacobian_single(C.tolist(), p.tolist(), J, threshold)
-
-    if make_native is None:
-        return evaluate
-    native, rotation_only = make_native(), pmap.position is None
-
-    def evaluate_native(q: np.ndarray) -> npt.NDArray[np.float64]:
-        """E_R from Pinocchio's C++ (:mod:`.native`) at regular poses; anything else takes ``evaluate``."""
-        try:
-            (C, p), jacobian = local.path
-        except AttributeError:
-            (C, p), jacobian = local.path = _single_path(kin, fid)
-        J = jacobian(q, "local_world_aligned")
-        found = native(C)
-        if found is None or not found[0] >= threshold or found[0] == 0.0:  # singular: the general path
+        found = None if rate is None else rate(C)
+        if found is None or not found[0] >= threshold:
             return jacobian_single(C.tolist(), p.tolist(), J, threshold)
-        if rotation_only:
-            return found[1].dot(J[3:])
-        J[3:] = found[1].dot(J[3:])  # J is this call's own array
-        return J
+        E_R = found[1]
+        if type(E_R) is tuple:  # the formulas' entries
+            pack_into(E, offset, *E_R)
+        else:
+            E[first:, 3:] = E_R
+        return E.dot(J)
 
-    return evaluate_native
+    return evaluate
 
 
 def _single_path(

@@ -42,7 +42,7 @@ class Layout:
         self.template = template.tobytes()
         self.offset = 0 if self.position_formula else 48 * (rows - (rotation.size if rotation else 0))
         self.pack_into: Callable[..., None] = struct.Struct(
-            "<"
+            "="  # native byte order: the template is a float64 ndarray of this process
             + "3d24x" * (position.size if position is not None and self.position_formula else 0)
             + "24x3d" * (rotation.size if rotation is not None else 0)
         ).pack_into

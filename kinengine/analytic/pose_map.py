@@ -54,10 +54,6 @@ class PoseMap:
     layout: Layout = field(init=False, repr=False, compare=False)
     part_rows: tuple[tuple[int, ...], ...] = field(init=False, repr=False, compare=False)
     """Per part (in :attr:`parts` order), the indices of its rows among the selected rows."""
-    fast_rotation: Callable[..., tuple[float, Entries] | None] | None = field(
-        init=False, repr=False, compare=False
-    )
-    """The rotation's (distance, E_R) straight from C when no position formula runs (None: none)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layout", Layout(self.position, self.rotation))
@@ -68,9 +64,6 @@ class PoseMap:
             spans.append(tuple(i for i, r in enumerate(selected) if start <= r < start + part.size))
             start += part.size
         object.__setattr__(self, "part_rows", tuple(spans))
-        fast = getattr(self.rotation, "_fast_E", None)  # (distance, E_R entries) | None from C's 9 entries
-        plain = self.position is None or not self.layout.position_formula
-        object.__setattr__(self, "fast_rotation", fast if plain else None)
 
     @property
     def size(self) -> int:
@@ -162,15 +155,6 @@ class PoseMap:
         entries in E, hence NaN rows in J_A (no error). The error message states J_e0's rank.
         """
         position_formula, position, rotation, template, pack_into, offset, shape = self.layout.fast
-        fast = self.fast_rotation
-        if fast is not None:  # regular poses: E_R without χ3 and without a second pass; else the general path
-            (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
-            found = fast(c00, c01, c02, c10, c11, c12, c20, c21, c22)
-            if found is not None and found[0] >= threshold and found[0] != 0.0:
-                buffer = bytearray(template)
-                pack_into(buffer, offset, *found[1])
-                JA = np.ndarray(shape, _F64, buffer).dot(J)
-                return JA if self.rows is None else JA[self.rows, :]
         entries: tuple[float, ...] = ()
         param: Parameterization | None = position
         try:

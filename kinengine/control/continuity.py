@@ -36,11 +36,15 @@ def _euler(proper: bool) -> Rule:
     """Euler angles: every χ equivalent to a canonical one is one of the two solutions
     (χ1, χ2, χ3) and (χ1 + π, s − χ2, χ3 + π) — s = 0 for proper sequences (a = c), π for Tait–Bryan — with
     2π shifts of each angle. Picks the candidate nearest (Euclidean) the previous χ, so χ2 may leave its
-    canonical range ([−π/2, π/2] or [0, π]) and χ1, χ3 do not jump by π where the canonical χ2 turns back."""
+    canonical range ([−π/2, π/2] or [0, π]) and χ1, χ3 do not jump by π where the canonical χ2 turns back.
+    χ within 1 rad of the previous χ in every angle is kept as it is: its squared distance is below 3, the
+    other solution's (χ1 and χ3 shifted by π) above (π − 1)² > 4.5 — the common case of a control loop."""
     shift = 0.0 if proper else math.pi
 
     def rule(chi: list[float], previous: list[float]) -> list[float]:
         p1, p2, p3 = previous
+        if abs(chi[0] - p1) < 1.0 and abs(chi[1] - p2) < 1.0 and abs(chi[2] - p3) < 1.0:
+            return chi
         a1, a2, a3 = _unwrap(chi[0], p1), _unwrap(chi[1], p2), _unwrap(chi[2], p3)
         b1, b2, b3 = _unwrap(chi[0] + math.pi, p1), _unwrap(shift - chi[1], p2), _unwrap(chi[2] + math.pi, p3)
         if (b1 - p1) ** 2 + (b2 - p2) ** 2 + (b3 - p3) ** 2 < (a1 - p1) ** 2 + (a2 - p2) ** 2 + (

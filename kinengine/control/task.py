@@ -29,8 +29,8 @@ with ``on_singularity="raise"`` (default) the update then raises RepresentationS
 writing every attribute: a failed update leaves the Task consistent, holding all the new configuration's
 values (so the next update continues from it), never a mix of old and new.
 
-How: one ``computeForwardKinematicsDerivatives`` fills Pinocchio's world-frame joint Jacobians J_w and
-J̇_w (no array is returned, so nothing is allocated); per frame :mod:`kinengine.control.task_frame` does
+How: one Pinocchio call fills its world-frame joint Jacobians J_w and, with q̇, J̇_w
+(:func:`~kinengine.control.task_frame.joint_jacobians`); per frame :mod:`kinengine.control.task_frame` does
 the rest. Pinocchio's model has plain joints only; with mimic joints q_pin = M q + b and q̇_pin = M q̇
 are written into preallocated arrays and J_w, J̇_w are folded, J_w·M (see :mod:`kinengine.model.coordinates`).
 A task of one absolute frame with all rows, Cartesian position and a rotation takes the fast path of
@@ -47,7 +47,6 @@ from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
-import pinocchio as pin
 
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
 from ..analytic.singular import check_on_singularity
@@ -56,7 +55,7 @@ from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
 from .frame_task import FrameTask, as_frame_tasks
 from .task_fast import fast_update
-from .task_frame import FrameBlock, FrameKinematics
+from .task_frame import FrameBlock, FrameKinematics, joint_jacobians
 
 
 class TaskRobot(Protocol):
@@ -237,10 +236,7 @@ class Task:
             if qdot is not None:
                 vp = self._vp
                 np.dot(coords.matrix, qdot, out=vp)
-        # returns nothing: no allocation
-        pin.computeForwardKinematicsDerivatives(
-            self._model, self._data, qp, self._zero if vp is None else vp, self._zero
-        )
+        joint_jacobians(self._model, self._data, qp, vp, self._zero)
         if qdot is None:
             if self._rates_valid:
                 self._invalidate_rates()

@@ -1,20 +1,22 @@
 """The fast path of :meth:`Task.update(q[, qdot]) <kinengine.control.task.Task.update>` for the common
 task: one absolute frame, all rows, Cartesian position and one rotation parameterization.
 
-One closure does the whole update with few numpy calls: the input checks, one
-``computeForwardKinematicsDerivatives`` (returns nothing: no allocation), the frame placement, χ_R, its
-distance to the singular set and E_R(χ) by scalar math (one function per parameterization family, see
-:func:`rotation_function`), then J_e0 and J_A = E·J_e0 = (E·X)·J_w by *one* product of the stacked
-(6 + 3 + m, 6) matrix [X; E·X] with J_w into one buffer whose rows are the Task's ``jacobian`` and
-``analytic_jacobian`` (X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]). With q̇: [twist; χ̇] by
-one product and [J̇_e0; J̇_A] by two (see :func:`fast_update`).
+One closure does the whole update with few numpy calls: the input checks, one Pinocchio call (without q̇
+computeFrameJacobian, which also places the frame; with q̇ the joint Jacobians and their rates of
+:func:`~kinengine.control.task_frame.joint_jacobians`, then the frame placement), χ_R, its distance to the
+singular set and E_R(χ) by the parameterization's :meth:`chart` (see :func:`rotation_function`), then
+J_e0 and J_A = E·J_e0 by *one* product of the stacked (6 + 3 + m, 6) matrix [X; E·X] with J_e0 (X = I) or
+with J_w (X = [[I, −[p]x], [0, I]], E·X = [[I, −[p]x], [0, E_R]]) into one buffer whose rows are the Task's
+``jacobian`` and ``analytic_jacobian``. With q̇: [twist; χ̇] by one product and [J̇_e0; J̇_A] by two (see
+:func:`fast_update`).
 
 It computes what :class:`~kinengine.control.task_frame.FrameBlock` computes, with the same scalar
 formulas and the same continuity rule: the same floats for χ, the distances and the pose; J_e0, J_A and
 the rates agree to rounding (fewer, larger products). For a pose within the threshold of a singular set, or at
 gimbal lock, it writes nothing and returns False: the general path then runs (NaN rows or the error,
 exactly as before). [X; E·X], χ, the distances and the pose share one Task buffer, in this order, so
-that one struct call writes every entry that changes (see :func:`fast_update`).
+that one struct call (native byte order: the buffer is a float64 ndarray of this process) writes every
+entry that changes (see :func:`fast_update`).
 """
 
 from __future__ import annotations
@@ -29,18 +31,15 @@ import numpy as np
 import pinocchio as pin
 
 from ..parameterizations.base import RotationParameterization
-from ..parameterizations.euler import GIMBAL_LOCK_TOLERANCE, EulerAngles
 from .continuity import Rule, continuity_rule
-from .task_frame import FrameBlock, FrameKinematics
+from .task_frame import FrameBlock, FrameKinematics, joint_jacobians
 
-Write = Callable[[list[float], float, "list[float] | None"], "list[float] | None"]
-"""(C_IF's entries column-major then p, threshold, previous χ or None) -> χ (3 + m), written with
-everything else into the Task's buffer (see :func:`fast_update`), or None (not a regular pose: nothing
-written)."""
-
-_ROW_MAJOR = itemgetter(0, 3, 6, 1, 4, 7, 2, 5, 8)
-"""Row-major entries of a 3x3 matrix from its column-major list."""
+Write = Callable[[list[list[float]], list[float], float, "list[float] | None", bool], "list[float] | None"]
+"""(C_IF's rows, p, threshold, previous χ or None, world) -> χ (3 + m), written with everything else into the
+Task's buffer (see :func:`fast_update`), or None (not a regular pose: nothing written). ``world``: [X; E·X]
+will multiply the joint Jacobians J_w at I's origin (X = [[I, −[p]x], [0, I]]); else J_e0 (X = I)."""
 _INF = math.inf
+_ORIGIN = (0.0, 0.0, 0.0)
 
 
 def rotation_function(
@@ -49,101 +48,35 @@ def rotation_function(
     """χ_R (continuous w.r.t. the previous χ through ``rule``), its distance and E_R for a regular pose,
     written by one ``pack(buffer, offset, ...)`` in the order of :func:`fast_update`'s buffer: columns
     3-5 of [X; E·X] (column-major), χ, the distances (inf for Cartesian), rows 0-2 of the pose."""
-    if isinstance(param, EulerAngles):
-        return _euler(param, rule, pack, buffer)
-    from_rotation, distance_of, E_of = param._from_rotation, param._distance, param._E
+    chart, distance_of, E_of = param.chart, param._distance, param._E
     m = param.size
     by_columns = itemgetter(*(3 * r + c for c in range(3) for r in range(m)))  # E_R (m, 3) column-major
 
-    def generic(C: list[float], threshold: float, previous: list[float] | None) -> list[float] | None:
-        chi = list(from_rotation(math, False, *_ROW_MAJOR(C)))
+    def generic(
+        C: list[list[float]], p: list[float], threshold: float, previous: list[float] | None, world: bool
+    ) -> list[float] | None:
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
+        found = chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        if found is None:
+            return None
+        chi, distance, entries = found
         if previous is not None:
-            chi = rule(chi, previous[3 : 3 + m])
-        distance = distance_of(math, *chi)
+            nearest = rule(chi, previous[3 : 3 + m])
+            if nearest != chi:  # another representative: its own distance and E
+                chi, distance, entries = nearest, distance_of(math, *nearest), E_of(math, *nearest)
         if not distance >= threshold or distance == 0.0:
             return None
-        E = by_columns(E_of(math, *chi))
-        c00, c10, c20, c01, c11, c21, c02, c12, c22, px, py, pz = C
+        E = by_columns(entries)
+        px, py, pz = p
+        ox, oy, oz = p if world else _ORIGIN  # X moves the twist from I's origin to p, or is the identity
         # fmt: off
-        pack(buffer, 0, -pz, py, 1.0, -pz, py, *E[:m], pz, -px, 1.0, pz, -px, *E[m : 2 * m],
-             -py, px, 1.0, -py, px, *E[2 * m :], px, py, pz, *chi, _INF, distance,
+        pack(buffer, 0, -oz, oy, 1.0, -oz, oy, *E[:m], oz, -ox, 1.0, oz, -ox, *E[m : 2 * m],
+             -oy, ox, 1.0, -oy, ox, *E[2 * m :], px, py, pz, *chi, _INF, distance,
              c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
         # fmt: on
         return [px, py, pz, *chi]
 
     return generic
-
-
-def _euler(param: EulerAngles, rule: Rule, pack: Callable[..., None], buffer: Any) -> Write:
-    """EulerAngles._from_rotation, the continuity rule, _distance and _E inlined (the same expressions,
-    so the same floats), with cos χ1, sin χ1 and cos χ2 computed once. The rule keeps χ as it is when
-    every angle is within 1 rad of the previous one (the other solution, χ1 and χ3 shifted by π, is then
-    farther than π − 1 in both): only then is it skipped."""
-    # column-major positions of C[a][b], C[a][t], C[a][a], C[b][a], C[t][a], C[b][t], C[t][t], C[t][b],
-    # C[b][b]
-    pick = itemgetter(*(3 * (i % 3) + i // 3 for i in param._index))
-    e, perm = param._eps, param._perm
-    # E'(columns in (a, b, t) order) -> E column-major (EulerAngles._to_columns, then transposed)
-    to_columns = [3 * r + perm.index(col) for r in range(3) for col in range(3)]
-    by_columns = itemgetter(*(to_columns[3 * r + c] for c in range(3) for r in range(3)))
-    atan2, hypot, cos, sin, pi, tol = (
-        math.atan2,
-        math.hypot,
-        math.cos,
-        math.sin,
-        math.pi,
-        GIMBAL_LOCK_TOLERANCE,
-    )
-    half_pi = 0.5 * math.pi
-    proper = param._proper
-
-    def euler(C: list[float], threshold: float, previous: list[float] | None) -> list[float] | None:
-        Cab, Cat, Caa, Cba, Cta, Cbt, Ctt, Ctb, Cbb = pick(C)
-        if proper:
-            chi2 = atan2(hypot(Cab, Cat), Caa)
-            if abs(chi2) <= tol or abs(chi2 - pi) <= tol:
-                return None
-            chi1 = atan2(Cba, -e * Cta)
-            c1, s1 = cos(chi1), sin(chi1)
-            chi3 = atan2(-e * c1 * Cbt - s1 * Ctt, c1 * Cbb + e * s1 * Ctb)
-        else:
-            chi2 = atan2(e * Cat, hypot(Cbt, Ctt))
-            if abs(abs(chi2) - half_pi) <= tol:
-                return None
-            chi1 = atan2(-e * Cbt, Ctt)
-            c1, s1 = cos(chi1), sin(chi1)
-            chi3 = atan2(e * c1 * Cba + s1 * Cta, c1 * Cbb + e * s1 * Ctb)
-        if previous is not None:
-            _, _, _, p1, p2, p3 = previous
-            if not (abs(chi1 - p1) < 1.0 and abs(chi2 - p2) < 1.0 and abs(chi3 - p3) < 1.0):
-                chi1, chi2, chi3 = rule([chi1, chi2, chi3], [p1, p2, p3])
-                c1, s1 = cos(chi1), sin(chi1)
-        if proper:
-            s2 = sin(chi2)
-            distance = abs(s2)
-            if not distance >= threshold or distance == 0.0:
-                return None
-            u = 1.0 / s2
-            k = cos(chi2) * u
-            E = by_columns((1.0, -s1 * k, e * c1 * k, 0.0, c1, e * s1, 0.0, s1 * u, -e * c1 * u))
-        else:
-            c2 = cos(chi2)
-            distance = abs(c2)
-            if not distance >= threshold or distance == 0.0:
-                return None
-            u = 1.0 / c2
-            t = sin(chi2) * u
-            E = by_columns((1.0, s1 * t, -e * c1 * t, 0.0, c1, e * s1, 0.0, -e * s1 * u, c1 * u))
-        e00, e10, e20, e01, e11, e21, e02, e12, e22 = E
-        c00, c10, c20, c01, c11, c21, c02, c12, c22, px, py, pz = C
-        # fmt: off
-        pack(buffer, 0, -pz, py, 1.0, -pz, py, e00, e10, e20, pz, -px, 1.0, pz, -px, e01, e11, e21,
-             -py, px, 1.0, -py, px, e02, e12, e22, px, py, pz, chi1, chi2, chi3, _INF, distance,
-             c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz)
-        # fmt: on
-        return [px, py, pz, chi1, chi2, chi3]
-
-    return euler
 
 
 def fast_update(
@@ -153,11 +86,10 @@ def fast_update(
     stacked_dot: np.ndarray,
     rates: np.ndarray,
     flat: np.ndarray,
-) -> Callable[[np.ndarray, np.ndarray | None, bool, float, bool], bool] | None:
+) -> Callable[[np.ndarray, np.ndarray | None, bool, float, bool], bool]:
     """``update(q, qdot, check, threshold, continuous) -> bool``: True when it wrote every attribute (the
     rates only with q̇: without, the Task keeps them NaN); False, having written nothing, where the general
-    path must run. None if Pinocchio's frame placement is not the 12 contiguous doubles (C_IF
-    column-major, p) read here.
+    path must run.
 
     ``stacked`` (6 + 3 + m, dof) C-contiguous: rows 0-5 are the block's J_e0, the rest its J_A;
     ``stacked_dot`` alike [J̇_e0; J̇_A] and ``rates`` (6 + 3 + m,) [twist; χ̇] = stacked·q̇. ``flat`` holds
@@ -169,10 +101,7 @@ def fast_update(
     the general path's J̇ = X·J̇_w + Ẋ·J_w and J̇_A = E·J̇ + Ė·J, added in the same order.
     """
     model, data, fid, coords = a.model, a.data, a.fid, a.coords
-    R, p = a.R, a.p
-    if p.__array_interface__["data"][0] != R.__array_interface__["data"][0] + 72 or not R.flags.f_contiguous:
-        return None
-    placement = np.lib.stride_tricks.as_strided(R, shape=(12,), strides=(8,))  # C_IF column-major, then p
+    R, p = a.R, a.p  # live views of the frame's placement in the Task's Data
     rotation = block.pmap.rotation
     assert rotation is not None
     m = rotation.size
@@ -210,7 +139,12 @@ def fast_update(
     G, dG, tmp = np.empty((6, n)), np.empty((6, n)), np.empty((rows, n))
     product, product_T, product_rates = S.dot, T.dot, stacked.dot
     twist = rates[:6]
-    fkd, place = pin.computeForwardKinematicsDerivatives, pin.updateFramePlacement
+    place, frame_jacobian, LWA, nv = (
+        pin.updateFramePlacement,
+        pin.computeFrameJacobian,
+        pin.LOCAL_WORLD_ALIGNED,
+        model.nv,
+    )
     ready, check_q = coords.ready, coords.check
     fold_q = coords.matrix
 
@@ -232,18 +166,23 @@ def fast_update(
             if qdot is not None:
                 np.dot(fold_q, qdot, out=vp)
                 v = vp
-        fkd(model, data, q, v, zero)
-        place(model, data, fid)
-        chi = write(placement.tolist(), threshold, block.previous)
+        if qdot is None and nv:  # J_e0 from Pinocchio (it places the frame too): S = [I; blockdiag(I, E_R)]
+            J = frame_jacobian(model, data, q, fid, LWA).reshape(6, nv)  # eigenpy: (6,) for nv = 1
+            chi = write(R.tolist(), p.tolist(), threshold, block.previous, False)
+        else:  # J_w and J̇_w at I's origin: S = [X; E·X]
+            joint_jacobians(model, data, q, v, zero)
+            place(model, data, fid)
+            J = Jw
+            chi = write(R.tolist(), p.tolist(), threshold, block.previous, True)
         if chi is None:
             return False
-        J, dJ = Jw, dJw
+        dJ = dJw
         if fold is not None:
-            J, dJ = G, dG
-            Jw.dot(fold, G)
+            Jw_folded, J, dJ = J, G, dG
+            Jw_folded.dot(fold, G)
         elif mask is not None:
+            np.multiply(J, mask, out=G)
             J, dJ = G, dG
-            np.multiply(Jw, mask, out=G)
         product(J, stacked)
         if continuous:
             block.previous = chi
@@ -272,7 +211,7 @@ def _packer(places: list[int]) -> tuple[Callable[..., None], int]:
     """A struct ``pack_into`` writing doubles at these increasing indices of a float64 buffer (from the first
     one on, given as the second value: pack into ``buffer[first:]``); struct writes zeros into pad bytes, so
     every entry skipped in between must be a zero."""
-    fmt, last = "<", places[0] - 1
+    fmt, last = "=", places[0] - 1  # native byte order: numpy's float64
     for k in places:
         fmt += f"{8 * (k - last - 1)}xd"
         last = k

@@ -35,6 +35,18 @@ from .continuity import Rule, continuity_rule
 from .frame_task import FrameTask
 
 
+def joint_jacobians(
+    model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray | None, zero: np.ndarray
+) -> None:
+    """Pinocchio's world-frame joint Jacobians J_w into ``data.J`` at q (and the joint placements); with
+    q̇ = ``v`` also J̇_w into ``data.dJ`` (computeForwardKinematicsDerivatives), without it
+    computeJointJacobians, which fills the same J_w at about half the cost."""
+    if v is None:
+        pin.computeJointJacobians(model, data, q)
+    else:
+        pin.computeForwardKinematicsDerivatives(model, data, q, v, zero)
+
+
 class FrameKinematics:
     """J_e0, J̇_e0, twist of one frame F (rows [v; ω] in I) from the Task's Pinocchio Data."""
 
@@ -304,4 +316,4 @@ class FrameBlock:
         np.dot(self.JA, qdot, out=self.chi_dot)
 
 
-__all__ = ["FrameBlock", "FrameKinematics"]
+__all__ = ["FrameBlock", "FrameKinematics", "joint_jacobians"]

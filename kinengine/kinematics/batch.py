@@ -104,11 +104,19 @@ def run_chain(
         workers = max(1, min(WORKERS if workers is None else workers, len(Q) // KERNEL_MIN_PER_WORKER))
         code = REFERENCE_CODES.get(reference, 0)  # reference None: no Jacobian asked
         run = chain.kernel.run
+        # The C chain reads and writes aligned float64; any other layout numpy gives (np.frombuffer at an
+        # odd offset) goes through an aligned copy.
+        Q = Q if Q.flags.aligned else Q.copy()
+        T, J = (None if a is None or a.flags.aligned else np.empty_like(a) for a in (pose, jac))
+        T, J = (pose if T is None else T), (jac if J is None else J)
 
         def share(a: int, b: int) -> None:
-            run(Q[a:b], None if pose is None else pose[a:b], None if jac is None else jac[a:b], code)
+            run(Q[a:b], None if T is None else T[a:b], None if J is None else J[a:b], code)
 
         _share(list(itertools.pairwise(len(Q) * i // workers for i in range(workers + 1))), share, workers)
+        for target, result in ((pose, T), (jac, J)):
+            if target is not None and result is not target:
+                target[...] = result
         return
     workers = max(1, min(WORKERS if workers is None else workers, len(Q) // MIN_PER_WORKER))
     chunk = chunk_rows(chain, len(Q), workers, pose is not None, jac is not None, analytic, reference)

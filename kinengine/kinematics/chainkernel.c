@@ -4,7 +4,14 @@
  *   kernel.run(Q, T, J, reference)
  *                            T[i] = T_IF(Q[i]) (4, 4) [m] and J[i] = J(Q[i]) (6, dof), rows [linear;
  *                            angular], reference 0 "local_world_aligned", 1 "world", 2 "local"; T or J may
- *                            be None. Any strides; the GIL is released while it runs.
+ *                            be None. Any strides that are multiples of 8 on 8-byte aligned data (the caller
+ *                            copies other layouts); the GIL is released while it runs.
+ *   sin_check(angles)        the kernel's sin_cos on a buffer of float64 angles (sines, then cosines): checked
+ *                            against libm at import (kinengine/kinematics/compiler.py), which falls back to the
+ *                            numpy chain with one warning if they differ. Building with -ffast-math is an error.
+ *
+ * Declared free-threading safe (Py_mod_gil): a Kernel is immutable after construction and run() writes only
+ * the outputs its caller passes.
  *
  * Same algorithm as the numpy chain, one configuration at a time, so nothing but the outputs is written
  * (no scratch rows beyond a few kB per call): for each movable joint i from the root,
@@ -24,6 +31,21 @@
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
+
+#if defined(__FAST_MATH__)
+/* -ffast-math (or -Ofast) lets the compiler reassociate sin_cos's argument reduction: measured sin/cos off by
+ * up to 0.707, wrong poses with no error. Build without it (kinengine then also checks sin_cos at import). */
+#error "kinengine/kinematics/chainkernel.c must not be built with -ffast-math: its sin and cos would be wrong"
+#endif
+
+/* C99 restrict where the compiler has it: MSVC spells it __restrict in C mode, C89 compilers lack it. */
+#if defined(_MSC_VER)
+#define KE_RESTRICT __restrict
+#elif defined(__STDC_VERSION__) && __STDC_VERSION__ >= 199901L
+#define KE_RESTRICT restrict
+#else
+#define KE_RESTRICT
+#endif
 
 #define STEP_DOUBLES 17 /* prismatic, coordinate, scaling, offset, accumulate, K (3x3 row-major), t (3) */
 #define TAIL_DOUBLES 12 /* R_f (3x3 row-major), t_f (3) */
@@ -119,6 +141,15 @@ get_array(PyObject *obj, Py_buffer *view, int ndim, int writable, const char *wh
     }
     if (view->ndim != ndim || view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0) {
         PyErr_Format(PyExc_ValueError, "Kernel.run: %s must be a %d-dimensional float64 array", what, ndim);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    int aligned = (uintptr_t)view->buf % sizeof(double) == 0;
+    for (int k = 0; k < ndim; k++) {
+        aligned = aligned && view->strides[k] % (Py_ssize_t)sizeof(double) == 0;
+    }
+    if (!aligned) { /* read as double *: the caller (kinengine/kinematics/batch.py) passes aligned copies */
+        PyErr_Format(PyExc_ValueError, "Kernel.run: %s must be an aligned float64 array", what);
         PyBuffer_Release(view);
         return -1;
     }
@@ -279,7 +310,7 @@ static const double C1 = 4.16666666666666019037e-02, C2 = -1.3888888888874109574
 #endif
 
 CLONES static void
-sin_cos(const double *restrict x, double *restrict sin_out, double *restrict cos_out, Py_ssize_t count)
+sin_cos(const double *KE_RESTRICT x, double *KE_RESTRICT sin_out, double *KE_RESTRICT cos_out, Py_ssize_t count)
 {
     for (Py_ssize_t i = 0; i < count; i++) {
         double a = x[i]; /* any other angle gives some number, replaced below */
@@ -413,24 +444,71 @@ static PyTypeObject KernelType = {
     .tp_new = kernel_new,
 };
 
+/* sin_check(angles) -> bytes: sin_cos of a buffer of float64 angles, n sines then n cosines, for the import-time
+ * check against libm in kinengine/kinematics/compiler.py. */
+static PyObject *
+sin_check(PyObject *module, PyObject *arg)
+{
+    Py_buffer x;
+    if (PyObject_GetBuffer(arg, &x, PyBUF_SIMPLE) < 0) {
+        return NULL;
+    }
+    Py_ssize_t n = x.len / (Py_ssize_t)sizeof(double);
+    PyObject *result = NULL;
+    double *angles = PyMem_Malloc(sizeof(double) * (n ? n : 1));
+    PyObject *out = PyBytes_FromStringAndSize(NULL, (Py_ssize_t)sizeof(double) * 2 * n);
+    if (angles == NULL || out == NULL) {
+        if (angles == NULL) {
+            PyErr_NoMemory();
+        }
+        Py_XDECREF(out);
+    }
+    else {
+        memcpy(angles, x.buf, sizeof(double) * n); /* any alignment */
+        double *values = (double *)PyBytes_AS_STRING(out);
+        sin_cos(angles, values, values + n, n);
+        result = out;
+    }
+    PyMem_Free(angles);
+    PyBuffer_Release(&x);
+    return result;
+}
+
+static PyMethodDef module_methods[] = {
+    {"sin_check", sin_check, METH_O,
+     "sin_check(angles: bytes of float64) -> bytes: the kernel's sines then cosines of the angles."},
+    {NULL, NULL, 0, NULL},
+};
+
+static int
+chainkernel_exec(PyObject *module)
+{
+    if (PyType_Ready(&KernelType) < 0) {
+        return -1;
+    }
+    return PyModule_AddObjectRef(module, "Kernel", (PyObject *)&KernelType); /* no reference kept on failure */
+}
+
+static PyModuleDef_Slot chainkernel_slots[] = {
+    {Py_mod_exec, chainkernel_exec},
+#ifdef Py_mod_gil
+    /* Kernel objects are immutable after construction and run() writes only its caller's outputs. */
+    {Py_mod_gil, Py_MOD_GIL_NOT_USED},
+#endif
+    {0, NULL},
+};
+
 static struct PyModuleDef chainkernel_module = {
-    PyModuleDef_HEAD_INIT, "kinengine.kinematics.chainkernel",
-    "The batch chain in C: poses and Jacobians one configuration at a time, without scratch rows.", -1, NULL,
+    PyModuleDef_HEAD_INIT,
+    .m_name = "kinengine.kinematics.chainkernel",
+    .m_doc = "The batch chain in C: poses and Jacobians one configuration at a time, without scratch rows.",
+    .m_size = 0,
+    .m_methods = module_methods,
+    .m_slots = chainkernel_slots,
 };
 
 PyMODINIT_FUNC
 PyInit_chainkernel(void)
 {
-    if (PyType_Ready(&KernelType) < 0) {
-        return NULL;
-    }
-    PyObject *module = PyModule_Create(&chainkernel_module);
-    if (module == NULL) {
-        return NULL;
-    }
-    if (PyModule_AddObjectRef(module, "Kernel", (PyObject *)&KernelType) < 0) {
-        Py_DECREF(module);
-        return NULL;
-    }
-    return module;
+    return PyModuleDef_Init(&chainkernel_module);
 }

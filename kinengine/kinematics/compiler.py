@@ -9,6 +9,10 @@ by :func:`program`). The C chain is used unless ``KINENGINE_PURE_PYTHON`` is set
 
 from __future__ import annotations
 
+import math
+import warnings
+from collections.abc import Callable
+
 import numpy as np
 import pinocchio as pin
 
@@ -22,15 +26,42 @@ REFERENCE_CODES = {pin.LOCAL_WORLD_ALIGNED: 0, pin.WORLD: 1, pin.LOCAL: 2}
 """The C chain's number for each Jacobian reference."""
 
 
+SIN_COS_TOLERANCE = 1e-15
+"""Largest difference from the C library's sin and cos that the C chain's own sin_cos may show at import."""
+
+
 def _kernel_type() -> type | None:
-    """The C chain (kinengine/kinematics/chainkernel.c), or None: not built, or KINENGINE_PURE_PYTHON."""
+    """The C chain (kinengine/kinematics/chainkernel.c), or None: not built, KINENGINE_PURE_PYTHON, or its
+    sin and cos disagree with the C library's (then one RuntimeWarning says so)."""
     if accelerator.SWITCHED_OFF:
         return None
     try:
-        from .chainkernel import Kernel
+        from . import chainkernel
     except ImportError:
         return None
-    return Kernel
+    error = sin_cos_error(chainkernel.sin_check)
+    if not error <= SIN_COS_TOLERANCE:
+        warnings.warn(
+            f"kinengine's C batch chain computes sin/cos up to {error:.3g} away from the C library's "
+            "(was it built with -ffast-math?); batches run on the numpy chain instead. Reinstall kinengine "
+            "without fast-math flags to use it.",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        return None
+    return chainkernel.Kernel
+
+
+def sin_cos_error(sin_check: Callable[[bytes], bytes]) -> float:
+    """Largest |difference| between the kernel's sin_cos and math.sin/math.cos (the C library's) over angles
+    that exercise every quadrant, the reduction near multiples of π/2 and large arguments [rad]."""
+    angles = [k * 0.25 * math.pi + d for k in range(-64, 65) for d in (-1e-9, 0.0, 1e-9, 0.3)]
+    angles += [math.ldexp(1.0, e) * sign for e in range(-30, 20) for sign in (1.0, -1.0)]
+    angles += [1e5 + 0.37 * k for k in range(50)]
+    values = np.frombuffer(sin_check(np.array(angles).tobytes()))
+    expected = np.array([math.sin(a) for a in angles] + [math.cos(a) for a in angles])
+    error = np.abs(values - expected).max()  # NaN if the kernel gave one
+    return float(error) if error == error else math.inf
 
 
 KERNEL = _kernel_type()

@@ -68,39 +68,101 @@ PoseFunction = Callable[..., np.ndarray]
 JacobianFunction = Callable[..., np.ndarray]
 KinematicsFunction = Callable[..., tuple[np.ndarray, np.ndarray]]
 PlacementFunction = Callable[[], tuple[np.ndarray, np.ndarray]]
+Calls = tuple[PoseFunction, JacobianFunction, KinematicsFunction]
 
 
 def _bind(
     kin: Kinematics, fid: int, checking: bool, batches: bool
 ) -> tuple[PoseFunction, JacobianFunction, KinematicsFunction, PlacementFunction]:
-    """The closures ``placement()`` and: ``pose(q)``, ``jacobian(q, reference="local_world_aligned")``,
-    ``kinematics(q, reference="local_world_aligned")``. A checked q that is a batch (only with ``batches``)
-    goes to :func:`kinengine.kinematics.batch.evaluate` on the full model."""
-    coords, dof = kin.coordinates, kin.dof
+    """The closures ``pose(q)``, ``jacobian(q, reference="local_world_aligned")``,
+    ``kinematics(q, reference="local_world_aligned")`` and ``placement()``: :func:`_single_calls` at one
+    configuration, behind :func:`_checked_calls`; for a plain frame (q as it is, dof > 1) the C accelerator's
+    calls, which hand every call that is not plain back to these closures."""
     model, pfid, new_data, mapped = kin.frame_path(fid)
-    ready, full_check = coords.ready, coords.check
-    forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
-    local_frame = pin.LOCAL
-    references = dict(REFERENCES)
     local = threading.local()
 
-    def state() -> pin.Data:
+    def data() -> pin.Data:
         """This thread's Data of the frame's model."""
-        local.data = new_data()
-        return local.data
-
-    def check(q: object) -> np.ndarray:
-        return full_check(q, allow_batch=batches)
+        try:
+            return local.data
+        except AttributeError:
+            local.data = new_data()
+            return local.data
 
     def placement() -> tuple[np.ndarray, np.ndarray]:
-        try:
-            data = local.data
-        except AttributeError:
-            data = state()
-        frame = data.oMf[pfid]
+        frame = data().oMf[pfid]
         rotation, translation = frame.rotation, frame.translation
         rotation.flags.writeable = translation.flags.writeable = False
         return rotation, translation
+
+    single = _single_calls(kin, model, pfid, data, mapped)
+    calls = _checked_calls(kin, fid, single, checking, batches)
+    if mapped or kin.dof <= 1:
+        return (*calls, placement)
+    native = accelerator.frame_calls(
+        dof=kin.dof,
+        limit=MAX_MAGNITUDE,
+        checking=checking,
+        model=model,
+        frame_id=pfid,
+        local=local,
+        state=data,
+        forward=pin.forwardKinematics,
+        place=pin.updateFramePlacement,
+        frame_jacobian=pin.computeFrameJacobian,
+        references=dict(REFERENCES),
+        default_reference=REFERENCES["local_world_aligned"],
+        local_reference=REFERENCES["local"],
+        slow_pose=calls[0],
+        slow_jacobian=calls[1],
+        slow_kinematics=calls[2],
+    )  # the same Pinocchio calls in C, which hands these closures every call that is not plain
+    return (*(calls if native is None else native), placement)
+
+
+def _single_calls(
+    kin: Kinematics, model: pin.Model, pfid: int, data: Callable[[], pin.Data], mapped: bool
+) -> Calls:
+    """The single-configuration calls on the frame's model, for a q (dof,) already checked:
+    ``pose(q)``, ``jacobian(q, ref)``, ``kinematics(q, ref)`` with ``ref`` a pin.ReferenceFrame. A frame moved
+    by mimic joints takes q_pin = M q + b and J_pin · M (only the mimic joints that move it); a 1-dof Jacobian
+    comes back from eigenpy as (6,) and is reshaped; Pinocchio 4.1 crashes on a frame Jacobian with nv = 0,
+    so a 0-dof Jacobian is zeros (6, 0)."""
+    forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
+    local_frame, dof = pin.LOCAL, kin.dof
+    pinocchio_q: Callable[[np.ndarray], np.ndarray] = kin.mimic.gather() if mapped else _same
+    fold: Callable[[np.ndarray], np.ndarray] = (
+        kin.mimic.folder() if mapped else _same if dof > 1 else (lambda J: J.reshape(6, dof))
+    )
+    if dof == 0:
+        frame_jacobian = _no_columns
+
+    def pose(q: np.ndarray) -> np.ndarray:
+        state = data()
+        forward(model, state, pinocchio_q(q))
+        return place(model, state, pfid).homogeneous
+
+    def jacobian(q: np.ndarray, ref: pin.ReferenceFrame) -> np.ndarray:
+        return fold(frame_jacobian(model, data(), pinocchio_q(q), pfid, ref))
+
+    def kinematics(q: np.ndarray, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
+        state, qp = data(), pinocchio_q(q)
+        if ref == local_frame or dof == 0:  # the LOCAL frame Jacobian does not place the joints
+            forward(model, state, qp)
+            return place(model, state, pfid).homogeneous, fold(frame_jacobian(model, state, qp, pfid, ref))
+        J = fold(frame_jacobian(model, state, qp, pfid, ref))  # places the joints and the frame
+        return place(model, state, pfid).homogeneous, J
+
+    return pose, jacobian, kinematics
+
+
+def _checked_calls(kin: Kinematics, fid: int, single: Calls, checking: bool, batches: bool) -> Calls:
+    """The public calls: the reference resolved by name, and with ``checking`` q checked once
+    (:attr:`CoordinateMap.ready` first, :meth:`CoordinateMap.check` for anything else); a checked batch
+    (N, dof), allowed with ``batches``, goes to :func:`kinengine.kinematics.batch.evaluate`."""
+    pose1, jacobian1, kinematics1 = single
+    ready, full_check = kin.coordinates.ready, kin.coordinates.check
+    references = dict(REFERENCES)
 
     def resolve(reference: Reference) -> pin.ReferenceFrame:
         try:
@@ -108,167 +170,41 @@ def _bind(
         except (KeyError, TypeError):
             return resolve_reference(reference)
 
-    def batch_pose(Q: np.ndarray) -> np.ndarray:
-        return batch.evaluate(kin, Q, fid, None, jacobian=False)[0]  # type: ignore[return-value]
-
-    def batch_jacobian(Q: np.ndarray, ref: pin.ReferenceFrame) -> np.ndarray:
-        return batch.evaluate(kin, Q, fid, ref, pose=False)[1]  # type: ignore[return-value]
-
-    def batch_kinematics(Q: np.ndarray, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
-        return batch.evaluate(kin, Q, fid, ref)  # type: ignore[return-value]
-
-    if dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
-        zeros = np.zeros((6, 0))
-
-        def pose0(q: np.ndarray) -> np.ndarray:
-            if checking:
-                q = check(q)
-                if q.ndim == 2:
-                    return batch_pose(q)
-            forward(model, kin.data(), q)
-            return place(model, kin.data(), pfid).homogeneous
-
-        def jacobian0(q: np.ndarray, reference: Reference = "local_world_aligned") -> np.ndarray:
-            ref = resolve(reference)
-            if checking:
-                q = check(q)
-                if q.ndim == 2:
-                    return batch_jacobian(q, ref)
-            return zeros.copy()
-
-        def kinematics0(
-            q: np.ndarray, reference: Reference = "local_world_aligned"
-        ) -> tuple[np.ndarray, np.ndarray]:
-            ref = resolve(reference)
-            if checking:
-                q = check(q)
-                if q.ndim == 2:
-                    return batch_kinematics(q, ref)
-            return pose0(q), zeros.copy()
-
-        return pose0, jacobian0, kinematics0, placement
-
-    if not mapped and dof > 1:  # q and J as they are: the hot path of nearly every robot and frame
-
-        def pose(q: np.ndarray) -> np.ndarray:
-            if checking and not ready(q):
-                q = check(q)
-                if q.ndim == 2:
-                    return batch_pose(q)
-            try:
-                data = local.data
-            except AttributeError:
-                data = state()
-            forward(model, data, q)
-            return place(model, data, pfid).homogeneous
-
-        def jacobian(q: np.ndarray, reference: Reference = "local_world_aligned") -> np.ndarray:
-            try:
-                ref = references[reference]
-            except (KeyError, TypeError):
-                ref = resolve_reference(reference)
-            if checking and not ready(q):
-                q = check(q)
-                if q.ndim == 2:
-                    return batch_jacobian(q, ref)
-            try:
-                data = local.data
-            except AttributeError:
-                data = state()
-            return frame_jacobian(model, data, q, pfid, ref)
-
-        def kinematics(
-            q: np.ndarray, reference: Reference = "local_world_aligned"
-        ) -> tuple[np.ndarray, np.ndarray]:
-            try:
-                ref = references[reference]
-            except (KeyError, TypeError):
-                ref = resolve_reference(reference)
-            if checking and not ready(q):
-                q = check(q)
-                if q.ndim == 2:
-                    return batch_kinematics(q, ref)
-            try:
-                data = local.data
-            except AttributeError:
-                data = state()
-            if ref == local_frame:  # Pinocchio's LOCAL frame Jacobian does not place the joints
-                forward(model, data, q)
-                return place(model, data, pfid).homogeneous, frame_jacobian(model, data, q, pfid, ref)
-            J = frame_jacobian(model, data, q, pfid, ref)
-            return place(model, data, pfid).homogeneous, J
-
-        native = accelerator.frame_calls(
-            dof=dof,
-            limit=MAX_MAGNITUDE,
-            checking=checking,
-            model=model,
-            frame_id=pfid,
-            local=local,
-            state=state,
-            forward=forward,
-            place=place,
-            frame_jacobian=frame_jacobian,
-            references=references,
-            default_reference=references["local_world_aligned"],
-            local_reference=references["local"],
-            slow_pose=pose,
-            slow_jacobian=jacobian,
-            slow_kinematics=kinematics,
-        )  # the same calls in C, which hands these closures every call that is not plain
-        if native is not None:
-            return (*native, placement)
-        return pose, jacobian, kinematics, placement
-
-    # A frame moved by mimic joints (q_pin = M q + b for those joints only; J_pin · M), or dof == 1
-    # (eigenpy returns a (6, 1) Jacobian as (6,)).
-    pinocchio_q = kin.mimic.gather() if mapped else (lambda q: q)
-    fold = kin.mimic.folder() if mapped else (lambda J: J.reshape(6, -1))
-
-    def mapped_pose(q: np.ndarray) -> np.ndarray:
+    def pose(q: np.ndarray) -> np.ndarray:
         if checking and not ready(q):
-            q = check(q)
+            q = full_check(q, allow_batch=batches)
             if q.ndim == 2:
-                return batch_pose(q)
-        try:
-            data = local.data
-        except AttributeError:
-            data = state()
-        forward(model, data, pinocchio_q(q))
-        return place(model, data, pfid).homogeneous
+                return batch.evaluate(kin, q, fid, None, jacobian=False)[0]  # type: ignore[return-value]
+        return pose1(q)
 
-    def mapped_jacobian(q: np.ndarray, reference: Reference = "local_world_aligned") -> np.ndarray:
+    def jacobian(q: np.ndarray, reference: Reference = "local_world_aligned") -> np.ndarray:
         ref = resolve(reference)
         if checking and not ready(q):
-            q = check(q)
+            q = full_check(q, allow_batch=batches)
             if q.ndim == 2:
-                return batch_jacobian(q, ref)
-        try:
-            data = local.data
-        except AttributeError:
-            data = state()
-        return fold(frame_jacobian(model, data, pinocchio_q(q), pfid, ref))
+                return batch.evaluate(kin, q, fid, ref, pose=False)[1]  # type: ignore[return-value]
+        return jacobian1(q, ref)
 
-    def mapped_kinematics(
+    def kinematics(
         q: np.ndarray, reference: Reference = "local_world_aligned"
     ) -> tuple[np.ndarray, np.ndarray]:
         ref = resolve(reference)
         if checking and not ready(q):
-            q = check(q)
+            q = full_check(q, allow_batch=batches)
             if q.ndim == 2:
-                return batch_kinematics(q, ref)
-        try:
-            data = local.data
-        except AttributeError:
-            data = state()
-        q = pinocchio_q(q)
-        if ref == local_frame:  # Pinocchio's LOCAL frame Jacobian does not place the joints
-            forward(model, data, q)
-            return place(model, data, pfid).homogeneous, fold(frame_jacobian(model, data, q, pfid, ref))
-        J = fold(frame_jacobian(model, data, q, pfid, ref))
-        return place(model, data, pfid).homogeneous, J
+                return batch.evaluate(kin, q, fid, ref)  # type: ignore[return-value]
+        return kinematics1(q, ref)
 
-    return mapped_pose, mapped_jacobian, mapped_kinematics, placement
+    return pose, jacobian, kinematics
+
+
+def _same(x: np.ndarray) -> np.ndarray:
+    return x
+
+
+def _no_columns(model: pin.Model, data: pin.Data, q: np.ndarray, fid: int, ref: object) -> np.ndarray:
+    """The frame Jacobian of a 0-dof model, (6, 0): Pinocchio 4.1 crashes computing it."""
+    return np.zeros((6, 0))
 
 
 __all__ = ["FrameHandle"]

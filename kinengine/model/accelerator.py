@@ -14,9 +14,9 @@ extension: without one the install goes on). It does three things the interprete
   pure-Python closures of :mod:`kinengine.kinematics.handle`, so results are equal bit for bit and
   every message is written once.
 
-``AVAILABLE`` says whether the accelerator runs. It is off when the extension was not built, when
-numpy's array layout is not the one it reads (checked on a probe array at import), or when the
-environment variable ``KINENGINE_PURE_PYTHON`` is set to anything but "" or "0" (for comparisons).
+``AVAILABLE`` says whether the accelerator runs. It is off when the extension was not built or does not
+import (numpy's C API is checked by its import), or when the environment variable
+``KINENGINE_PURE_PYTHON`` is set to anything but "" or "0" (for comparisons).
 """
 
 from __future__ import annotations
@@ -25,8 +25,6 @@ import os
 from collections.abc import Callable
 from types import ModuleType
 from typing import Any
-
-import numpy as np
 
 SWITCHED_OFF = os.environ.get("KINENGINE_PURE_PYTHON", "") not in ("", "0")
 """KINENGINE_PURE_PYTHON is set: no C module is used."""
@@ -37,12 +35,7 @@ def _load() -> ModuleType | None:
         return None
     try:
         from . import fastcall
-    except ImportError:  # not built: no C compiler at install time
-        return None
-    probe = np.arange(3.0)
-    try:
-        fastcall.configure(np.ndarray, probe.dtype, probe, probe.__array_interface__["data"][0])
-    except RuntimeError:  # numpy's array struct is not laid out as fastcall.c reads it
+    except ImportError:  # not built (no C compiler at install time), or built against another numpy ABI
         return None
     return fastcall
 

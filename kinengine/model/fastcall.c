@@ -13,12 +13,12 @@
  *                          ready, other arguments, an unknown reference) is handed to those closures
  *                          unchanged, so every conversion and error message lives in Python, once.
  *
- * numpy's array struct is read directly (data, nd, dimensions, descr, flags: the layout numpy has kept
- * since 1.7); configure() checks that layout on a probe array before anything is trusted, and the Python
- * side (kinengine/model/accelerator.py) falls back to pure Python if it raises. Pinocchio is called
- * through its Python functions, so results are bit for bit those of the pure-Python path.
- * Each thread uses its own Pinocchio Data: the one the handle's threading.local holds for it, cached
- * with the thread state's unique id (never reused, unlike thread idents).
+ * numpy arrays are read through numpy's public C API (numpy's headers at build time: numpy is in
+ * build-system.requires). Pinocchio is called through its Python functions, so results are bit for bit
+ * those of the pure-Python path. Each thread uses its own Pinocchio Data: the one the handle's
+ * threading.local holds for it. With the GIL, the last one used is cached with the thread state's unique id
+ * (never reused, unlike thread idents); a free-threaded build (Py_GIL_DISABLED) keeps no cache, reads
+ * threading.local on every call and declares Py_MOD_GIL_NOT_USED.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -26,34 +26,25 @@
 #include <stdint.h>
 #include <string.h>
 
-/* The leading fields of numpy's PyArrayObject_fields (numpy >= 1.7, 2.x). */
-typedef struct {
-    PyObject_HEAD
-    char *data;
-    int nd;
-    Py_ssize_t *dimensions;
-    Py_ssize_t *strides;
-    PyObject *base;
-    PyObject *descr;
-    int flags;
-} ArrayFields;
+#define NPY_NO_DEPRECATED_API NPY_1_7_API_VERSION
+#include <numpy/arrayobject.h>
 
-#define C_CONTIGUOUS 0x0001
-
-static PyTypeObject *ndarray_type = NULL; /* numpy.ndarray, set by configure() */
-static PyObject *float64_descr = NULL;    /* numpy.dtype(float64), set by configure() */
+#ifndef Py_GIL_DISABLED
+#define CACHE_DATA 1 /* the GIL serializes every update of a FrameCalls' cached Data */
+#endif
 
 static int
 is_ready(PyObject *q, Py_ssize_t dof, double limit)
 {
-    if (Py_TYPE(q) != ndarray_type) {
+    if (!PyArray_CheckExact(q)) {
         return 0;
     }
-    const ArrayFields *a = (const ArrayFields *)q;
-    if (a->descr != float64_descr || a->nd != 1 || a->dimensions[0] != dof || !(a->flags & C_CONTIGUOUS)) {
+    PyArrayObject *a = (PyArrayObject *)q;
+    if (PyArray_TYPE(a) != NPY_DOUBLE || !PyArray_ISNOTSWAPPED(a) || PyArray_NDIM(a) != 1 ||
+        PyArray_DIM(a, 0) != dof || !PyArray_IS_C_CONTIGUOUS(a)) {
         return 0;
     }
-    const char *p = a->data;
+    const char *p = PyArray_BYTES(a);
     for (Py_ssize_t i = 0; i < dof; i++) {
         double x;
         memcpy(&x, p + 8 * i, sizeof x); /* any alignment */
@@ -62,37 +53,6 @@ is_ready(PyObject *q, Py_ssize_t dof, double limit)
         }
     }
     return 1;
-}
-
-static PyObject *
-configure(PyObject *module, PyObject *args)
-{
-    PyObject *type, *descr, *probe;
-    unsigned long long address;
-    if (!PyArg_ParseTuple(args, "O!OOK", &PyType_Type, &type, &descr, &probe, &address)) {
-        return NULL;
-    }
-    /* probe: numpy.arange(3.0), address: its data pointer from __array_interface__ */
-    const ArrayFields *a = (const ArrayFields *)probe;
-    int ok = Py_TYPE(probe) == (PyTypeObject *)type && a->descr == descr && a->nd == 1 &&
-             a->dimensions[0] == 3 && a->strides[0] == 8 && (a->flags & C_CONTIGUOUS) &&
-             (unsigned long long)(uintptr_t)a->data == address;
-    if (ok) {
-        for (int i = 0; i < 3; i++) {
-            double x;
-            memcpy(&x, a->data + 8 * i, sizeof x);
-            ok = ok && x == (double)i;
-        }
-    }
-    if (!ok) {
-        PyErr_SetString(PyExc_RuntimeError, "numpy's array layout is not the one kinengine.model.fastcall reads");
-        return NULL;
-    }
-    Py_INCREF(type);
-    Py_XSETREF(ndarray_type, (PyTypeObject *)type);
-    Py_INCREF(descr);
-    Py_XSETREF(float64_descr, descr);
-    Py_RETURN_NONE;
 }
 
 /* ---- Ready ------------------------------------------------------------------------------------- */
@@ -110,10 +70,6 @@ ready_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     double limit;
     static char *names[] = {"dof", "limit", NULL};
     if (!PyArg_ParseTupleAndKeywords(args, kwds, "nd", names, &dof, &limit)) {
-        return NULL;
-    }
-    if (ndarray_type == NULL) {
-        PyErr_SetString(PyExc_RuntimeError, "kinengine.model.fastcall.configure() was not called");
         return NULL;
     }
     ReadyObject *self = (ReadyObject *)type->tp_alloc(type, 0);
@@ -224,10 +180,6 @@ calls_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
                                      &o[9], &o[10], &o[11], &o[12])) {
         return NULL;
     }
-    if (ndarray_type == NULL) {
-        PyErr_SetString(PyExc_RuntimeError, "kinengine.model.fastcall.configure() was not called");
-        return NULL;
-    }
     FrameCallsObject *self = (FrameCallsObject *)type->tp_alloc(type, 0);
     if (self == NULL) {
         return NULL;
@@ -254,11 +206,13 @@ calls_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
 static PyObject *
 thread_data(FrameCallsObject *self)
 {
+#ifdef CACHE_DATA
     uint64_t thread = PyThreadState_GetID(PyThreadState_Get());
     if (self->cached_data != NULL && self->cached_thread == thread) {
         Py_INCREF(self->cached_data);
         return self->cached_data;
     }
+#endif
     PyObject *data = PyObject_GetAttr(self->local, str_data);
     if (data == NULL) {
         if (!PyErr_ExceptionMatches(PyExc_AttributeError)) {
@@ -270,9 +224,11 @@ thread_data(FrameCallsObject *self)
             return NULL;
         }
     }
+#ifdef CACHE_DATA
     Py_INCREF(data);
     Py_XSETREF(self->cached_data, data);
     self->cached_thread = thread;
+#endif
     return data;
 }
 
@@ -428,40 +384,50 @@ static PyTypeObject FrameCallsType = {
 
 /* ---- module ------------------------------------------------------------------------------------ */
 
-static PyMethodDef module_methods[] = {
-    {"configure", configure, METH_VARARGS,
-     "configure(numpy.ndarray, numpy.dtype(float64), numpy.arange(3.0), its data address): check numpy's "
-     "array layout on the probe and remember the type and dtype (RuntimeError if the layout differs)."},
-    {NULL, NULL, 0, NULL},
+static int
+fastcall_exec(PyObject *module)
+{
+    if (_import_array() < 0) { /* numpy's C API table */
+        return -1;
+    }
+    if (str_data == NULL) {
+        str_data = PyUnicode_InternFromString("data");
+        str_homogeneous = PyUnicode_InternFromString("homogeneous");
+        str_reference = PyUnicode_InternFromString("reference");
+        if (str_data == NULL || str_homogeneous == NULL || str_reference == NULL) {
+            return -1;
+        }
+    }
+    if (PyType_Ready(&ReadyType) < 0 || PyType_Ready(&FrameCallsType) < 0) {
+        return -1;
+    }
+    /* PyModule_AddObjectRef keeps no reference when it fails: nothing leaks on a failed init */
+    if (PyModule_AddObjectRef(module, "Ready", (PyObject *)&ReadyType) < 0 ||
+        PyModule_AddObjectRef(module, "FrameCalls", (PyObject *)&FrameCallsType) < 0) {
+        return -1;
+    }
+    return 0;
+}
+
+static PyModuleDef_Slot fastcall_slots[] = {
+    {Py_mod_exec, fastcall_exec},
+#ifdef Py_mod_gil
+    /* Ready and FrameCalls are immutable after construction; the Data cache exists only with the GIL. */
+    {Py_mod_gil, Py_MOD_GIL_NOT_USED},
+#endif
+    {0, NULL},
 };
 
 static struct PyModuleDef fastcall_module = {
-    PyModuleDef_HEAD_INIT, "kinengine.model.fastcall",
-    "The hot path's input check and frame calls in C (see kinengine/model/accelerator.py).", -1, module_methods,
+    PyModuleDef_HEAD_INIT,
+    .m_name = "kinengine.model.fastcall",
+    .m_doc = "The hot path's input check and frame calls in C (see kinengine/model/accelerator.py).",
+    .m_size = 0,
+    .m_slots = fastcall_slots,
 };
 
 PyMODINIT_FUNC
 PyInit_fastcall(void)
 {
-    str_data = PyUnicode_InternFromString("data");
-    str_homogeneous = PyUnicode_InternFromString("homogeneous");
-    str_reference = PyUnicode_InternFromString("reference");
-    if (str_data == NULL || str_homogeneous == NULL || str_reference == NULL) {
-        return NULL;
-    }
-    if (PyType_Ready(&ReadyType) < 0 || PyType_Ready(&FrameCallsType) < 0) {
-        return NULL;
-    }
-    PyObject *m = PyModule_Create(&fastcall_module);
-    if (m == NULL) {
-        return NULL;
-    }
-    Py_INCREF(&ReadyType);
-    Py_INCREF(&FrameCallsType);
-    if (PyModule_AddObject(m, "Ready", (PyObject *)&ReadyType) < 0 ||
-        PyModule_AddObject(m, "FrameCalls", (PyObject *)&FrameCallsType) < 0) {
-        Py_DECREF(m);
-        return NULL;
-    }
-    return m;
+    return PyModuleDef_Init(&fastcall_module);
 }

@@ -253,6 +253,29 @@ class RotationParameterization(Parameterization):
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
         return np.array(self._from_rotation(math, warn, c00, c01, c02, c10, c11, c12, c20, c21, c22))
 
+    def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
+        """(χ, its distance to the singular set, E(χ)'s row-major entries) at one pose C_IE given by its 9
+        row-major entries (Python floats), χ in the canonical ranges of :meth:`from_rotation`. None where
+        χ is not unique (gimbal lock) or E has no finite value: the caller's general path then decides.
+
+        The single-pose rate map that the analytic Jacobian and the Task call: :meth:`_from_rotation`,
+        :meth:`_distance` and :meth:`_E` (a family may share their intermediate values, as Euler angles do).
+        """
+        chi = list(self._from_rotation(math, False, *C))
+        try:
+            distance = self._distance(math, *chi)
+            return (chi, distance, self._E(math, *chi)) if distance != 0.0 else None
+        except ZeroDivisionError:
+            return None
+
+    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
+        """(distance to the singular set, E_R) at one pose C_IE (3, 3) float64: χ̇_R = E_R·ω with ω [rad/s]
+        in I. E_R is :meth:`chart`'s row-major entries (Python floats), or an (m, 3) array where Pinocchio
+        computes it (euler_zyx; rotation_vector below JLOG3_MAX_ANGLE). None as for :meth:`chart`."""
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
+        found = self.chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        return None if found is None else (found[1], found[2])
+
     def to_rotation(self, chi: npt.ArrayLike) -> FloatArray:
         """C_IE from χ_R: (m,) -> (3, 3), (..., m) -> (..., 3, 3)."""
         chi = as_float_array(chi, self._one, "chi")

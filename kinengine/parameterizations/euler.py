@@ -101,18 +101,25 @@ class EulerAngles(RotationParameterization):
             self.alternatives = ("quaternion", f"euler_{seq[0]}{seq[1]}{seq[0]}", "rotation_matrix")
         super().__init__()
 
-    def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
-        ab, at, aa, ba, ta, bt, tt, tb, bb = self._index
+    def _leading(self, xp: Namespace, C: Values) -> tuple[Component, Component, Component]:
+        """(χ1, χ2, locked) off C's row-major entries by atan2; ``locked``: χ2 within GIMBAL_LOCK_TOLERANCE
+        of gimbal lock, where χ1 alone is not defined."""
+        ab, at, aa, ba, ta, bt, tt, _, _ = self._index
         eps = self._eps
         # proper: C[a][a] = c2, C[a][b] = s2 s3, C[a][t] = ε s2 c3, C[b][a] = s1 s2, C[t][a] = −ε c1 s2
         if self._proper:
             chi2 = xp.atan2(xp.hypot(C[ab], C[at]), C[aa])
-            chi1 = xp.atan2(C[ba], -eps * C[ta])
             locked = (abs(chi2) <= GIMBAL_LOCK_TOLERANCE) | (abs(chi2 - math.pi) <= GIMBAL_LOCK_TOLERANCE)
-        else:  # C[a][t] = ε s2, C[b][t] = −ε s1 c2, C[t][t] = c1 c2
-            chi2 = xp.atan2(eps * C[at], xp.hypot(C[bt], C[tt]))
-            chi1 = xp.atan2(-eps * C[bt], C[tt])
-            locked = abs(abs(chi2) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE
+            return xp.atan2(C[ba], -eps * C[ta]), chi2, locked
+        # C[a][t] = ε s2, C[b][t] = −ε s1 c2, C[t][t] = c1 c2
+        chi2 = xp.atan2(eps * C[at], xp.hypot(C[bt], C[tt]))
+        locked = abs(abs(chi2) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE
+        return xp.atan2(-eps * C[bt], C[tt]), chi2, locked
+
+    def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
+        tb, bb = self._index[7:]
+        eps = self._eps
+        chi1, chi2, locked = self._leading(xp, C)
         if xp is np or locked:
             if warn:
                 warn_where(
@@ -127,56 +134,53 @@ class EulerAngles(RotationParameterization):
                 if xp is math
                 else np.where(locked, np.atan2(eps * C[tb], C[bb]), chi1)
             )
-        # χ3 from row b of R_a(χ1)^T C = R_b(χ2) R_c(χ3), with the χ1 just chosen (as Eigen's eulerAngles):
-        # near gimbal lock χ1 is ill-conditioned, but then χ3 compensates and χ -> C stays accurate.
-        c1, s1 = xp.cos(chi1), xp.sin(chi1)
-        if self._proper:  # row b of R_b(χ2) R_a(χ3) = (−ε s3 on t, c3 on b)
-            chi3 = xp.atan2(-eps * c1 * C[bt] - s1 * C[tt], c1 * C[bb] + eps * s1 * C[tb])
-        else:  # row b of R_b(χ2) R_t(χ3) = (ε s3 on a, c3 on b)
-            chi3 = xp.atan2(eps * c1 * C[ba] + s1 * C[ta], c1 * C[bb] + eps * s1 * C[tb])
+        chi3 = self._third(xp, xp.cos(chi1), xp.sin(chi1), C)
         if xp is math:
             return chi1, chi2, 0.0 if locked else chi3
         return chi1, chi2, np.where(locked, 0.0, chi3)
 
-    def _fast_E(self, *C: float) -> tuple[float, Entries] | None:
-        """(distance, E's entries) from C_IF's 9 entries (Python floats) for one regular pose, or None (gimbal
-        lock: the caller takes the general path). Exactly :meth:`_distance` and :meth:`_E` of
-        :meth:`_from_rotation`'s χ1, χ2 (E does not depend on χ3, which is not computed)."""
-        ab, at, aa, ba, ta, bt, tt, _, _ = self._index
-        e = self._eps
-        atan2 = math.atan2
-        if self._proper:
-            chi2 = atan2(math.hypot(C[ab], C[at]), C[aa])
-            if abs(chi2) <= GIMBAL_LOCK_TOLERANCE or abs(chi2 - math.pi) <= GIMBAL_LOCK_TOLERANCE:
-                return None
-            chi1 = atan2(C[ba], -e * C[ta])
-            c1, s1, c2, s2 = math.cos(chi1), math.sin(chi1), math.cos(chi2), math.sin(chi2)
-            if s2 == 0.0:
-                return None
-            u = 1.0 / s2
-            k = c2 * u
-            return abs(s2), self._to_columns(
-                (1.0, -s1 * k, e * c1 * k, 0.0, c1, e * s1, 0.0, s1 * u, -e * c1 * u)
-            )
-        chi2 = atan2(e * C[at], math.hypot(C[bt], C[tt]))
-        if abs(abs(chi2) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE:
+    def _third(self, xp: Namespace, c1: Component, s1: Component, C: Values) -> Component:
+        """χ3 from row b of R_a(χ1)^T C = R_b(χ2) R_c(χ3), c1, s1 of the χ1 chosen (as Eigen's eulerAngles):
+        near gimbal lock χ1 is ill-conditioned, but then χ3 compensates and χ -> C stays accurate."""
+        _, _, _, ba, ta, bt, tt, tb, bb = self._index
+        eps = self._eps
+        if self._proper:  # row b of R_b(χ2) R_a(χ3) = (−ε s3 on t, c3 on b)
+            return xp.atan2(-eps * c1 * C[bt] - s1 * C[tt], c1 * C[bb] + eps * s1 * C[tb])
+        # row b of R_b(χ2) R_t(χ3) = (ε s3 on a, c3 on b)
+        return xp.atan2(eps * c1 * C[ba] + s1 * C[ta], c1 * C[bb] + eps * s1 * C[tb])
+
+    def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
+        # _from_rotation, _distance and _E with cos and sin of χ1 and χ2 computed once
+        chi1, chi2, locked = self._leading(math, C)
+        if locked:
             return None
-        chi1 = atan2(-e * C[bt], C[tt])
         c1, s1, c2, s2 = math.cos(chi1), math.sin(chi1), math.cos(chi2), math.sin(chi2)
-        if c2 == 0.0:
+        distance = abs(s2) if self._proper else abs(c2)
+        if distance == 0.0:
             return None
-        u = 1.0 / c2
-        t = s2 * u
-        return abs(c2), self._to_columns(
-            (1.0, s1 * t, -e * c1 * t, 0.0, c1, e * s1, 0.0, -e * s1 * u, c1 * u)
-        )
+        chi = [chi1, chi2, self._third(math, c1, s1, C)]
+        return chi, distance, self._rate_entries(c1, s1, c2, s2)
+
+    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
+        # chart without χ3: E does not depend on it
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
+        chi1, chi2, locked = self._leading(math, (c00, c01, c02, c10, c11, c12, c20, c21, c22))
+        if locked:
+            return None
+        c1, s1, c2, s2 = math.cos(chi1), math.sin(chi1), math.cos(chi2), math.sin(chi2)
+        distance = abs(s2) if self._proper else abs(c2)
+        return (distance, self._rate_entries(c1, s1, c2, s2)) if distance != 0.0 else None
 
     def _to_rotation(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         a, b, c = self._axes
         return _matmul(_matmul(_elementary(xp, a, chi1), _elementary(xp, b, chi2)), _elementary(xp, c, chi3))
 
     def _E(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
-        c1, s1, c2, s2, e = xp.cos(chi1), xp.sin(chi1), xp.cos(chi2), xp.sin(chi2), self._eps
+        return self._rate_entries(xp.cos(chi1), xp.sin(chi1), xp.cos(chi2), xp.sin(chi2))
+
+    def _rate_entries(self, c1: Component, s1: Component, c2: Component, s2: Component) -> Entries:
+        """E's row-major entries from c_k = cos χk, s_k = sin χk (the module doc's E, columns on a, b, t)."""
+        e = self._eps
         if self._proper:
             u = 1.0 / s2
             k = c2 * u
@@ -258,3 +262,11 @@ class EulerZYX(EulerAngles):
         if is_single(chi, (3,)):
             return pin.rpy.computeRpyJacobian(chi[::-1], pin.WORLD)[:, ::-1]
         return super().E_inverse(chi)
+
+    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
+        # (roll, pitch, yaw) = matrixToRpy(C); E = computeRpyJacobianInverse(rpy, WORLD), rows reversed
+        rpy = pin.rpy.matrixToRpy(C)
+        pitch = float(rpy[1])
+        if abs(abs(pitch) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE:
+            return None
+        return abs(math.cos(pitch)), pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD)[::-1]
