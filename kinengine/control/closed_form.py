@@ -39,6 +39,11 @@ EXTRA_HINT = "closed-form IK needs the solver library EAIK: pip install 'kinengi
 METHODS = ("auto", "closed_form", "numeric")
 THREADS = max(1, min(4, os.cpu_count() or 1))
 """EAIK's worker threads for a batch (its C++ threads run without the GIL)."""
+SNAP_AXIS = 1e-4
+"""Axis entries below this (in I) count as zero when the exact chain has no decomposition (``snapped``)."""
+SNAP_OFFSET = 1e-5
+"""[m] offset entries below this count as zero alike; the ideal chain's answers are then polished on the
+robot's own chain (:mod:`.ik_solutions`)."""
 SMALL_BATCH = 64
 """Batches up to this many poses are solved one call at a time (EAIK's thread start-up costs more)."""
 
@@ -121,7 +126,9 @@ class ClosedFormChain:
         n = len(g.joints)
         if n != 6:
             raise KinematicsError(_not_six_message(robot, frame, g, EAIK))
-        self.solver = _decomposed(EAIK, g, [])
+        self.solver, self.approximate = _decomposed(EAIK, g, []), False
+        if self.solver is None:  # a description written with rounded angles (1.5708): solve the ideal chain
+            self.solver, self.approximate = _decomposed(EAIK, snapped(g), []), True
         if self.solver is None:
             raise KinematicsError(
                 f"the 6 joints that move frame {frame!r} ({', '.join(g.joints)}) have no known "
@@ -234,6 +241,15 @@ def _checked_poses(T: object) -> np.ndarray:
     return np.ascontiguousarray(poses)
 
 
+def snapped(g: Geometry) -> Geometry:
+    """The geometry with axis entries below ``SNAP_AXIS`` and offset entries below ``SNAP_OFFSET`` [m] in I
+    set to zero (axes renormalized): the ideal chain of a description written with rounded numbers."""
+    H = np.where(np.abs(g.H) < SNAP_AXIS, 0.0, g.H)
+    H /= np.linalg.norm(H, axis=1)[:, None]
+    P = np.where(np.abs(g.P) < SNAP_OFFSET, 0.0, g.P)
+    return Geometry(g.joints, g.columns, H, P, g.C_tool)
+
+
 def _decomposed(EAIK: object, g: Geometry, locked: list[tuple[int, float]]) -> Any:
     """EAIK's solver of the chain (joints ``locked`` at (index, angle)), None if it finds no decomposition
     (it raises RuntimeError for some geometries, e.g. a lock that leaves two parallel axes it would
@@ -252,7 +268,7 @@ def _not_six_message(robot: Robot, frame: str, g: Geometry, EAIK: object) -> str
         return head + ": use method='numeric'"
     lockable = []
     for i, name in enumerate(g.joints):
-        if _decomposed(EAIK, g, [(i, 0.0)]) is not None:
+        if any(_decomposed(EAIK, chain, [(i, 0.0)]) is not None for chain in (g, snapped(g))):
             lockable.append(name)
     if not lockable:
         return head + ": locking no single one of them leaves a known decomposition; use method='numeric'"

@@ -4,7 +4,9 @@ From raw joint angles (N, K, n) of the n chain joints to :class:`IKSolutions`, e
 over all candidates of all poses at once (flat (M,) arrays, M = number of raw answers):
 
 1. check: the frame's pose at each candidate (the batch chain) against the target; a candidate further
-   than ``ACCEPT`` [m, rad] from it is dropped (the solver's least-squares answers of unreachable poses);
+   than ``ACCEPT`` [m, rad] from it is dropped (the solver's least-squares answers of unreachable poses),
+   unless it is polished to it first (a degenerate answer, or one of an idealized chain: damped least
+   squares from it);
 2. deduplicate: candidates of one pose closer than ``SAME`` [rad] (angles compared modulo 2π) are one;
 3. wrap into the joint ranges: continuous joints (no limits) into (−π, π]; a limited joint takes the
    2π shift inside [lower, upper] nearest the reference (``q_near``, else 0); ``all_turns`` adds every
@@ -32,6 +34,8 @@ ACCEPT = 1e-9
 """[m and rad] a candidate whose frame pose is further than this from the target is no solution."""
 SAME = 1e-7
 """[rad] candidates of one pose whose angles all agree to this (modulo 2π) are one solution."""
+POLISH = 1e-3
+"""[m and rad] an answer of an idealized chain (rounded axes) this close to the target is polished."""
 DEGENERATE = 1e-6
 """[m] a least-squares answer this close to the target's position met a degenerate subproblem (a line of
 aligned joint axes: the pose is singular), not an unreachable pose; its rotation is repaired numerically."""
@@ -48,6 +52,7 @@ class Chain(Protocol):
     upper: np.ndarray
     continuous: np.ndarray  # True: no limits
     narrow: np.ndarray  # True: the range spans less than 2π
+    approximate: bool  # True: the solver solves an idealized chain; its answers are polished
     robot: Robot
 
 
@@ -110,15 +115,18 @@ def candidates_to_solutions(
         row, wrapped, ls = row[keep], wrapped[keep], ls[keep]
     full = near[row] if near.ndim == 2 else np.repeat(near[None], len(row), axis=0)
     full[:, columns] = wrapped
-    # 1. the frame's pose at every candidate against its target; degenerate answers repaired
+    # 1. the frame's pose at every candidate against its target; degenerate answers repaired, an
+    # idealized chain's polished
     T_d = poses[row]
     err_p, err_r = residuals(robot, frame, full, T_d)
     exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
     degenerate = ls & (err_p <= DEGENERATE)
     singular = np.zeros(n_poses, dtype=bool)
     singular[row[degenerate]] = True
-    fix = np.flatnonzero(degenerate & ~exact)
-    if len(fix):
+    polish = (err_p <= POLISH) & (err_r <= POLISH) if chain.approximate else degenerate
+    fix = np.flatnonzero((degenerate | polish) & ~exact)
+    if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
+        full[np.ix_(fix, columns)] = _turns(chain, wrapped[fix], np.zeros_like(wrapped[fix]))[0]
         full[fix] = _repaired(robot, frame, full[fix], T_d[fix])
         err_p, err_r = residuals(robot, frame, full[fix], T_d[fix])
         exact[fix] = (err_p <= ACCEPT) & (err_r <= ACCEPT)
@@ -240,8 +248,8 @@ def residuals(robot: Robot, frame: str, q: np.ndarray, T_d: np.ndarray) -> tuple
 
 
 def _repaired(robot: Robot, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:
-    """Degenerate answers (the position met, the rotation about a line of aligned joint axes not):
-    a few damped least-squares iterations from each (the rotation left is in the range of J)."""
+    """Degenerate answers (the position met, the rotation about a line of aligned joint axes not) and
+    an idealized chain's answers: a few damped least-squares iterations from each."""
     result = robot.inverse_kinematics(
         T_d, frame, q, tol_position=ACCEPT / 10, tol_rotation=ACCEPT / 10, restarts=0, method="numeric"
     )
