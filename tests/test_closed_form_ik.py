@@ -109,7 +109,8 @@ def test_every_solution_reproduces_the_pose_and_the_generating_q_is_among_them(c
     misses = np.flatnonzero(~hit)
     near_singular = _sigma_min(robot, Q[misses]) if len(misses) else np.zeros(0)
     named = ", ".join(
-        f"#{i} (sigma_min {s:.2g}, singular flag {found.singular[i]})" for i, s in zip(misses, near_singular, strict=True)
+        f"#{i} (sigma_min {s:.2g}, singular flag {found.singular[i]})"
+        for i, s in zip(misses, near_singular, strict=True)
     )
     assert rate >= CASES[case], f"{case}: {rate:.2%} complete; missed {named}"
     # the misses lie at (or next to) singular sets: the Jacobian there loses rank to 1e-3 (measured: at
