@@ -284,14 +284,15 @@ def test_prismatic_and_mimic_joints_are_refused_with_the_reason(mixed):
 @pytest.mark.parametrize(
     "T, message",
     [
-        (np.eye(3), r"shape \(4, 4\) or \(N, 4, 4\)"),
+        (np.eye(3), r"shape \(4, 4\) or a batch \(N, 4, 4\)"),
         (np.diag([1.0, 1.0, -1.0, 1.0]), "not a rotation matrix"),
-        (np.full((4, 4), np.nan), "NaN"),
-        ("pose", "pose"),
+        (np.full((4, 4), np.nan), "finite pose"),
+        (np.full((2, 4, 4), np.nan), "finite batch"),
+        ("pose", "Expected `target` to be"),
     ],
 )
 def test_bad_poses_are_refused(abb, T, message):
-    with pytest.raises(kinengine.OptionError, match=message):
+    with pytest.raises(kinengine.ParameterizationError, match=message):
         abb.ik_solutions(T)
 
 

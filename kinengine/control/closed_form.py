@@ -30,7 +30,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import KinematicsError, OptionError
-from .ik_solutions import IKSolutions, candidates_to_solutions
+from .ik_solutions import IKSolutions, candidates_to_solutions, one_pose
+from .ik_target import batch_targets, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from ..robot import Robot
@@ -141,7 +142,18 @@ class ClosedFormChain:
         self.upper = coords.upper[g.columns]
         self.continuous = coords.continuous[g.columns] | ~np.isfinite(self.upper - self.lower)
         self.narrow = ~self.continuous & (self.upper - self.lower < 2 * np.pi)
+        self.limits = (self.lower.tolist(), self.upper.tolist(), self.continuous.tolist(), g.columns.tolist())
         self.robot = robot
+        self.pose = robot.frame(frame, check_inputs=False).pose
+        self.neutral = robot.neutral()
+        self.neutral.flags.writeable = False
+
+    def solve_one(self, T: np.ndarray) -> Any:
+        """EAIK's answer object for one pose T (4, 4): ``.Q`` (k, 6) [rad], ``.is_LS`` (k,)."""
+        try:
+            return self.solver.calculate_IK(T)
+        except RuntimeError as exc:  # not seen in the tests; EAIK's own message, as a kinengine error
+            raise KinematicsError(f"the closed-form solver failed on frame {self.frame!r}: {exc}") from None
 
     def raw(self, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """EAIK's answers for poses T (N, 4, 4), flat: pose index (M,), angles (M, 6) [rad], least-squares
@@ -208,6 +220,11 @@ def ik_solutions(
             raise OptionError(
                 f"`q_near` must be (dof,) or one row per pose ({len(poses)}), got {len(near)} rows"
             )
+    reference = chain.neutral if near is None else near
+    if single and within_limits and not all_turns and not chain.approximate:
+        answer = chain.solve_one(poses[0])
+        if not any(answer.is_LS):  # exact answers only: the scalar path
+            return one_pose(chain, poses[0], answer.Q, reference, near is not None)
     row, Q, LS = chain.raw(poses)
     return candidates_to_solutions(
         chain,
@@ -215,7 +232,7 @@ def ik_solutions(
         row,
         Q,
         LS,
-        robot.neutral() if near is None else near,
+        reference,
         near is not None,
         within_limits=bool(within_limits),
         all_turns=bool(all_turns),
@@ -224,21 +241,12 @@ def ik_solutions(
 
 
 def _checked_poses(T: object) -> np.ndarray:
-    try:
-        poses = np.array(T, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise OptionError("`T` must be a pose (4, 4) or a batch of poses (N, 4, 4) of numbers") from None
-    if poses.shape[-2:] != (4, 4) or poses.ndim not in (2, 3):
-        raise OptionError(f"`T` must have shape (4, 4) or (N, 4, 4), got {poses.shape}")
-    if not np.isfinite(poses).all():
-        raise OptionError("`T` has a NaN or infinite entry")
-    R = poses[..., :3, :3]
-    RtR = np.swapaxes(R, -1, -2) @ R
-    if np.abs(RtR - np.eye(3)).max(initial=0.0) > 1e-6 or (np.linalg.det(R) <= 0).any():
-        raise OptionError("`T`'s rotation block is not a rotation matrix (orthonormal, det +1 to 1e-6)")
-    if np.abs(poses[..., 3, :] - (0.0, 0.0, 0.0, 1.0)).max(initial=0.0) > 0:
-        raise OptionError("`T`'s last row must be (0, 0, 0, 1)")
-    return np.ascontiguousarray(poses)
+    """T as a C-contiguous float64 (4, 4) or (N, 4, 4), checked as the numeric solver checks its targets."""
+    if np.ndim(T) == 3:  # type: ignore[arg-type]
+        batch_targets(T)
+    else:
+        single_target(T, None, None)
+    return np.ascontiguousarray(T, dtype=np.float64)
 
 
 def snapped(g: Geometry) -> Geometry:

@@ -17,7 +17,6 @@ import numpy.typing as npt
 from ..errors import KinematicsError, OptionError
 from .closed_form import METHODS, available, chain_of, ik_solutions
 from .ik_solutions import residuals
-from .ik_target import batch_targets, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from ..robot import Robot
@@ -56,10 +55,6 @@ def closed_form_or_none(
         chain = chain_of(robot, frame)
         if isinstance(chain, KinematicsError):
             return None
-    if len(shape) == 3:  # the numeric solver's checks of a pose target, same messages
-        batch_targets(target)
-    else:
-        single_target(target, None, None)
     return nearest_result(robot, target, frame, q0, numeric, fall_back=method == "auto")
 
 

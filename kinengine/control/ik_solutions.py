@@ -22,12 +22,15 @@ iterations when it is not exact.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     from ..robot import Robot
 
 ACCEPT = 1e-9
@@ -40,6 +43,8 @@ DEGENERATE = 1e-6
 """[m] a least-squares answer this close to the target's position met a degenerate subproblem (a line of
 aligned joint axes: the pose is singular), not an unreachable pose; its rotation is repaired numerically."""
 TWO_PI = 2.0 * np.pi
+FEW = 16
+"""Up to this many candidates are checked one frame pose at a time."""
 
 
 class Chain(Protocol):
@@ -53,6 +58,8 @@ class Chain(Protocol):
     continuous: np.ndarray  # True: no limits
     narrow: np.ndarray  # True: the range spans less than 2π
     approximate: bool  # True: the solver solves an idealized chain; its answers are polished
+    limits: tuple[list[float], list[float], list[bool], list[int]]  # lower, upper, continuous, columns
+    pose: Callable[[np.ndarray], np.ndarray]  # T_IF of a q (dof,), unchecked
     robot: Robot
 
 
@@ -173,6 +180,56 @@ def candidates_to_solutions(
     return IKSolutions(out, count, count > 0, singular, limits, frame, chain.joints)
 
 
+def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has_near: bool) -> IKSolutions:
+    """:func:`candidates_to_solutions` of one pose's exact answers Q (k, n) with ``within_limits=True``
+    and ``all_turns=False``, written with scalars (a few candidates: numpy's per-call cost would dominate):
+    the same steps, order and tolerances."""
+    lo, hi, cont, columns = chain.limits
+    refs = [float(near[c]) for c in columns] if has_near else [0.0] * len(columns)
+    kept: list[list[float]] = []
+    seen: list[list[float]] = []
+    for answer in Q.tolist():
+        wrapped = [math.remainder(a, TWO_PI) for a in answer]  # [−π, π]
+        wrapped = [math.pi if a == -math.pi else a for a in wrapped]
+        angles = []
+        for a, low, high, free, ref in zip(wrapped, lo, hi, cont, refs, strict=True):
+            if free:
+                angles.append(a)
+                continue
+            k_min = math.ceil((low - a) / TWO_PI - 1e-12)
+            k_max = math.floor((high - a) / TWO_PI + 1e-12)
+            if k_min > k_max:
+                break
+            k = min(max(round((ref - a) / TWO_PI), k_min), k_max)
+            angles.append(min(max(a + TWO_PI * k, low), high))
+        else:
+            if not any(
+                all(min(abs(a - b), TWO_PI - abs(a - b)) <= SAME for a, b in zip(wrapped, w, strict=True))
+                for w in seen
+            ):
+                seen.append(wrapped)
+                kept.append(angles)
+    full = np.repeat(near[None], len(kept), axis=0)
+    if kept:
+        full[:, columns] = kept
+    pose, target = chain.pose, T_d[:3].ravel().tolist()
+    exact = []
+    for q in full:
+        d = [x - y for x, y in zip(pose(q)[:3].ravel().tolist(), target, strict=True)]
+        err_p, err_r = math.hypot(d[3], d[7], d[11]), math.hypot(*d[0:3], *d[4:7], *d[8:11]) / math.sqrt(2.0)
+        exact.append(err_p <= ACCEPT and err_r <= ACCEPT)
+    full = full[exact]
+    if has_near and len(full) > 1:
+        full = full[np.argsort(np.linalg.norm(full - near, axis=1), kind="stable")]
+    c = len(full)
+    return IKSolutions(full, c, c > 0, False, np.ones(c, dtype=bool), chain.frame, chain.joints)
+
+
+def _same(a: list[float], b: list[float]) -> bool:
+    """Two lists of angles in [−π, π] equal to SAME modulo 2π."""
+    return all(min(abs(x - y), TWO_PI - abs(x - y)) <= SAME for x, y in zip(a, b, strict=True))
+
+
 def _wrap_pi(a: np.ndarray) -> np.ndarray:
     """Angles into (−π, π] (the solver's are in [−π, π] already: then only −π moves)."""
     if len(a) and np.abs(a).max() <= np.pi:
@@ -239,9 +296,11 @@ def _all_turns(
 
 def residuals(robot: Robot, frame: str, q: np.ndarray, T_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Position [m] and rotation [rad, to first order: |C − C_d|_F / √2] errors of frame at q (M, dof)."""
-    if not len(q):
-        return np.zeros(0), np.zeros(0)
-    T = robot.frame_pose(q, frame)
+    if len(q) <= FEW:  # one pose at a time: a batch's set-up costs more
+        pose = robot.frame(frame, check_inputs=False).pose
+        T = np.array([pose(np.ascontiguousarray(x)) for x in q]).reshape(-1, 4, 4)
+    else:
+        T = robot.frame_pose(q, frame)
     err_p = np.linalg.norm(T[:, :3, 3] - T_d[:, :3, 3], axis=1)
     err_r = np.linalg.norm(T[:, :3, :3] - T_d[:, :3, :3], axis=(1, 2)) / np.sqrt(2.0)
     return err_p, err_r
