@@ -308,3 +308,40 @@ def test_without_the_library_one_line_names_the_extra(abb, monkeypatch):
     with pytest.raises(kinengine.KinematicsError, match=r"kinengine\[ik\]"):
         fresh.ik_solutions(np.eye(4))
     assert fresh.inverse_kinematics(fresh.frame_pose(np.full(6, 0.3))).iterations > 0  # auto: numeric
+
+
+def test_the_command_line_prints_every_solution(capsys, abb):
+    import json
+
+    from kinengine.cli import main
+    from kinengine.parameterizations import get_rotation
+
+    assert main(["ik", "abb_irb120", "--xyz", "0.4,-0.1,0.5", "--rpy", "0,1.2,0.3", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    T = np.eye(4)
+    T[:3, :3] = get_rotation("euler_zyx").to_rotation(np.array([0.3, 1.2, 0.0]))  # URDF rpy: yaw, pitch, roll
+    T[:3, 3] = (0.4, -0.1, 0.5)
+    np.testing.assert_allclose(report["pose"], T, rtol=0, atol=1e-15)
+    q = np.array(report["solutions"])
+    assert report["count"] == len(q) == abb.ik_solutions(T).count > 0
+    assert _pose_error(abb.frame_pose(q), T).max() <= 1e-9
+    assert (
+        main(
+            [
+                "ik",
+                "abb_irb120",
+                "--xyz",
+                "0.4,-0.1,0.5",
+                "--rpy",
+                "0,1.2,0.3",
+                "--near",
+                "-0.3,0.2,0.3,2,1,-2",
+            ]
+        )
+        == 0
+    )
+    table = capsys.readouterr().out.splitlines()
+    assert table[0].startswith("robot abb_irb120 (6 dof), frame 'tool0': 2 solution(s)")
+    assert "|q - near|" in table[1] and len(table) == 4
+    assert main(["ik", "panda_arm", "--xyz", "0.4,0,0.5"]) == 2
+    assert "locking one of panda_joint4" in capsys.readouterr().err
