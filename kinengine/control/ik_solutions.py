@@ -183,51 +183,53 @@ def candidates_to_solutions(
 def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has_near: bool) -> IKSolutions:
     """:func:`candidates_to_solutions` of one pose's exact answers Q (k, n) with ``within_limits=True``
     and ``all_turns=False``, written with scalars (a few candidates: numpy's per-call cost would dominate):
-    the same steps, order and tolerances."""
+    the same steps, order and tolerances (duplicates dropped among the candidates within the limits)."""
     lo, hi, cont, columns = chain.limits
-    refs = [float(near[c]) for c in columns] if has_near else [0.0] * len(columns)
-    kept: list[list[float]] = []
+    base = near.tolist()
+    refs = [base[c] for c in columns] if has_near else None
+    pose, target = chain.pose, T_d[:3].ravel().tolist()
     seen: list[list[float]] = []
+    rows: list[list[float]] = []
     for answer in Q.tolist():
         wrapped = [math.remainder(a, TWO_PI) for a in answer]  # [−π, π]
-        wrapped = [math.pi if a == -math.pi else a for a in wrapped]
-        angles = []
-        for a, low, high, free, ref in zip(wrapped, lo, hi, cont, refs, strict=True):
-            if free:
-                angles.append(a)
-                continue
-            k_min = math.ceil((low - a) / TWO_PI - 1e-12)
-            k_max = math.floor((high - a) / TWO_PI + 1e-12)
-            if k_min > k_max:
-                break
-            k = min(max(round((ref - a) / TWO_PI), k_min), k_max)
-            angles.append(min(max(a + TWO_PI * k, low), high))
+        q = base.copy()
+        for j, a in enumerate(wrapped):
+            if a == -math.pi:
+                a = wrapped[j] = math.pi
+            low, high = lo[j], hi[j]
+            if not cont[j] and (refs is not None or a < low or a > high):  # else: k = 0, the nearest to 0
+                k_min = math.ceil((low - a) / TWO_PI - 1e-12)
+                k_max = math.floor((high - a) / TWO_PI + 1e-12)
+                if k_min > k_max:
+                    break
+                k = min(max(round(((refs[j] if refs is not None else 0.0) - a) / TWO_PI), k_min), k_max)
+                a = min(max(a + TWO_PI * k, low), high)
+            q[columns[j]] = a
         else:
-            if not any(
-                all(min(abs(a - b), TWO_PI - abs(a - b)) <= SAME for a, b in zip(wrapped, w, strict=True))
-                for w in seen
-            ):
-                seen.append(wrapped)
-                kept.append(angles)
-    full = np.repeat(near[None], len(kept), axis=0)
-    if kept:
-        full[:, columns] = kept
-    pose, target = chain.pose, T_d[:3].ravel().tolist()
-    exact = []
-    for q in full:
-        d = [x - y for x, y in zip(pose(q)[:3].ravel().tolist(), target, strict=True)]
-        err_p, err_r = math.hypot(d[3], d[7], d[11]), math.hypot(*d[0:3], *d[4:7], *d[8:11]) / math.sqrt(2.0)
-        exact.append(err_p <= ACCEPT and err_r <= ACCEPT)
-    full = full[exact]
-    if has_near and len(full) > 1:
+            if any(_same(wrapped, w) for w in seen):
+                continue
+            seen.append(wrapped)
+            d = [x - y for x, y in zip(pose(np.array(q))[:3].ravel().tolist(), target, strict=True)]
+            err_p, err_r = (
+                math.hypot(d[3], d[7], d[11]),
+                math.hypot(*d[0:3], *d[4:7], *d[8:11]) / math.sqrt(2),
+            )
+            if err_p <= ACCEPT and err_r <= ACCEPT:
+                rows.append(q)
+    full = np.array(rows, dtype=np.float64).reshape(len(rows), len(base))
+    if has_near and len(rows) > 1:
         full = full[np.argsort(np.linalg.norm(full - near, axis=1), kind="stable")]
-    c = len(full)
+    c = len(rows)
     return IKSolutions(full, c, c > 0, False, np.ones(c, dtype=bool), chain.frame, chain.joints)
 
 
 def _same(a: list[float], b: list[float]) -> bool:
-    """Two lists of angles in [−π, π] equal to SAME modulo 2π."""
-    return all(min(abs(x - y), TWO_PI - abs(x - y)) <= SAME for x, y in zip(a, b, strict=True))
+    """Two lists of angles in (−π, π] equal to SAME modulo 2π."""
+    for x, y in zip(a, b, strict=True):
+        d = abs(x - y)
+        if d > SAME and TWO_PI - d > SAME:
+            return False
+    return True
 
 
 def _wrap_pi(a: np.ndarray) -> np.ndarray:
