@@ -146,6 +146,7 @@ class ClosedFormChain:
         self.robot = robot
         self.pose = robot.frame(frame, check_inputs=False).pose
         self.neutral = robot.neutral()
+        self.whole = bool(np.array_equal(g.columns, np.arange(robot.dof)))
         self.neutral.flags.writeable = False
 
     def solve_one(self, T: np.ndarray) -> Any:

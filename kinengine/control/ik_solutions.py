@@ -60,6 +60,7 @@ class Chain(Protocol):
     approximate: bool  # True: the solver solves an idealized chain; its answers are polished
     limits: tuple[list[float], list[float], list[bool], list[int]]  # lower, upper, continuous, columns
     pose: Callable[[np.ndarray], np.ndarray]  # T_IF of a q (dof,), unchecked
+    whole: bool  # the chain's joints are all of q's coordinates, in order
     robot: Robot
 
 
@@ -120,12 +121,14 @@ def candidates_to_solutions(
     if within_limits:  # 0. what cannot be a solution within the limits is not checked
         keep = _inside(chain, wrapped) | ls
         row, wrapped, ls = row[keep], wrapped[keep], ls[keep]
-    full = near[row] if near.ndim == 2 else np.repeat(near[None], len(row), axis=0)
-    full[:, columns] = wrapped
+    if chain.whole:  # the chain's joints are q's coordinates, in order
+        full = wrapped.copy()
+    else:
+        full = near[row] if near.ndim == 2 else np.repeat(near[None], len(row), axis=0)
+        full[:, columns] = wrapped
     # 1. the frame's pose at every candidate against its target; degenerate answers repaired, an
     # idealized chain's polished
-    T_d = poses[row]
-    err_p, err_r = residuals(robot, frame, full, T_d)
+    err_p, err_r = residuals(robot, frame, full, poses, row)
     exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
     degenerate = ls & (err_p <= DEGENERATE)
     singular = np.zeros(n_poses, dtype=bool)
@@ -134,8 +137,8 @@ def candidates_to_solutions(
     fix = np.flatnonzero((degenerate | polish) & ~exact)
     if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
         full[np.ix_(fix, columns)] = _turns(chain, wrapped[fix], np.zeros_like(wrapped[fix]))[0]
-        full[fix] = _repaired(robot, frame, full[fix], T_d[fix])
-        err_p, err_r = residuals(robot, frame, full[fix], T_d[fix])
+        full[fix] = _repaired(robot, frame, full[fix], poses[row[fix]])
+        err_p, err_r = residuals(robot, frame, full[fix], poses, row[fix])
         exact[fix] = (err_p <= ACCEPT) & (err_r <= ACCEPT)
         wrapped[fix] = _wrap_pi(full[fix][:, columns])
     row, full, wrapped = row[exact], full[exact], wrapped[exact]
@@ -243,10 +246,9 @@ def _inside(chain: Chain, wrapped: np.ndarray) -> np.ndarray:
     """(M,) True where every angle has a 2π shift inside its joint's range (only joints spanning < 2π
     can lack one)."""
     narrow = chain.narrow
-    w = wrapped[:, narrow]
-    k_min = np.ceil((chain.lower[narrow] - w) / TWO_PI - 1e-12)
-    k_max = np.floor((chain.upper[narrow] - w) / TWO_PI + 1e-12)
-    return (k_min <= k_max).all(axis=1)
+    lower = chain.lower[narrow]
+    offset = np.mod(wrapped[:, narrow] - lower, TWO_PI)  # a − lower modulo 2π: inside if <= the span
+    return ((offset <= chain.upper[narrow] - lower + 1e-12) | (offset >= TWO_PI - 1e-12)).all(axis=1)
 
 
 def _turns(
@@ -296,16 +298,21 @@ def _all_turns(
     return row, angles, inside, full
 
 
-def residuals(robot: Robot, frame: str, q: np.ndarray, T_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Position [m] and rotation [rad, to first order: |C − C_d|_F / √2] errors of frame at q (M, dof)."""
+def residuals(
+    robot: Robot, frame: str, q: np.ndarray, poses: np.ndarray, row: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Position [m] and rotation [rad, to first order: |C − C_d|_F / √2] errors of frame at q (M, dof)
+    against poses[row] (M, 4, 4) (row None: poses itself)."""
     if len(q) <= FEW:  # one pose at a time: a batch's set-up costs more
         pose = robot.frame(frame, check_inputs=False).pose
         T = np.array([pose(np.ascontiguousarray(x)) for x in q]).reshape(-1, 4, 4)
     else:
         T = robot.frame_pose(q, frame)
-    err_p = np.linalg.norm(T[:, :3, 3] - T_d[:, :3, 3], axis=1)
-    err_r = np.linalg.norm(T[:, :3, :3] - T_d[:, :3, :3], axis=(1, 2)) / np.sqrt(2.0)
-    return err_p, err_r
+    target = poses[:, :3, :].reshape(len(poses), 12)
+    D = T[:, :3, :].reshape(len(T), 12) - (target if row is None else target[row])
+    D *= D
+    err_p2 = D[:, 3] + D[:, 7] + D[:, 11]
+    return np.sqrt(err_p2), np.sqrt(np.maximum(D.sum(axis=1) - err_p2, 0.0) / 2.0)
 
 
 def _repaired(robot: Robot, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:
