@@ -68,7 +68,7 @@ def _shape(target: npt.ArrayLike) -> tuple[int, ...]:
 
 def nearest_result(
     robot: Robot,
-    target: object,
+    target: npt.ArrayLike,
     frame: str | None,
     q0: object,
     numeric: Callable[[npt.ArrayLike, object], IKResult | IKBatchResult] | None,
@@ -81,7 +81,7 @@ def nearest_result(
     from .ik_batch import IKBatchResult
 
     coords = robot.engine.coordinates
-    single = np.ndim(target) == 2  # type: ignore[arg-type]
+    single = np.ndim(target) == 2
     if q0 is None:
         lo, hi = coords.lower, coords.upper
         both = np.isfinite(lo) & np.isfinite(hi)
@@ -90,7 +90,10 @@ def nearest_result(
         reference: np.ndarray = np.clip(middle, lo, hi)
     else:
         reference = coords.check(q0, name="q0", allow_batch=not single)
-    found = ik_solutions(robot, target, frame, q_near=reference)  # type: ignore[arg-type]
+        n = np.shape(target)[0]
+        if reference.ndim == 2 and len(reference) != n:
+            raise OptionError(f"`q0` must be (dof,) or one row per target ({n}), got {len(reference)} rows")
+    found = ik_solutions(robot, target, frame, q_near=reference)
     poses = np.asarray(target, dtype=np.float64)
     batch = poses if not single else poses[None]
     count = np.atleast_1d(np.asarray(found.count))
