@@ -66,6 +66,17 @@ def _shape(target: npt.ArrayLike) -> tuple[int, ...]:
         return ()
 
 
+def _middle(robot: Robot) -> np.ndarray:
+    """The middle of each joint's range; where a range is unbounded, 0 clipped into it (read-only)."""
+    lo, hi = robot.engine.coordinates.lower, robot.engine.coordinates.upper
+    both = np.isfinite(lo) & np.isfinite(hi)
+    middle = np.zeros(robot.dof)
+    middle[both] = (lo[both] + hi[both]) / 2
+    middle = np.clip(middle, lo, hi)
+    middle.flags.writeable = False
+    return middle
+
+
 def nearest_result(
     robot: Robot,
     target: npt.ArrayLike,
@@ -79,15 +90,12 @@ def nearest_result(
     Poses without a solution within the limits: ``numeric(T, q0)`` when ``fall_back``, else
     success False at the reference q."""
     from .ik_batch import IKBatchResult
+    from .ik_solver import IKResult
 
     coords = robot.engine.coordinates
     single = np.ndim(target) == 2
     if q0 is None:
-        lo, hi = coords.lower, coords.upper
-        both = np.isfinite(lo) & np.isfinite(hi)
-        middle = np.zeros(robot.dof)
-        middle[both] = (lo[both] + hi[both]) / 2
-        reference: np.ndarray = np.clip(middle, lo, hi)
+        reference: np.ndarray = robot.engine.memoized("middle of the joint ranges", lambda: _middle(robot))
     else:
         reference = coords.check(q0, name="q0", allow_batch=not single)
         n = np.shape(target)[0]
@@ -95,6 +103,10 @@ def nearest_result(
             raise OptionError(f"`q0` must be (dof,) or one row per target ({n}), got {len(reference)} rows")
     found = ik_solutions(robot, target, frame, q_near=reference)
     poses = np.asarray(target, dtype=np.float64)
+    if single and found.count:  # the common case, without the batch's arrays
+        q = found.q[0].copy()
+        err_p, err_r = residuals(robot, found.frame, q[None], poses[None])
+        return IKResult(q, True, 0, float(err_p[0]), float(err_r[0]), 0)
     batch = poses if not single else poses[None]
     count = np.atleast_1d(np.asarray(found.count))
     solved = count > 0

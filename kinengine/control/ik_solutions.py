@@ -200,7 +200,8 @@ def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has
             if a == -math.pi:
                 a = wrapped[j] = math.pi
             low, high = lo[j], hi[j]
-            if not cont[j] and (refs is not None or a < low or a > high):  # else: k = 0, the nearest to 0
+            near_a = refs is None or abs(refs[j] - a) <= math.pi  # a is the 2π shift nearest the reference
+            if not cont[j] and (not near_a or a < low or a > high):  # else: k = 0 is the shift to take
                 k_min = math.ceil((low - a) / TWO_PI - 1e-12)
                 k_max = math.floor((high - a) / TWO_PI + 1e-12)
                 if k_min > k_max:
@@ -304,8 +305,7 @@ def residuals(
     """Position [m] and rotation [rad, to first order: |C − C_d|_F / √2] errors of frame at q (M, dof)
     against poses[row] (M, 4, 4) (row None: poses itself)."""
     if len(q) <= FEW:  # one pose at a time: a batch's set-up costs more
-        pose = robot.frame(frame, check_inputs=False).pose
-        T = np.array([pose(np.ascontiguousarray(x)) for x in q]).reshape(-1, 4, 4)
+        T = np.array([robot.frame_pose(x, frame) for x in q]).reshape(-1, 4, 4)
     else:
         T = robot.frame_pose(q, frame)
     target = poses[:, :3, :].reshape(len(poses), 12)
