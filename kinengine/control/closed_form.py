@@ -20,7 +20,6 @@ base, a tool offset or a locked joint change only these numbers.
 
 from __future__ import annotations
 
-import itertools
 import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -173,7 +172,7 @@ class ClosedFormChain:
         if not total:
             return np.zeros(0, dtype=np.intp), np.zeros((0, 6)), np.zeros(0, dtype=bool)
         Q = np.concatenate([Q for Q in Qs if len(Q)])
-        LS = np.fromiter(itertools.chain.from_iterable(a.is_LS for a in answers), dtype=bool, count=total)
+        LS = np.concatenate([a.is_LS for a in answers]).astype(bool, copy=False)
         return np.repeat(np.arange(n), counts), Q, LS
 
 
