@@ -279,6 +279,11 @@ def test_prismatic_and_mimic_joints_are_refused_with_the_reason(mixed):
         mixed.locked({"slide": 0.0}).ik_solutions(np.eye(4), "finger_b")
     with pytest.raises(kinengine.KinematicsError, match="3 revolute joints"):
         mixed.locked({"slide": 0.0}).ik_solutions(np.eye(4), "tip")
+    with pytest.raises(
+        kinengine.KinematicsError, match=r"1 revolute joint \(shoulder\); closed-form IK needs 6"
+    ):
+        mixed.ik_solutions(np.eye(4), "l1")
+    assert mixed.inverse_kinematics(mixed.frame_pose(mixed.neutral(), "l1"), "l1").success  # auto: numeric
 
 
 @pytest.mark.parametrize(

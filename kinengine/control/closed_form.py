@@ -104,7 +104,7 @@ def chain_geometry(robot: Robot, frame: str) -> Geometry:
                 f"frame {frame!r} is moved by the mimic joint {name!r}: its angle is tied to another "
                 "joint's, which no subproblem decomposition models; lock its leader or use method='numeric'"
             )
-        J = pin.getJointJacobian(model, data, k, pin.LOCAL_WORLD_ALIGNED)
+        J = np.reshape(pin.getJointJacobian(model, data, k, pin.LOCAL_WORLD_ALIGNED), (6, -1))  # nv = 1: (6,)
         joints.append(name)
         columns.append(coords.names.index(name))
         axes.append(J[3:, model.joints[k].idx_v])
@@ -271,7 +271,8 @@ def _decomposed(EAIK: object, g: Geometry, locked: list[tuple[int, float]]) -> A
 
 def _not_six_message(robot: Robot, frame: str, g: Geometry, EAIK: object) -> str:
     n = len(g.joints)
-    head = f"frame {frame!r} is moved by {n} revolute joints ({', '.join(g.joints)}); closed-form IK needs 6"
+    joints = f"{n} revolute joint{'' if n == 1 else 's'}" + (f" ({', '.join(g.joints)})" if n else "")
+    head = f"frame {frame!r} is moved by {joints}; closed-form IK needs 6"
     if n != 7:
         return head + ": use method='numeric'"
     lockable = []
