@@ -358,3 +358,17 @@ def test_q0_rows_must_match_the_targets(abb):
         abb.inverse_kinematics(T, q0=np.zeros((2, 6)))
     with pytest.raises(kinengine.OptionError, match=r"`q_near` must be \(dof,\) or one row per pose \(3\)"):
         abb.ik_solutions(T, q_near=np.zeros((2, 6)))
+
+
+def test_a_large_batch_is_solved_in_chunks_with_the_same_answer(abb, monkeypatch):
+    from kinengine.control import closed_form
+
+    Q = abb.random_configuration(rng=12, size=60)
+    T = abb.frame_pose(Q)
+    T[5, :3, 3] *= 5.0  # one unreachable pose
+    whole = abb.ik_solutions(T, q_near=Q)
+    monkeypatch.setattr(closed_form, "CHUNK_POSES", 7)
+    chunked = abb.ik_solutions(T, q_near=Q)
+    np.testing.assert_array_equal(chunked.q, whole.q)  # NaN padding included
+    for name in ("count", "reachable", "singular", "within_limits"):
+        np.testing.assert_array_equal(getattr(chunked, name), getattr(whole, name))

@@ -29,7 +29,7 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import KinematicsError, OptionError
-from .ik_solutions import IKSolutions, candidates_to_solutions, one_pose
+from .ik_solutions import IKSolutions, candidates_to_solutions, joined, one_pose
 from .ik_target import batch_targets, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -44,6 +44,8 @@ SNAP_AXIS = 1e-4
 SNAP_OFFSET = 1e-5
 """[m] offset entries below this count as zero alike; the ideal chain's answers are then polished on the
 robot's own chain (:mod:`.ik_solutions`)."""
+CHUNK_POSES = 16384
+"""Larger batches are solved in chunks of this many poses (the candidates' arrays stay below ~100 MB)."""
 SMALL_BATCH = 64
 """Batches up to this many poses are solved one call at a time (EAIK's thread start-up costs more)."""
 
@@ -225,19 +227,27 @@ def ik_solutions(
         answer = chain.solve_one(poses[0])
         if not any(answer.is_LS):  # exact answers only: the scalar path
             return one_pose(chain, poses[0], answer.Q, reference, near is not None)
-    row, Q, LS = chain.raw(poses)
-    return candidates_to_solutions(
-        chain,
-        poses,
-        row,
-        Q,
-        LS,
-        reference,
-        near is not None,
-        within_limits=bool(within_limits),
-        all_turns=bool(all_turns),
-        single=single,
-    )
+
+    def solve(part: slice) -> IKSolutions:
+        ref = reference[part] if reference.ndim == 2 else reference
+        row, Q, LS = chain.raw(poses[part])
+        return candidates_to_solutions(
+            chain,
+            poses[part],
+            row,
+            Q,
+            LS,
+            ref,
+            near is not None,
+            within_limits=bool(within_limits),
+            all_turns=bool(all_turns),
+            single=single,
+        )
+
+    if len(poses) <= CHUNK_POSES:
+        return solve(slice(None))
+    # bounded memory: the candidates' arrays of one chunk at a time
+    return joined([solve(slice(a, a + CHUNK_POSES)) for a in range(0, len(poses), CHUNK_POSES)])
 
 
 def _checked_poses(T: object) -> np.ndarray:

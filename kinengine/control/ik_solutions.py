@@ -183,6 +183,17 @@ def candidates_to_solutions(
     return IKSolutions(out, count, count > 0, singular, limits, frame, chain.joints)
 
 
+def joined(parts: list[IKSolutions]) -> IKSolutions:
+    """One batch's IKSolutions from those of consecutive chunks of its poses (padded to the widest)."""
+    K = max(p.q.shape[1] for p in parts)
+    pad = [((0, 0), (0, K - p.q.shape[1]), (0, 0)) for p in parts]
+    q = np.concatenate([np.pad(p.q, w, constant_values=np.nan) for p, w in zip(parts, pad, strict=True)])
+    limits = np.concatenate([np.pad(p.within_limits, w[:2]) for p, w in zip(parts, pad, strict=True)])
+    count = np.concatenate([p.count for p in parts])
+    singular = np.concatenate([p.singular for p in parts])
+    return IKSolutions(q, count, count > 0, singular, limits, parts[0].frame, parts[0].joints)
+
+
 def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has_near: bool) -> IKSolutions:
     """:func:`candidates_to_solutions` of one pose's exact answers Q (k, n) with ``within_limits=True``
     and ``all_turns=False``, written with scalars (a few candidates: numpy's per-call cost would dominate):
@@ -324,4 +335,4 @@ def _repaired(robot: Robot, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.nd
     return np.asarray(result.q)
 
 
-__all__ = ["ACCEPT", "DEGENERATE", "SAME", "IKSolutions", "candidates_to_solutions", "residuals"]
+__all__ = ["ACCEPT", "DEGENERATE", "SAME", "IKSolutions", "candidates_to_solutions", "joined", "residuals"]
