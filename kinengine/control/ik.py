@@ -43,13 +43,13 @@ from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, first_seeds
 from .ik_solver import IKResult, solve_one
 from .ik_target import Options, RandomSource, batch_targets, checked_problem, single_target
 
-if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..robot import Robot
+if TYPE_CHECKING:  # named for the checker only
     from .ik_batch import IKBatchResult
+    from .robot_like import RobotLike
 
 
 def inverse_kinematics(
-    robot: Robot,
+    robot: RobotLike,
     target: npt.ArrayLike | Mapping[str, npt.ArrayLike],
     frame: str | None = None,
     q0: object = None,

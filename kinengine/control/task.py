@@ -49,8 +49,8 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
-from ..analytic.singular import check_on_singularity
+from ..analytic import as_rows, pose_map
+from ..analytic.options import DEFAULTS, AnalyticOptions
 from ..errors import OptionError
 from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
@@ -86,21 +86,22 @@ class Task:
         self,
         robot: TaskRobot,
         frames: str | FrameTask | Sequence[str | FrameTask],
-        position: str | None = "cartesian",
-        rotation: str | None = "euler_zyx",
+        position: str | None = DEFAULTS.position,
+        rotation: str | None = DEFAULTS.rotation,
         *,
-        rows: Sequence[str | int] | None = None,
+        rows: Sequence[str | int] | None = DEFAULTS.rows,
         check_inputs: bool = True,
         continuous: bool = True,
-        singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
+        singularity_threshold: float = DEFAULTS.singularity_threshold,
         relative_to: str | None = None,
-        on_singularity: str = "raise",
+        on_singularity: str = DEFAULTS.on_singularity,
     ) -> None:
-        specs = as_frame_tasks(frames, position, rotation, rows, relative_to)
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity).checked()
+        specs = as_frame_tasks(frames, options.position, options.rotation, options.rows, relative_to)
         if not specs:
             raise OptionError("a task needs at least one frame: pass a frame name or a list of them")
-        self._nan = check_on_singularity(on_singularity)
-        self.on_singularity = on_singularity
+        self.options = options
+        self._nan, self.on_singularity = options.nan, on_singularity
         pmaps = [pose_map(f.position, f.rotation, as_rows(f.rows)) for f in specs]
         self.frame_tasks, self.frames = specs, tuple(f.frame for f in specs)
         uniform = all(
@@ -115,7 +116,7 @@ class Task:
             f"{f.frame}:{part.name}" for f, pm in zip(specs, pmaps, strict=False) for part in pm.parts
         )
         self.check_inputs, self.continuous = check_inputs, continuous
-        self.singularity_threshold = singularity_threshold
+        self.singularity_threshold = options.singularity_threshold
         kin = robot.engine
         self._coords = coords = kin.coordinates
         self._model = model = kin.model
