@@ -115,7 +115,7 @@ def solve_batch(
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
     # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
     # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
-    # iterations (newest first), the target's p_d (3) and C_d (9), the attempt's start (dof)
+    # iterations (oldest first), the target's p_d (3) and C_d (9), the attempt's start (dof)
     H, P, S = 2 * dof, 2 * dof + STALL_SPAN, 2 * dof + STALL_SPAN + 12  # history, p_d, start
     meta, state = np.empty((3, 0), dtype=np.intp), np.empty((S + dof, 0))
     space = _Workspace(max(n, SPECULATE), dof)
@@ -165,8 +165,8 @@ def solve_batch(
             err = e_d if sqrt_w is None else e_d * sqrt_w[:, None]
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
-        end = done | (it == max_iterations) | (gives_way(it, score, history[-1]) & ~patient)
-        history[1:], history[0] = history[:-1].copy(), score  # newest first
+        end = done | (it == max_iterations) | (gives_way(it, score, history) & ~patient)
+        history[:-1], history[-1] = history[1:].copy(), score  # oldest first
         ended = np.empty(0, dtype=np.intp)
         if end.any():
             log.append((tid[end], att[end], it[end], score[end], ep[end], er[end], q[:, end].T))

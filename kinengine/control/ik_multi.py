@@ -29,18 +29,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError, ParameterizationError
+from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
 from .ik_solver import IKResult
-from .ik_step import (
-    POSE_ROW_DAMPING,
-    ROTATION_ROW_WEIGHT,
-    STALL_FROM,
-    STALL_SPAN,
-    damping,
-    gives_way,
-    limit_weights,
-    take_step,
-)
 from .ik_target import Options, Problem, RandomSource, checked_problem, single_target
 
 if TYPE_CHECKING:  # named for the checker only
@@ -187,13 +178,13 @@ def solve_frames(
     m = layout[-1][4]
     err, J, e, A = np.empty(m), np.empty((m, robot.dof)), np.empty(6), np.empty((m, m))
     e_p, e_r = e[:3], e[3:]  # views
-    limits = limit_weights(kin)
+    limits = step.limit_weights(kin)
     weigh, bounds = limits.inverse_weights_one if limits.any else None, (lower, upper)
-    rotation_sq = ROTATION_ROW_WEIGHT**2  # a full pose's rotation rows weigh ρ, as in the single solver:
+    rotation_sq = step.ROTATION_ROW_WEIGHT**2  # a full pose's rotation rows weigh ρ, as in the single solver:
     row_damping = np.ones(m)  # (J W⁻¹Jᵀ + λ² S⁻²) with S = diag(1, 1, 1, ρ, ρ, ρ) on those blocks
     for _, _, _, start, stop, S, _, _ in layout:
         if S is None:
-            row_damping[start:stop] = POSE_ROW_DAMPING
+            row_damping[start:stop] = step.POSE_ROW_DAMPING
     best, total = None, 0
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
@@ -223,8 +214,11 @@ def solve_frames(
                 per_frame.append((ep, er))
                 score += ep + SEED_ROTATION_WEIGHT * er
                 done = done and ep <= tol_p and er <= tol_r
-            earlier = history[iteration - STALL_SPAN] if iteration >= STALL_FROM else score
-            if done or iteration == max_iterations or (not last and gives_way(iteration, score, earlier)):
+            if (
+                done
+                or iteration == max_iterations
+                or (not last and step.gives_way(iteration, score, history))
+            ):
                 break
             history.append(score)
             iteration += 1
@@ -238,8 +232,10 @@ def solve_frames(
                     J[start:stop] = S @ J_F
                 else:
                     J[start:stop] = (S @ J_F) * sqrt_w[:, None]
-            diagonal = damping(squared, damping_sq) * row_damping
-            previous = take_step(q, J, err, A, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv)
+            diagonal = step.damping(squared, damping_sq) * row_damping
+            previous = step.take_step(
+                q, J, err, A, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
+            )
         total += iteration
         if best is None or score < best[2]:
             best = (q, per_frame, score, attempt, done)

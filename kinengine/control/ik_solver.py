@@ -14,17 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
+from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT
-from .ik_step import (
-    POSE_ROW_DAMPING,
-    ROTATION_ROW_WEIGHT,
-    STALL_FROM,
-    STALL_SPAN,
-    damping,
-    gives_way,
-    limit_weights,
-    take_step,
-)
 from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # named for the checker only
@@ -92,12 +83,12 @@ def solve_one(
     target = pin.SE3(C_d, p_d) if full else None
     # Rows weighted by S = diag(1, 1, 1, ρ, ρ, ρ): (S J W⁻¹Jᵀ S + λ² I) x = S e is (J W⁻¹Jᵀ + λ² S⁻²)(S x) = e
     # with Δq = W⁻¹Jᵀ (S x): the weights only scale the damping on the diagonal.
-    rotation_sq = ROTATION_ROW_WEIGHT**2 if full else 1.0
-    row_damping = POSE_ROW_DAMPING if full else 1.0
+    rotation_sq = step.ROTATION_ROW_WEIGHT**2 if full else 1.0
+    row_damping = step.POSE_ROW_DAMPING if full else 1.0
     subtract, hypot = np.subtract, math.hypot
     m = len(rows) if rows is not None else part.stop - part.start
     A = np.empty((m, m))
-    limits = limit_weights(kin)
+    limits = step.limit_weights(kin)
     weigh = limits.inverse_weights_one if limits.any else None
     bounds = (lower, upper)
     best, total = None, 0
@@ -137,8 +128,11 @@ def solve_one(
                 squared = float(err @ err)
             score = ep + SEED_ROTATION_WEIGHT * er
             done = ep <= tol_p and er <= tol_r
-            earlier = history[iteration - STALL_SPAN] if iteration >= STALL_FROM else score
-            if done or iteration == max_iterations or (not last and gives_way(iteration, score, earlier)):
+            if (
+                done
+                or iteration == max_iterations
+                or (not last and step.gives_way(iteration, score, history))
+            ):
                 break
             if not movable:  # no joint moves the frame: the error stays as it is
                 break
@@ -155,8 +149,10 @@ def solve_one(
                     J = J * sqrt_w[:, None]
             elif not full:
                 J = J[part]
-            diagonal = damping(squared, damping_sq) * row_damping
-            previous = take_step(q, J, err, A, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv)
+            diagonal = step.damping(squared, damping_sq) * row_damping
+            previous = step.take_step(
+                q, J, err, A, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
+            )
         total += iteration
         if best is None or score < best[3]:
             best = (q, ep, er, score, attempt)

@@ -18,7 +18,7 @@ fallen below STALL_RATIO × its value STALL_SPAN iterations earlier (:func:`give
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -107,12 +107,19 @@ def limit_weights(kin: Kinematics) -> LimitWeights:
     return kin.memoized("ik limit weights", lambda: LimitWeights(c.lower, c.upper, c.continuous))
 
 
-def gives_way(iteration: object, score: object, earlier: object) -> object:
+def gives_way(
+    iteration: int | np.ndarray, score: float | np.ndarray, history: Sequence[float] | np.ndarray
+) -> bool | np.ndarray:
     """Whether an attempt other than the last makes way for the next seed at this iteration: its score still
-    above GIVE_UP after PROBE_ITERATIONS, or stalled (above STALL_RATIO × ``earlier``, its score STALL_SPAN
-    iterations earlier, from STALL_FROM on). Python numbers give a bool, arrays (r,) an array."""
-    probed = (iteration == PROBE_ITERATIONS) & (score > GIVE_UP)  # type: ignore[operator]
-    return probed | ((iteration >= STALL_FROM) & (score > STALL_RATIO * earlier))  # type: ignore[operator]
+    above GIVE_UP after PROBE_ITERATIONS, or stalled (from STALL_FROM on, above STALL_RATIO × its score
+    STALL_SPAN iterations earlier). ``history``: the earlier scores, oldest first (a list for one attempt;
+    rows (≥ STALL_SPAN, r) for columns of attempts, with ``iteration`` and ``score`` (r,): an array out)."""
+    if isinstance(iteration, int):
+        if iteration == PROBE_ITERATIONS and score > GIVE_UP:
+            return True
+        return iteration >= STALL_FROM and score > STALL_RATIO * history[-STALL_SPAN]
+    probed = (iteration == PROBE_ITERATIONS) & (score > GIVE_UP)
+    return probed | ((iteration >= STALL_FROM) & (score > STALL_RATIO * history[-STALL_SPAN]))
 
 
 def damping(squared: float | np.ndarray, damping_sq: float) -> float | np.ndarray:

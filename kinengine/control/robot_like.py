@@ -1,11 +1,12 @@
 """What the layers below the facade read of a robot: :class:`RobotLike`, the public members of
-:class:`kinengine.Robot` that inverse kinematics, the pictures and ``kinengine verify`` use. They type their
+:class:`kinengine.Robot` that the Task, inverse kinematics, the QP step, the singularity measures, the
+pictures and ``kinengine verify`` use. They type their
 argument against it, never against the facade's ``Robot`` (a higher layer), which satisfies it."""
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -13,7 +14,9 @@ import numpy.typing as npt
 from ..arrays import FloatArray, Reference
 from ..kinematics.engine import Kinematics
 from ..urdf import RobotDescription
-from .manipulability import VelocityEllipsoid
+
+if TYPE_CHECKING:  # manipulability types its own argument against RobotLike
+    from .manipulability import VelocityEllipsoid
 
 
 class RobotLike(Protocol):

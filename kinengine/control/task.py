@@ -43,7 +43,7 @@ views that the next update overwrites; copy what you keep.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -52,23 +52,13 @@ import pinocchio as pin
 from ..analytic import as_rows, pose_map
 from ..analytic.options import DEFAULTS, AnalyticOptions
 from ..errors import OptionError
-from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
 from .frame_task import FrameTask, as_frame_tasks
 from .task_fast import fast_update
 from .task_frame import FrameBlock, FrameKinematics
 
-
-class TaskRobot(Protocol):
-    """What a Task reads of the Robot it is built from (public attributes of :class:`kinengine.Robot`)."""
-
-    @property
-    def engine(self) -> Kinematics: ...
-
-    @property
-    def dof(self) -> int: ...
-
-    def frame_id(self, frame: str) -> int: ...
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
 
 
 class Task:
@@ -84,7 +74,7 @@ class Task:
 
     def __init__(
         self,
-        robot: TaskRobot,
+        robot: RobotLike,
         frames: str | FrameTask | Sequence[str | FrameTask],
         position: str | None = DEFAULTS.position,
         rotation: str | None = DEFAULTS.rotation,
