@@ -18,6 +18,8 @@ from kinengine.cli.bench import run as bench_run
 from kinengine.cli.bench.cases import Case, throughput_cases
 from kinengine.parameterizations import ROTATION_PARAMETERIZATIONS
 
+pytestmark = pytest.mark.slow  # runs the benchmark, with the peers where installed
+
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):

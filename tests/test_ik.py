@@ -28,6 +28,7 @@ def _within_limits(robot, q):
     return bool(np.all(q >= robot.lower_limits) and np.all(q <= robot.upper_limits))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["abb_irb120", "ur5", "panda"])
 def test_acceptance_1000_random_reachable_targets(name):
     robot = kinengine.load(name)

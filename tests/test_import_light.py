@@ -49,12 +49,14 @@ def _modules_after(code: str) -> set[str]:
     return set(json.loads(out.stdout.splitlines()[-1]))
 
 
+@pytest.mark.slow
 def test_loading_a_shipped_robot_imports_none_of_the_heavy_modules():
     loaded = _modules_after("import kinengine; kinengine.load('abb_irb120')")
     assert "kinengine.robot" in loaded and "pinocchio" in loaded
     assert sorted(m for m in HEAVY if m in loaded) == []
 
 
+@pytest.mark.slow
 def test_the_lazy_names_are_imported_on_first_use():
     loaded = _modules_after(
         "import kinengine\nfrom kinengine import DifferentialIK, IKBatchResult\nassert kinengine.pose_error"
