@@ -110,6 +110,7 @@ def solve_batch(
     limits = limit_weights(robot.engine)
     # a full pose's rotation rows are weighted by ρ: |S e|² in the damping, λ² S⁻² on A's diagonal (ik_step)
     row_damping = POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
+    row_weight_sq = 1.0 / row_damping  # S²
     winner = np.full(n, attempts, dtype=np.intp)  # each target's first converged attempt (none yet)
     launched = np.zeros(n, dtype=np.intp)  # attempts started so far
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
@@ -183,7 +184,7 @@ def solve_batch(
             w = None
             if limits.any:
                 w, state[dof:H] = limits.inverse_weights(q, state[dof:H])
-            squared = np.einsum("in,in,i->n", err, err, 1.0 / row_damping)  # |S e|²
+            squared = row_weight_sq @ (err * err)  # |S e|²
             diagonal = row_damping[:, None] * damping(squared, problem.damping_sq)
             nullspace = (problem.q_ns, problem.gain, score)
             step = take_steps(q, J, err, w, diagonal, nullspace, space.buffers)

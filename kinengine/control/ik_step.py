@@ -188,42 +188,49 @@ def take_steps(
     buffers: tuple[np.ndarray, np.ndarray],
 ) -> np.ndarray:
     """q + Δq for every column (q (dof, r), J (m, dof, r), err (m, r), 1/w (dof, r) or None, ``diagonal``
-    λ² S⁻² (m, r)): the step of :func:`take_step` for each column, not clipped. A = J W⁻¹Jᵀ + diag(λ² S⁻²)
-    is factorized A = L Lᵀ column-wise (:func:`_cholesky_solve`); a column whose A is not positive definite
-    (a pivot <= 0) is solved by numpy instead (LU, or least squares where A is singular), as are all of
-    them below CHOLESKY_FROM columns. ``buffers``: (J W⁻¹ (≥m, dof, ≥r), A (≥ m·m·r, flat)), reused."""
+    λ² S⁻² (m, r)): the step of :func:`take_step` for each column, not clipped. From CHOLESKY_FROM columns
+    on, A = J W⁻¹Jᵀ + diag(λ² S⁻²) is factorized A = L Lᵀ column-wise (:func:`_cholesky_solve`) and a
+    column whose A is not positive definite (a pivot <= 0) is solved again by numpy; below it, numpy solves
+    them all (:func:`_solve_stacked`: LU, least squares where A is singular). ``buffers``: (J W⁻¹
+    (≥m, dof, ≥r), A (≥ m·m·r, flat)), reused between iterations."""
     m, r = len(J), J.shape[2]
     JW = J if w is None else np.multiply(J, w, out=buffers[0][:m, :, :r])
-    A = buffers[1][: m * m * r].reshape(m, m, r)
-    for i in range(m):  # the lower triangle: the factorization reads no more
-        np.einsum("kn,jkn->jn", JW[i], J[: i + 1], out=A[i, : i + 1])
-        A[i, i] += diagonal[i]
     q_ns, gain, score = nullspace
     z = None if q_ns is None else nullspace_pull(gain, score, q_ns, q)
     if z is not None:
         err = err - np.einsum("ijn,jn->in", J, z)
     if r < CHOLESKY_FROM:
-        y = _numpy_solve(A, err)
+        y = _solve_stacked(_normal_stack(JW, J, diagonal, buffers[1]), err)
     else:
+        A = buffers[1][: m * m * r].reshape(m, m, r)
+        for i in range(m):  # the lower triangle: the factorization reads no more
+            np.einsum("kn,jkn->jn", JW[i], J[: i + 1], out=A[i, : i + 1])
+            A[i, i] += diagonal[i]
         y, refused = _cholesky_solve(A, err)
-        if refused.any():  # A was overwritten by L there: rebuilt for those columns
-            JW_k, J_k = JW[..., refused], J[..., refused]
-            A_k = np.einsum("ikn,jkn->ijn", JW_k, J_k)
-            for i in range(m):
-                A_k[i, i] += diagonal[i, refused]
-            y[:, refused] = _numpy_solve(A_k, err[:, refused])
+        if refused.any():  # A was overwritten by L: rebuilt for those columns
+            A_k = _normal_stack(JW[..., refused], J[..., refused], diagonal[:, refused], None)
+            y[:, refused] = _solve_stacked(A_k, err[:, refused])
     return q + np.einsum("ijn,in->jn", JW, y) + (0.0 if z is None else z)
 
 
-def _numpy_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """x (m, r) with A x = b for A (m, m, r) of which the lower triangle is read (symmetric), by numpy's
-    stacked LU solve; the least-squares solution (pseudo-inverse) where one of them is singular."""
-    lower = np.tril(A.transpose(2, 0, 1))
-    full = lower + np.tril(lower, -1).transpose(0, 2, 1)
+def _normal_stack(
+    JW: np.ndarray, J: np.ndarray, diagonal: np.ndarray, buffer: np.ndarray | None
+) -> np.ndarray:
+    """A = J W⁻¹Jᵀ + diag(``diagonal``) as a stack (r, m, m), in ``buffer`` (flat) if given."""
+    m, r = len(J), J.shape[2]
+    A = np.empty((r, m, m)) if buffer is None else buffer[: r * m * m].reshape(r, m, m)
+    np.einsum("ikn,jkn->nij", JW, J, out=A)
+    A.reshape(r, m * m)[:, :: m + 1] += diagonal.T
+    return A
+
+
+def _solve_stacked(A: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """x (m, r) with A x = b for a stack A (r, m, m), by numpy's stacked LU solve; the least-squares
+    solution (pseudo-inverse) where one of them is singular."""
     try:
-        return np.linalg.solve(full, b.T[..., None])[..., 0].T
+        return np.linalg.solve(A, b.T[..., None])[..., 0].T
     except np.linalg.LinAlgError:  # exactly singular (λ_min = 0 where no joint moves the frame)
-        return (np.linalg.pinv(full) @ b.T[..., None])[..., 0].T
+        return (np.linalg.pinv(A) @ b.T[..., None])[..., 0].T
 
 
 def _cholesky_solve(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
