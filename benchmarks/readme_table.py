@@ -12,7 +12,7 @@ import argparse
 import json
 from pathlib import Path
 
-from kinengine.cli.bench.command import _peer_cell, _us, case_label
+from kinengine.cli.bench.command import _achieved, _peer_cell, _us, case_label
 
 HERE = Path(__file__).resolve().parent
 
@@ -29,7 +29,9 @@ def markdown(report: dict, robot: str) -> str:
     for row in rows:
         k, p = row["kinengine"], row["pinocchio"]
         ratio = f"{row['ratio']:.2f}" if "ratio" in row else ("–" if p["status"] == "none" else "")
-        label = case_label(row) + (f" ({row['success']:.1%} reached)" if "success" in row else "")
+        label = case_label(row) + (
+            f" ({row['success']:.1%} reached, {_achieved(row)})" if "success" in row else ""
+        )
         cells = [
             label,
             f"{row['n']:,}",

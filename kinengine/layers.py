@@ -2,7 +2,9 @@
 
 A module may import modules of its own layer or of lower layers, never of a higher one; the
 command line imports only the public API. Layers above the kinematics take a Robot object as an
-argument and use its public methods; only the facade (``kinengine.robot``) constructs one.
+argument and use its public methods, typed against a Protocol of their own layer or a lower one
+(``kinengine.control.robot_like.RobotLike``), never against the facade's class; only the facade
+(``kinengine.robot``) constructs one.
 ``tests/test_architecture.py`` reads every module's imports from the source (ast) and enforces these
 rules, no import cycles, and no import of another module's private (underscore) names.
 """
@@ -17,7 +19,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("analytic", ("kinengine.analytic",)),
     ("control", ("kinengine.control",)),
     ("tools and presentation", ("kinengine.verify", "kinengine.presentation")),
-    ("facade", ("kinengine.facade", "kinengine.robot", "kinengine.loading")),
+    ("facade", ("kinengine.robot", "kinengine.loading")),
     ("public API", ("kinengine", "kinengine.layers")),
     ("command line", ("kinengine.cli", "kinengine.__main__")),
 )

@@ -13,32 +13,49 @@ Frames and conventions
     that currently coincides with I's origin: v_O = v_f − ω × p_f  (p_f = origin of f in I).
 
 The Robot checks its inputs once and hands them to ``robot.engine`` (Pinocchio model, per-thread
-Data, coordinate map); its other method groups live in :mod:`kinengine.facade`.
+Data, coordinate map) and to the analytic, control and presentation layers' functions.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
 from typing import TYPE_CHECKING, overload
 
+import numpy as np
+import pinocchio as pin
+
+from .analytic import analytic_batch, analytic_function, analytic_single
+from .analytic.evaluate import analytic_relative
+from .analytic.hessian import analytic_hessian as _analytic_hessian
+from .analytic.options import DEFAULTS, AnalyticOptions
 from .arrays import ArrayLike, FloatArray, Matrix, Reference, Stack, Vector
+from .control import manipulability as _manipulability
+from .control.manipulability import DEFAULT_TOLERANCE, Rows, SingularityReport, VelocityEllipsoid
 from .errors import OptionError
-from .facade.analysis import AnalysisMethods
-from .facade.analytic import AnalyticMethods
-from .facade.configurations import ConfigurationMethods
-from .facade.editing import EditingMethods
-from .facade.presentation import PresentationMethods
 from .kinematics import Kinematics, resolve_reference
 from .kinematics import batch as _batch
+from .kinematics import derivatives as _derivatives
+from .kinematics import relative as _relative
 from .kinematics.handle import FrameHandle
+from .kinematics.options import checked_flag, checked_frames, checked_rng
 from .urdf import RobotDescription
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # imported by the first call that needs them
+    import matplotlib.axes
+
+    from .control.frame_task import FrameTask
+    from .control.ik import IKResult
+    from .control.ik_batch import IKBatchResult
     from .control.ik_solutions import IKSolutions
+    from .control.task import Task
+    from .presentation.viewer import Viewer
+
+FastPath = tuple[Callable[[object], bool], Callable[[FloatArray], FloatArray]]
+"""(ready, J_A): the input test CoordinateMap.ready and J_A(q) for a q that passed it."""
 
 
-class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethods):
+class Robot:
     """A fixed-base robot: one coordinate per independent movable joint.
 
     Build it with :func:`kinengine.load` or :func:`kinengine.load_urdf_string`. The
@@ -65,6 +82,7 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
             kin.frame_id(end_effector)  # FrameNotFoundError with suggestions for an unknown name
         self._end_effector = end_effector if end_effector is not None else _default_end_effector(description)
         self._handles: dict[object, FrameHandle] = {}  # frame name (None: end effector) -> checked handle
+        self._analytic_paths: dict[tuple, FastPath | None] = {}  # analytic_jacobian's options -> J_A(q)
 
     # -- description ------------------------------------------------------------------------
     name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
@@ -106,6 +124,432 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
         (a fresh Pinocchio model and Data in the receiving process; nothing per-thread is sent)."""
         state = (self._description, self._urdf_text, self._name, self._end_effector, dict(self._packages))
         return _rebuild_robot, state
+
+    # -- configurations ---------------------------------------------------------------------
+    def neutral(self) -> FloatArray:
+        """The zero configuration clipped into the joint limits, (dof,): q = 0 unless a joint's limits exclude
+        0 (e.g. the Panda's joint 4), which then sits at its nearest limit (as MoveIt's default state)."""
+        return np.clip(np.zeros(self.dof), self._coords.lower, self._coords.upper)
+
+    def random_configuration(
+        self, rng: np.random.Generator | int | None = None, size: int | None = None
+    ) -> FloatArray:
+        """Uniform within limits, (dof,) or (size, dof); continuous joints in [-π, π)."""
+        return self._coords.sample(checked_rng(rng), size)
+
+    def configuration(
+        self, values: Mapping[str, float], *, base: ArrayLike | None = None, strict: bool = True
+    ) -> FloatArray:
+        """q from joint name -> value (e.g. a ROS JointState); unnamed joints at ``base`` (default neutral).
+
+        Unknown names raise FrameNotFoundError (``strict=False`` ignores them).
+        """
+        coords = self._coords
+        start = (
+            self.neutral() if base is None else np.array(coords.check(base, name="base", allow_batch=False))
+        )
+        return coords.from_mapping(values, start, strict=checked_flag(strict, "strict"))
+
+    def check_configuration(
+        self, q: ArrayLike, *, check_limits: bool = True, batch: bool = True
+    ) -> FloatArray:
+        """A fresh float64 copy of q, (dof,) or (with ``batch``) (N, dof); ConfigurationError on bad shape,
+        values or (optionally) limits."""
+        allow_batch = checked_flag(batch, "batch")
+        return np.array(self._coords.check(q, check_limits=check_limits, allow_batch=allow_batch))
+
+    def pinocchio_model(self) -> pin.Model:
+        """A copy of Pinocchio's Model: one plain joint (nq = nv = 1) per movable URDF joint, mimic joints
+        included as ordinary joints; its configuration is :meth:`pinocchio_configuration`."""
+        return pin.Model(self._kin.model)
+
+    def pinocchio_configuration(self, q: ArrayLike) -> FloatArray:
+        """Pinocchio's configuration (nq,) for q: q_pin = M q + b (every movable joint's value, mimic
+        joints at multiplier·leader + offset); equal to q for robots without mimic joints."""
+        q = self._coords.check(q, allow_batch=False)
+        return np.array(self._coords.to_pinocchio(q), dtype=float)
+
+    # -- analytic Jacobians (options: kinengine.analytic.options) ------------------------------
+    def pose_parameters(
+        self,
+        q: ArrayLike,
+        frame: str | None = None,
+        position: str | None = DEFAULTS.position,
+        rotation: str | None = DEFAULTS.rotation,
+        *,
+        rows: Sequence[str | int] | None = DEFAULTS.rows,
+        check_limits: bool = False,
+        relative_to: str | None = None,
+        on_singularity: str | None = DEFAULTS.on_singularity,
+        singularity_threshold: float = DEFAULTS.singularity_threshold,
+    ) -> FloatArray:
+        """χ_e(q) = (χ_P, χ_R) of ``frame`` in the root frame, (m,) or (N, m) for q (N, dof).
+
+        ``position``/``rotation`` name a parameterization (None leaves its rows out);
+        ``rows`` keeps only the named rows (labels or indices), e.g. ("x", "z", "ry").
+        ``relative_to``: χ of T_BA, the pose of ``frame`` in that frame B, instead of T_IA.
+        ``on_singularity`` "raise" (default): RepresentationSingularityError within ``singularity_threshold``
+        of the singular set (where χ is not unique, e.g. ZYX angles at gimbal lock); "nan": NaN in that
+        parameterization's rows there; None: χ everywhere (a warning is issued at gimbal lock).
+        """
+        unchecked = on_singularity is None  # the angles alone (the default before "raise")
+        mode = "raise" if on_singularity is None else on_singularity
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold, mode).checked()
+        pmap = options.pose_map()
+        if relative_to is None:
+            T = self.frame_pose(q, frame, check_limits=check_limits)
+        else:
+            T = self.relative_pose(q, frame, relative_to=relative_to, check_limits=check_limits)
+        if unchecked:
+            return pmap.parameters(T)
+        kin = self._kin
+        qc = self._coords.check(q)
+        fa = kin.frame_id(self._end_effector if frame is None else frame)
+        fb = None if relative_to is None else kin.frame_id(relative_to)
+
+        def J(row: int | None) -> FloatArray:
+            qr = qc if row is None else qc[row]
+            if fb is None:
+                return kin.jacobian(qr, fa, pin.LOCAL_WORLD_ALIGNED)
+            return _relative.relative_jacobian(kin, qr, fa, fb)
+
+        return pmap.parameters(T, options.singularity_threshold, options.nan, J)
+
+    def analytic_jacobian(
+        self,
+        q: ArrayLike,
+        frame: str | None = None,
+        position: str | None = DEFAULTS.position,
+        rotation: str | None = DEFAULTS.rotation,
+        *,
+        rows: Sequence[str | int] | None = DEFAULTS.rows,
+        singularity_threshold: float = DEFAULTS.singularity_threshold,
+        check_limits: bool = False,
+        relative_to: str | None = None,
+        on_singularity: str = DEFAULTS.on_singularity,
+    ) -> FloatArray:
+        """J_eA = ∂χ_e/∂q = E_e(χ_e) · J_e0(q), (m, dof) or (N, m, dof) for q (N, dof).
+
+        Raises RepresentationSingularityError when χ_e is closer than ``singularity_threshold``
+        to its parameterization's singular set (the message names regular alternatives and says whether
+        the robot itself is singular); ``on_singularity="nan"`` gives NaN in that parameterization's rows
+        instead (in a batch, only in the rows of those configurations). ``relative_to``: the analytic
+        Jacobian of χ(T_BA), E(χ)·J_rel with J_rel = :meth:`relative_jacobian` expressed in B.
+        """
+        if relative_to is None and check_limits is False:
+            key = (frame, position, rotation, rows, singularity_threshold, on_singularity)
+            path, found = None, True
+            try:  # options seen before (checked then): J_A(q) for them, looked up once
+                path = self._analytic_paths[key]
+            except KeyError:
+                found = False
+            except TypeError:  # unhashable options (e.g. rows as a list): the general path checks them
+                pass
+            if not found:  # checked here (outside the handlers, so that an error reads plainly)
+                options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity)
+                path = self._analytic_path(frame, options)
+                if len(self._analytic_paths) < 256:
+                    self._analytic_paths[key] = path
+            if path is not None:
+                ready, evaluate = path
+                if ready(q):  # a float64 (dof,) array within the bounds: checked
+                    return evaluate(q)  # type: ignore[arg-type]
+        kin = self._kin
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity).checked()
+        pmap, threshold, nan = options.pose_map(), options.singularity_threshold, options.nan
+        fid = kin.frame_id(self._end_effector if frame is None else frame)
+        qc: FloatArray = self._coords.check(q, check_limits=check_limits)
+        if relative_to is not None:
+            return analytic_relative(kin, qc, fid, kin.frame_id(relative_to), pmap, threshold, nan)
+        if qc.ndim == 2:
+            return analytic_batch(kin, qc, fid, pmap, threshold, nan)
+        return analytic_single(kin, qc, fid, pmap, threshold, nan)
+
+    def _analytic_path(self, frame: str | None, options: AnalyticOptions) -> FastPath | None:
+        """(ready, J_A) for these options (each checked here: an error is raised, not kept): J_A(q) answers a
+        float64 (dof,) array q that ``ready`` passed (any other q takes the general path, which checks it);
+        None where the general path is needed (on_singularity "nan")."""
+        options = options.checked()
+        fid = self._kin.frame_id(self._end_effector if frame is None else frame)
+        if options.nan:
+            return None
+        evaluate = analytic_function(self._kin, fid, options.pose_map(), options.singularity_threshold)
+        return self._coords.ready, evaluate
+
+    def analytic_hessian(
+        self,
+        q: ArrayLike,
+        frame: str | None = None,
+        position: str | None = DEFAULTS.position,
+        rotation: str | None = DEFAULTS.rotation,
+        *,
+        rows: Sequence[str | int] | None = DEFAULTS.rows,
+        singularity_threshold: float = DEFAULTS.singularity_threshold,
+    ) -> FloatArray:
+        """∂J_A/∂q, (m, dof, dof) with [:, :, k] = ∂J_A/∂q_k. See :mod:`kinengine.analytic.hessian`."""
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold).checked()
+        fid = self._kin.frame_id(self._end_effector if frame is None else frame)
+        qc = self._coords.check(q, allow_batch=False)
+        return _analytic_hessian(self._kin, qc, fid, options.pose_map(), options.singularity_threshold)
+
+    def task(
+        self,
+        frames: str | FrameTask | Sequence[str | FrameTask] | None = None,
+        position: str | None = DEFAULTS.position,
+        rotation: str | None = DEFAULTS.rotation,
+        *,
+        rows: Sequence[str | int] | None = DEFAULTS.rows,
+        check_inputs: bool = True,
+        continuous: bool = True,
+        singularity_threshold: float = DEFAULTS.singularity_threshold,
+        relative_to: str | None = None,
+        on_singularity: str = DEFAULTS.on_singularity,
+    ) -> Task:
+        """A :class:`~kinengine.control.task.Task` for a control loop: ``task.update(q, qdot)`` fills pose, χ,
+        J_e0, J_A (and with q̇ the twist, J̇_e0, J̇_A) into preallocated read-only arrays.
+
+        ``frames``: one name (default: end_effector), several (blocks stacked), or
+        :class:`~kinengine.FrameTask` entries, each with its own parameterizations, rows and relative_to
+        (names given as strings take ``position``, ``rotation``, ``rows`` and ``relative_to`` of this call).
+        ``on_singularity``: "raise" (default) or "nan"; ``task.singularity_distances`` tells how far each
+        parameterization is from its singular set. See :mod:`kinengine.control.task`.
+        """
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity).checked()
+        continuous, check_inputs = (
+            checked_flag(continuous, "continuous"),
+            checked_flag(check_inputs, "check_inputs"),
+        )
+        from .control.frame_task import FrameTask
+        from .control.task import Task
+
+        checked_frames(frames, (str, FrameTask))
+        return Task(
+            self,
+            self._end_effector if frames is None else frames,
+            options.position,
+            options.rotation,
+            rows=options.rows,
+            check_inputs=check_inputs,
+            continuous=continuous,
+            singularity_threshold=options.singularity_threshold,
+            relative_to=relative_to,
+            on_singularity=options.on_singularity,
+        )
+
+    # -- relative kinematics --------------------------------------------------------------------
+    def relative_pose(
+        self, q: ArrayLike, frame: str | None = None, *, relative_to: str, check_limits: bool = False
+    ) -> FloatArray:
+        """T_BA = T_IB⁻¹ T_IA: the pose of ``frame`` A (default: end_effector) in frame B = ``relative_to``,
+        (4, 4) [m], or (N, 4, 4) for q (N, dof). See :mod:`kinengine.kinematics.relative`."""
+        fa = self._kin.frame_id(self._end_effector if frame is None else frame)
+        fb = self._kin.frame_id(relative_to)
+        return _relative.relative_pose(self._kin, self._coords.check(q, check_limits=check_limits), fa, fb)
+
+    def relative_jacobian(
+        self,
+        q: ArrayLike,
+        frame: str | None = None,
+        *,
+        relative_to: str,
+        expressed_in: str | None = None,
+        check_limits: bool = False,
+    ) -> FloatArray:
+        """(6, dof), or (N, 6, dof) for q (N, dof); rows [v; ω]: the velocity of A's origin and the angular
+        velocity of A (A = ``frame``, default end_effector), both relative to B = ``relative_to`` (as seen by
+        an observer fixed in B), in the axes of ``expressed_in`` (any frame name; default B).
+
+        In B: d/dt(B_p_BA) = J[:3]·q̇ and Ċ_BA = [J[3:]·q̇]× C_BA. See :mod:`kinengine.kinematics.relative`.
+        """
+        fa = self._kin.frame_id(self._end_effector if frame is None else frame)
+        fb = self._kin.frame_id(relative_to)
+        fe = None if expressed_in is None else self._kin.frame_id(expressed_in)
+        qc = self._coords.check(q, check_limits=check_limits)
+        return _relative.relative_jacobian(self._kin, qc, fa, fb, fe)
+
+    # -- derivatives ------------------------------------------------------------------------------
+    def jacobian_time_variation(
+        self,
+        q: ArrayLike,
+        qdot: ArrayLike,
+        frame: str | None = None,
+        reference: Reference = "local_world_aligned",
+    ) -> FloatArray:
+        """J̇ = dJ/dt of the geometric Jacobian in ``reference`` along q̇, (6, dof). See
+        :mod:`kinengine.kinematics.derivatives`."""
+        ref = resolve_reference(reference)
+        fid = self._kin.frame_id(self._end_effector if frame is None else frame)
+        qc: FloatArray = self._coords.check(q, allow_batch=False)
+        vc: FloatArray = self._coords.check(qdot, name="qdot", allow_batch=False)
+        return _derivatives.jacobian_time_variation(self._kin, qc, vc, fid, ref)
+
+    def kinematic_hessian(
+        self, q: ArrayLike, frame: str | None = None, reference: Reference = "local_world_aligned"
+    ) -> FloatArray:
+        """∂J/∂q, (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, in ``reference``. See
+        :mod:`kinengine.kinematics.derivatives`."""
+        ref = resolve_reference(reference)
+        fid = self._kin.frame_id(self._end_effector if frame is None else frame)
+        qc = self._coords.check(q, allow_batch=False)
+        return _derivatives.kinematic_hessian(self._kin, qc, fid, ref)
+
+    # -- singularities ------------------------------------------------------------------------------
+    def singularity_report(
+        self,
+        q: ArrayLike,
+        frame: str | None = None,
+        rows: Rows = "all",
+        *,
+        tolerance: float = DEFAULT_TOLERANCE,
+    ) -> SingularityReport:
+        """Singular values, manipulability, condition number and lost directions of J_e0 (kinematic
+        singularities)."""
+        return _manipulability.singularity_report(self, q, frame, rows, tolerance=tolerance)
+
+    def manipulability(
+        self, q: ArrayLike, frame: str | None = None, rows: Rows = "all"
+    ) -> float | FloatArray:
+        """Yoshikawa's sqrt(det(J Jᵀ)) of the chosen rows of J_e0; (N,) for q (N, dof)."""
+        return _manipulability.manipulability(self, q, frame, rows)
+
+    def velocity_ellipsoid(self, q: ArrayLike, frame: str | None = None) -> VelocityEllipsoid:
+        """Axes and semi-axes [m/s per unit joint speed] of {J_v u : |u| <= 1} in the root frame."""
+        return _manipulability.velocity_ellipsoid(self, q, frame)
+
+    def require_regular(
+        self,
+        q: ArrayLike,
+        frame: str | None = None,
+        rows: Rows = "all",
+        *,
+        tolerance: float = DEFAULT_TOLERANCE,
+    ) -> SingularityReport:
+        """The singularity report, or KinematicSingularityError if J_e0 (rows) loses rank."""
+        return _manipulability.require_regular(self, q, frame, rows, tolerance=tolerance)
+
+    # -- inverse kinematics -------------------------------------------------------------------------
+    def inverse_kinematics(
+        self,
+        target: ArrayLike | Mapping[str, ArrayLike],
+        frame: str | None = None,
+        q0: ArrayLike | None = None,
+        *,
+        position: str | None = None,
+        rotation: str | None = None,
+        rows: Sequence[str | int] | Mapping[str, Sequence[str | int]] | None = None,
+        weights: Sequence[float] | Mapping[str, Sequence[float]] | None = None,
+        tol_position: float = 1e-6,
+        tol_rotation: float = 1e-6,
+        max_iterations: int = 100,
+        restarts: int = 3,
+        rng: np.random.Generator | int | None = None,
+        nullspace_target: ArrayLike | None = None,
+        nullspace_gain: float = 0.1,
+        min_damping: float = 1e-6,
+        method: str = "auto",
+    ) -> IKResult | IKBatchResult:
+        """Differential IK (damped least squares) to a 4x4 pose, a batch of poses (N, 4, 4) (an IKBatchResult
+        of N results, solved vectorized), a parameter target χ, or a mapping {frame: T_IF (4, 4)} solved for
+        every frame at once (``frame`` None; ``rows``/``weights`` one spec or {frame: spec}; a MultiIKResult
+        whose errors are the maxima over the frames, ``frame_errors`` per frame). See
+        :func:`kinengine.control.ik.inverse_kinematics` for the options. ``method``: "auto" (the closed form
+        when the chain has one, see :meth:`ik_solutions`), "closed_form" or "numeric"."""
+        from .control import ik as _ik  # here: inverse kinematics is imported by its first call
+
+        return _ik.inverse_kinematics(
+            self,
+            target,
+            frame,
+            q0,
+            position=position,
+            rotation=rotation,
+            rows=rows,
+            weights=weights,
+            tol_position=tol_position,
+            tol_rotation=tol_rotation,
+            max_iterations=max_iterations,
+            restarts=restarts,
+            rng=rng,
+            nullspace_target=nullspace_target,
+            nullspace_gain=nullspace_gain,
+            min_damping=min_damping,
+            method=method,
+        )
+
+    # -- model editing (kinengine.model.editing, imported by the first edit) ----------------------
+    def with_frame(self, name: str, parent: str, placement: ArrayLike) -> Robot:
+        """A new Robot with frame ``name`` fixed to frame ``parent`` (a link or joint) at ``placement``:
+        T_parent,name as a (4, 4) homogeneous transform [m], or a pair (xyz [m], rpy [rad]). The frame is a
+        new link on a fixed joint ``<name>_joint``; it is in ``frame_names``, ``urdf_text`` (edited alike)
+        and everything else. See :func:`kinengine.model.editing.add_frame`."""
+        from .model.editing import add_frame
+
+        return self._edited(add_frame(self._description, name, parent, placement))
+
+    def locked(self, values: Mapping[str, float]) -> Robot:
+        """A new Robot with the named joints fixed at their values [rad or m] (mimic followers too, at
+        multiplier·value + offset); the other coordinates keep their order. Its poses and Jacobians equal
+        this robot's at those values with the locked columns removed. ConfigurationError for a value
+        outside the limits. See :func:`kinengine.model.editing.lock_joints`."""
+        from .model.editing import lock_joints
+
+        return self._edited(lock_joints(self._description, values))
+
+    def _edited(self, description: RobotDescription) -> Robot:
+        """The Robot of an edited description: same name, end effector and packages; its URDF text edited
+        alike."""
+        from .model.editing import edited_urdf_text
+
+        text = edited_urdf_text(self._urdf_text, description)
+        return type(self)(
+            description, text, name=self._name, end_effector=self._end_effector, packages=self._packages
+        )
+
+    # -- presentation (matplotlib and viser imported only when asked for) ------------------------
+    def plot(
+        self,
+        q: ArrayLike | None = None,
+        ax: matplotlib.axes.Axes | None = None,
+        *,
+        frames: Sequence[str] = (),
+        ellipsoid: str | None = None,
+        axis_length: float | None = None,
+        title: bool | str = True,
+    ) -> matplotlib.axes.Axes:
+        """A matplotlib 3D picture of the robot at q (None: neutral); returns the axes. See
+        :func:`kinengine.presentation.plotting.plot_robot`."""
+        from .presentation.plotting import plot_robot
+
+        return plot_robot(
+            self, q, ax, frames=frames, ellipsoid=ellipsoid, axis_length=axis_length, title=title
+        )
+
+    def view(
+        self,
+        q: ArrayLike | None = None,
+        *,
+        port: int | None = None,
+        frames: Sequence[str] = (),
+        ellipsoid: str | None = None,
+        parameterization: str = "euler_zyx",
+        meshes: bool = True,
+        host: str = "127.0.0.1",
+    ) -> Viewer:
+        """Serve the robot at q (None: neutral) in the browser (Viser); returns the running viewer:
+        ``.url``, ``.update(q)`` (moves the robot live), ``.close()``. Needs
+        ``pip install 'kinengine[view]'``. See :func:`kinengine.presentation.viewer.view`."""
+        from .presentation.viewer import view
+
+        return view(
+            self,
+            q,
+            port=port,
+            host=host,
+            frames=frames,
+            ellipsoid=ellipsoid,
+            parameterization=parameterization,
+            meshes=meshes,
+        )
 
     # -- kinematics -------------------------------------------------------------------------
     def frame_id(self, frame: str) -> int:

@@ -32,7 +32,7 @@ from .parameterizations.base import Parameterization
 from .reference import REFERENCES, ReferenceKinematics, read_urdf
 
 if TYPE_CHECKING:
-    from .robot import Robot
+    from .control.robot_like import RobotLike
 
 REFERENCE_ATOL = 1e-10
 YOURDFPY_ATOL = 1e-9
@@ -101,7 +101,7 @@ class VerifyReport:
         }
 
 
-def verify(robot: Robot, samples: int = 20, seed: int = 0, progress: bool = False) -> VerifyReport:
+def verify(robot: RobotLike, samples: int = 20, seed: int = 0, progress: bool = False) -> VerifyReport:
     """Run every check on ``robot`` (a :class:`kinengine.Robot`) and return the report.
 
     ``samples``: random configurations, a whole number in [0, MAX_SAMPLES]; ``seed``: a whole number >= 0.
@@ -164,7 +164,7 @@ def verify(robot: Robot, samples: int = 20, seed: int = 0, progress: bool = Fals
     return VerifyReport(robot.name, robot.dof, len(frames), len(q_all), tuple(checks))
 
 
-def _box(robot: Robot) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+def _box(robot: RobotLike) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """The sampled joint box: the limits, or [-π, π] where they are infinite or empty (lower >= upper)."""
     lower, upper = np.asarray(robot.lower_limits, float), np.asarray(robot.upper_limits, float)
     lower, upper = np.clip(lower, -BOX, BOX), np.clip(upper, -BOX, BOX)
@@ -188,7 +188,7 @@ def _corners(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> 
     return np.where(pick, upper, lower)
 
 
-def _fd_jacobian(robot: Robot, q: np.ndarray, frame: str, reference: str) -> npt.NDArray[np.float64]:
+def _fd_jacobian(robot: RobotLike, q: np.ndarray, frame: str, reference: str) -> npt.NDArray[np.float64]:
     """(M, 6, dof) Jacobians by central differences of T_IF(q), each reference from its definition:
     local_world_aligned [ṗ; log(C+ C-^T)/2h], local T^-1·dT/dq, world dT/dq·T^-1 (twists [v; ω])."""
     M, dof = q.shape
@@ -211,7 +211,7 @@ def _fd_jacobian(robot: Robot, q: np.ndarray, frame: str, reference: str) -> npt
     return np.swapaxes(np.concatenate([v, w], axis=-1), 1, 2)
 
 
-def _yourdfpy_check(robot: Robot, q: np.ndarray) -> CheckResult:
+def _yourdfpy_check(robot: RobotLike, q: np.ndarray) -> CheckResult:
     """Every link's pose vs yourdfpy's scene-graph forward kinematics (URDF.update_cfg)."""
     urdf = read_urdf(robot.urdf_text, source=robot.source, scene_graph=True)
     for joint in urdf.robot.joints:  # yourdfpy translates by q·axis without normalizing the axis
@@ -242,7 +242,7 @@ def _or(value: float | None, default: float) -> float:
     return default if value is None else float(value)
 
 
-def _parameterizations(robot: Robot) -> list[tuple[str, str, Parameterization]] | None:
+def _parameterizations(robot: RobotLike) -> list[tuple[str, str, Parameterization]] | None:
     """(kind, name, parameterization) for every position and rotation parameterization, or None
     when this robot has no analytic Jacobians yet."""
     if not (hasattr(robot, "analytic_jacobian") and hasattr(robot, "pose_parameters")):
@@ -255,7 +255,7 @@ def _parameterizations(robot: Robot) -> list[tuple[str, str, Parameterization]] 
 
 
 def _analytic_check(
-    robot: Robot, q: np.ndarray, kind: str, name: str, param: Parameterization
+    robot: RobotLike, q: np.ndarray, kind: str, name: str, param: Parameterization
 ) -> CheckResult:
     """J_A of the end effector vs central differences of χ(q), away from singularities and branch cuts."""
     row = f"analytic {name} vs finite differences"
@@ -266,7 +266,7 @@ def _analytic_check(
     def chi(qs: np.ndarray) -> npt.NDArray[np.float64]:
         with warnings.catch_warnings():  # χ at a singular pose warns; such samples are skipped
             warnings.simplefilter("ignore")
-            return robot.pose_parameters(qs, frame, position=position, rotation=rotation)
+            return robot.pose_parameters(qs, frame, position=position, rotation=rotation, on_singularity=None)
 
     chi0 = chi(q)
     regular = np.atleast_1d(param.singularity_distance(chi0)) >= SINGULARITY_MARGIN

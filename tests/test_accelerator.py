@@ -231,6 +231,7 @@ def test_each_thread_keeps_its_own_data(abb):
         assert np.array_equal(seen[0], expected[k][0][:3, 3])
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(PURE, reason="this is the pure-Python run")
 def test_the_pure_python_path_passes_the_handle_and_input_tests():
     """The fallback a machine without a C compiler runs: the handle, input-check and analytic fast-path

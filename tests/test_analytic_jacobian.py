@@ -124,8 +124,11 @@ def test_abb_at_zero_is_on_the_zyx_and_xyz_singularities_and_the_error_says_what
         assert info.value.distance < 1e-12
         assert "euler_zyz" in info.value.alternatives or "quaternion" in info.value.alternatives
         assert isinstance(info.value, kinengine.KinematicsError)
-        with pytest.warns(UserWarning):
-            chi = robot.pose_parameters(q, "tool0", rotation=rotation)
+        # the same default for χ as for J_A (one AnalyticOptions): the angles are not unique there
+        with pytest.raises(kinengine.RepresentationSingularityError, match="quaternion"):
+            robot.pose_parameters(q, "tool0", rotation=rotation)
+        with pytest.warns(UserWarning):  # on_singularity=None: the angles alone, with a warning
+            chi = robot.pose_parameters(q, "tool0", rotation=rotation, on_singularity=None)
         assert np.all(np.abs(chi) < 10)  # valid angles, no 1e15
     # near, not only at, the singular set: tool0 pitched by π/2 − 1e-8
     near = q.copy()

@@ -18,6 +18,8 @@ from kinengine.cli.bench import run as bench_run
 from kinengine.cli.bench.cases import Case, throughput_cases
 from kinengine.parameterizations import ROTATION_PARAMETERIZATIONS
 
+pytestmark = pytest.mark.slow  # runs the benchmark, with the peers where installed
+
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
@@ -182,15 +184,22 @@ def test_mujoco_and_drake_agree_before_they_are_timed(quick_run, name):
     assert report["versions"][name]
 
 
-def test_ik_rows_count_reached_targets(quick_run):
+def test_ik_rows_count_reached_targets_and_record_the_achieved_error(quick_run):
+    """Rates are compared at equal accuracy: each IK row records, for kinengine and the peer, the share of
+    targets within 1e-6 m / 1e-6 rad and the median and largest achieved error, consistent with it."""
     _, report, _ = quick_run
     ik_rows = [r for r in report["rows"] if r["case"] == "inverse_kinematics[random targets]"]
     assert len(ik_rows) == 2
     for row in ik_rows:
         assert 0.9 <= row["success"] <= 1.0 and row["pinocchio"]["status"] == "none"
+        assert 0.0 <= row["error_median"] <= row["error_max"]
+        assert row["error_median"] <= 1e-6 + 2e-8  # most targets reached: the median one too
+        if row["success"] == 1.0:
+            assert row["error_max"] <= 1e-6 + 2e-8
         rtb = row["peers"]["roboticstoolbox"]
         if report["robots"][0]["peers"]["roboticstoolbox"]["loaded"]:
             assert rtb["status"] == "ok" and 0.0 <= rtb["success"] <= 1.0
+            assert 0.0 <= rtb["error_median"] <= rtb["error_max"]
 
 
 def test_ikpy_poses_agree(quick_run):

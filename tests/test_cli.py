@@ -53,6 +53,7 @@ def test_pose_names_only_the_parameterizations_asked_for(capsys):
     assert "None" not in out
 
 
+@pytest.mark.slow
 def test_a_reader_that_leaves_early_is_not_an_error():
     code = "import sys; from kinengine.cli import main; sys.exit(main(sys.argv[1:]))"
     run = subprocess.run(

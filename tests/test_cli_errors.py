@@ -13,6 +13,8 @@ import pytest
 from kinengine.cli import main
 from kinengine.cli.arguments import one_line, printable
 
+pytestmark = pytest.mark.slow  # the CLI in subprocesses
+
 REPO = Path(__file__).resolve().parents[1]
 
 

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # mkdocs build --strict
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

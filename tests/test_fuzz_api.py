@@ -29,6 +29,8 @@ from kinengine import KinematicsError, KinematicSingularityError
 from kinengine.cli import main
 from kinengine.cli.main import build_parser
 
+pytestmark = pytest.mark.slow  # hypothesis over every public method
+
 ROBOT = kinengine.load("abb_irb120")
 Q0 = ROBOT.neutral()
 

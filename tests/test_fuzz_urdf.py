@@ -27,6 +27,8 @@ import kinengine
 from kinengine.model import catalog_entry, shipped_robots_dir
 from kinengine.reference import ReferenceKinematics
 
+pytestmark = pytest.mark.slow  # hypothesis over mutated URDFs
+
 SEED_TEXTS = tuple(p.read_text(encoding="utf-8") for p in sorted(shipped_robots_dir().glob("*/*.urdf"))) + (
     catalog_entry("panda").path.read_text(encoding="utf-8"),
 )

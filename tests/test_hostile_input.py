@@ -24,6 +24,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # one subprocess per hostile case
+
 ADDRESS_SPACE = 1024**3  # [bytes] RLIMIT_AS of each child; measured peaks: 0.20 GiB, 0.57 GiB for the largest
 TIMEOUT = 60.0  # [s] per child
 REPO = Path(__file__).resolve().parents[1]

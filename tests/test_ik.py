@@ -28,6 +28,7 @@ def _within_limits(robot, q):
     return bool(np.all(q >= robot.lower_limits) and np.all(q <= robot.upper_limits))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["abb_irb120", "ur5", "panda"])
 def test_acceptance_1000_random_reachable_targets(name):
     robot = kinengine.load(name)
@@ -324,7 +325,7 @@ def test_every_entry_of_a_pose_target_is_checked(abb):
 def test_stalled_attempts_give_way_after_stall_from_iterations(abb):
     """A target 5 m away (the IRB 120 reaches 0.58 m): no attempt's error shrinks by 20 % in 3 iterations, so
     each one but the last gives way after STALL_FROM iterations and the last runs out max_iterations."""
-    from kinengine.control import ik_solver
+    from kinengine.control import ik_step
     from kinengine.control.ik_seeds import first_seeds
     from kinengine.control.ik_target import checked_problem
 
@@ -334,7 +335,7 @@ def test_stalled_attempts_give_way_after_stall_from_iterations(abb):
     problem = checked_problem(abb, None, None, None, 1e-6, 1e-6, 50, 2, None, 0.1, 1e-6, False)
     attempts = first_seeds(abb, problem, T[None, :3, 3], T[None, :3, :3], None).shape[1] + 2
     assert not result.success
-    assert result.iterations == (attempts - 1) * ik_solver.STALL_FROM + 50
+    assert result.iterations == (attempts - 1) * ik_step.STALL_FROM + 50
     ep, _ = _pose_errors(abb, result.q, "tool0", T)
     assert ep == pytest.approx(result.position_error, rel=1e-9) and ep > 4.0
 
@@ -357,9 +358,9 @@ def test_a_full_pose_step_equals_the_explicitly_weighted_six_row_step(abb):
     """A full pose's least squares weights the rotation rows by ROTATION_ROW_WEIGHT (done on the damping
     diagonal, in the frame F); the six rows in the target frame with weights w = (1, 1, 1, ρ², ρ², ρ²) take
     the same steps in another frame and another code path, so both end on the same q, attempt and count."""
-    from kinengine.control import ik_solver
+    from kinengine.control import ik_step
 
-    rho_sq = ik_solver.ROTATION_ROW_WEIGHT**2
+    rho_sq = ik_step.ROTATION_ROW_WEIGHT**2
     targets = abb.frame_pose(abb.random_configuration(np.random.default_rng(3), size=30))
     for i, T in enumerate(targets):
         full = inverse_kinematics(abb, T, rng=i, method="numeric")

@@ -6,7 +6,6 @@ solution, attempts run at once resolved as if run one after another, and the col
 from __future__ import annotations
 
 import numpy as np
-import pinocchio as pin
 import pytest
 from scipy.spatial.transform import Rotation
 
@@ -93,30 +92,44 @@ def test_single_targets_in_a_batch_of_one_and_q0_batches():
     np.testing.assert_allclose(exact.q, q, atol=1e-12)
 
 
-def test_column_wise_cholesky_equals_numpy_solve():
+def _explicit_step(q, J, e, inverse_w, diagonal, z):
+    """Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + diag(d))⁺ (e − J z) + z for one column, written out (pseudo-inverse)."""
+    A = (J * inverse_w) @ J.T + np.diag(diagonal)
+    return q + (J * inverse_w).T @ np.linalg.pinv(A) @ (e - J @ z) + z
+
+
+@pytest.mark.parametrize("r", [40, 300])  # numpy's solve, the column-wise Cholesky factorization
+def test_the_batched_step_is_the_damped_least_squares_formula_also_for_singular_systems(r):
+    """take_steps over columns equals the written-out step of each column, including columns whose system
+    is not positive definite (J = 0 with no damping, a frame no joint moves at λ_min = 0: exactly singular,
+    the step is the least-squares one; a negative diagonal: indefinite, which a Cholesky factorization
+    refuses: those columns are solved again by numpy), every result finite."""
+    from kinengine.control.ik_step import take_steps
+
     rng = np.random.default_rng(35)
-    for m in (1, 3, 5, 6):
-        J = rng.normal(size=(50, m, 7))
-        A = J @ J.transpose(0, 2, 1) + 1e-3 * np.eye(m)
-        b = rng.normal(size=(50, m))
-        x = ik_batch._cholesky_solve(np.ascontiguousarray(A.transpose(1, 2, 0)), np.ascontiguousarray(b.T))
-        np.testing.assert_allclose(x.T, np.linalg.solve(A, b[..., None])[..., 0], rtol=1e-8, atol=1e-10)
-
-
-def test_column_wise_log3_equals_pinocchio_including_near_pi():
-    rng = np.random.default_rng(36)
-    C_d = Rotation.random(200, random_state=rng).as_matrix()
-    C = Rotation.random(200, random_state=rng).as_matrix()
-    axes = Rotation.random(40, random_state=rng).as_rotvec()
-    axes /= np.linalg.norm(axes, axis=1)[:, None]
-    angles = np.concatenate((np.pi - np.geomspace(1e-9, 0.3, 20), np.geomspace(1e-12, 1e-3, 20)))
-    C[:40] = Rotation.from_rotvec(-axes * angles[:, None]).as_matrix() @ C_d[:40]  # C_d Cᵀ: angle θ
-    out = np.empty((3, 200))
-    ik_batch._log3_columns(
-        np.ascontiguousarray(C_d.transpose(1, 2, 0)), np.ascontiguousarray(C.transpose(1, 2, 0)), out
-    )
-    expected = np.array([pin.log3(a @ b.T) for a, b in zip(C_d, C, strict=True)])
-    np.testing.assert_allclose(out.T, expected, atol=1e-9)
+    for m in (3, 6):
+        dof = 7
+        J, e = rng.normal(size=(m, dof, r)), rng.normal(size=(m, r))
+        J[:, :, 0] = 0.0  # no joint moves the frame ...
+        diagonal = np.abs(rng.normal(size=(m, r)))
+        diagonal[:, 0] = 0.0  # ... and no damping: A = 0
+        diagonal[:, 1] = -0.5  # indefinite (not positive definite)
+        q, inverse_w = rng.normal(size=(dof, r)), rng.uniform(0.2, 1.0, size=(dof, r))
+        q_ns = rng.normal(size=dof)
+        buffers = (np.empty((6, dof, r)), np.empty(36 * r))
+        for pull in (None, q_ns):
+            z = (
+                np.zeros((dof, r))
+                if pull is None
+                else 0.1 * np.minimum(1.0, 0.02 / 5e-2) * (q_ns[:, None] - q)
+            )
+            out = take_steps(q, J, e, inverse_w, diagonal, (pull, 0.1, np.full(r, 0.02)), buffers)
+            assert np.isfinite(out).all()
+            for n in range(r):
+                expected = _explicit_step(
+                    q[:, n], J[..., n], e[:, n], inverse_w[:, n], diagonal[:, n], z[:, n]
+                )
+                np.testing.assert_allclose(out[:, n], expected, rtol=1e-7, atol=1e-9)
 
 
 def test_large_batches_are_solved_in_chunks_with_the_same_results(monkeypatch):

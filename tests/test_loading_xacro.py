@@ -210,6 +210,7 @@ def test_plain_urdf_keeps_packages_for_package_uris(workspace, tmp_path):
 
 
 # -- command line ----------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_cli_info_on_a_xacro_in_a_subprocess(workspace):
     run = subprocess.run(
         [

@@ -253,6 +253,7 @@ def test_mimic_limits_that_leave_a_range_are_enforced():
 
 
 # -- hypothesis: random trees with every mimic shape -------------------------------------------------
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(random_urdfs(max_links=7), st.integers(0, 2**32 - 1))
 def test_random_trees_with_mimic_shapes_match_the_reference_and_finite_differences(text, seed):

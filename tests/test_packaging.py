@@ -29,6 +29,8 @@ import pytest
 
 import kinengine
 
+pytestmark = pytest.mark.slow  # builds the sdist and wheel and installs them into a fresh venv
+
 REPO = Path(__file__).resolve().parents[1]
 SHIPPED_ROBOTS = sorted(p.parent.name for p in (REPO / "robots").glob("*/*.urdf") if p.stem == p.parent.name)
 

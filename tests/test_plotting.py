@@ -125,6 +125,7 @@ def test_show_bad_arguments_are_argparse_errors_before_any_work(args, message, c
     assert len(err.splitlines()) == 1 and message in err
 
 
+@pytest.mark.slow
 def test_importing_kinengine_and_its_cli_does_not_import_matplotlib():
     code = "import sys, kinengine, kinengine.cli; print('matplotlib' in sys.modules)"
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

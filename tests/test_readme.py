@@ -1,5 +1,5 @@
 """The README and the documentation site stay true: their Python examples run, and CI runs the
-README's test command verbatim.
+README's test command (in its quick and slow steps).
 
 README blocks run one by one, each in a fresh namespace. A docs page's blocks run top to bottom in one
 namespace (a later block may use an earlier block's names), in a temporary working directory. In both,
@@ -77,12 +77,18 @@ def test_docs_python_examples_run(page, recwarn, tmp_path, monkeypatch):
         _run_block(block, namespace, f"docs/{page}")
 
 
-def test_ci_runs_the_readme_test_command_verbatim():
+def test_ci_runs_the_readme_test_command_as_its_quick_and_slow_steps():
+    """.ci/run installs as the README's test command does and runs its tests in two steps, the quick ones
+    and the slow ones (marker ``slow``), which together are every test the README's command runs."""
     commands = re.search(r"```bash\n(.*?)\n(.*?)\n```", README, flags=re.S)
     assert commands, "the README must open with a bash block of two commands"
     install_and_run, install_and_test = commands.group(1), commands.group(2)
     assert "kinengine" in install_and_run and "pip install ." in install_and_run
-    assert install_and_test in (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    install, test = install_and_test.rsplit(" && ", 1)
+    assert test == ".venv/bin/pytest -q"
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
+    assert install in ci
+    assert ci[ci.index(install) + 1 :][:2] == [f'{test} -m "not slow"', f"{test} -m slow"]
     assert README.index("```bash") < 200, "the two commands must be the README's first lines"
 
 

@@ -426,6 +426,7 @@ def test_pinocchio_visits_sibling_joints_in_name_order_not_file_order():
     _assert_matches_pinocchio(text, _samples(3, 2, seed=7), atol=1e-12)
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(random_urdfs(max_links=8), st.integers(0, 2**32 - 1))
 def test_random_urdfs_match_pinocchio(text, seed):

@@ -33,6 +33,8 @@ from kinengine import (
 from kinengine.errors import ResourceLimitError
 from kinengine.urdf import Limits
 
+pytestmark = pytest.mark.slow  # threads, processes and memory caps
+
 REPO = Path(__file__).resolve().parents[1]
 LIMIT = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
 

@@ -28,6 +28,8 @@ from kinengine.errors import KinematicsError
 from kinengine.presentation import viewer_scene
 from kinengine.presentation.viewer import view
 
+pytestmark = pytest.mark.slow  # drives the viewer in a real browser
+
 # Every test but the first needs the [view] extra (viser, pycollada for the DAE meshes).
 needs_view = pytest.mark.skipif(
     importlib.util.find_spec("viser") is None or importlib.util.find_spec("collada") is None,

@@ -31,10 +31,8 @@ kinengine.control.manipulability.DEFAULT_TOLERANCE, taken relative to the larges
 
 def check_on_singularity(on_singularity: object) -> bool:
     """True for "nan", False for "raise"; OptionError otherwise."""
-    if on_singularity == "nan":
-        return True
-    if on_singularity == "raise":
-        return False
+    if isinstance(on_singularity, str) and on_singularity in ON_SINGULARITY:
+        return on_singularity == "nan"
     raise OptionError(f"on_singularity must be 'raise' or 'nan', got {on_singularity!r}")
 
 

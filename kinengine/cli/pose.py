@@ -23,7 +23,7 @@ def _run(args: argparse.Namespace) -> int:
     analytic = args.rotation is not None or args.position != "cartesian"
     if analytic:
         labels = parameter_labels(args.position, args.rotation)
-        chi = robot.pose_parameters(q, frame, args.position, args.rotation)
+        chi = robot.pose_parameters(q, frame, args.position, args.rotation, on_singularity=None)
         JA = robot.analytic_jacobian(q, frame, args.position, args.rotation)
     np.set_printoptions(precision=5, suppress=True, linewidth=120)
     print(f"robot {printable(robot.name)} ({robot.dof} dof), frame {printable(frame)!r}")

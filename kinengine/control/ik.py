@@ -16,8 +16,8 @@ that ranks seeds and attempts), λ² = ``DAMPING_SCALE``·(|e_p|² + ρ²|e_R|²
 by Cholesky (least squares where the matrix is not positive definite),
 with z = gain·min(1, score/NULLSPACE_FADE) · (q_ns − q) pulling towards ``nullspace_target`` in the
 (damped) nullspace of J.
-Joint limits: every iterate is clipped into them, and Chan & Dubey's weights W (:class:`LimitWeights`)
-slow joints that approach a limit.
+Joint limits: every iterate is clipped into them, and Chan & Dubey's weights W
+(:class:`.ik_step.LimitWeights`) slow joints that approach a limit.
 Seeds, in order, one attempt each of at most ``max_iterations`` iterations (an attempt whose error
 is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations, or from iteration ``STALL_FROM`` on above
 ``STALL_RATIO`` × its error ``STALL_SPAN`` iterations earlier, makes way for the next seed):
@@ -43,13 +43,13 @@ from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, first_seeds
 from .ik_solver import IKResult, solve_one
 from .ik_target import Options, RandomSource, batch_targets, checked_problem, single_target
 
-if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..robot import Robot
+if TYPE_CHECKING:  # named for the checker only
     from .ik_batch import IKBatchResult
+    from .robot_like import RobotLike
 
 
 def inverse_kinematics(
-    robot: Robot,
+    robot: RobotLike,
     target: npt.ArrayLike | Mapping[str, npt.ArrayLike],
     frame: str | None = None,
     q0: object = None,

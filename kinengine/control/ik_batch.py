@@ -4,16 +4,16 @@ The algorithm of :mod:`kinengine.control.ik` (same error, damping, limit weights
 give-up rules and tolerances), each iteration done for every attempt still running, held column-wise
 (q (dof, r), J (6, dof, r), ...: every numpy call runs over r contiguous entries): poses and
 Jacobians J_e0 from the batch chain (:mod:`kinengine.kinematics.batch`, written straight into reused
-column buffers), the rotation errors log(C_d Cᵀ) in closed form, and the damped least-squares systems
-(m, m, r) by a column-wise Cholesky factorization (LAPACK for few columns). Attempts that end
-(converged, given up, out of iterations) are compacted away, and the target's next attempt starts (its
-seed looked up only then: :class:`~kinengine.control.ik_seeds.BatchSeeds`). When few attempts are left
-running (SPECULATE), each target runs several of its next attempts at the same time; every target's
+column buffers), the rotation errors log(C_d Cᵀ) from the rotation-vector parameterization, and the step
+of :func:`kinengine.control.ik_step.take_steps` (numpy's stacked solve of the (m, m) systems). Attempts
+that end (converged, given up, out of iterations) are compacted away, and the target's next attempt starts
+(its seed looked up only then: :class:`~kinengine.control.ik_seeds.BatchSeeds`). When few attempts are
+left running (SPECULATE), each target runs several of its next attempts at the same time; every target's
 outcome is then taken from its attempts in order (:func:`_resolve`): the same q, success, iteration
 count and restarts as if the attempts had run one after another. The last few attempts that never give
 way (TAIL) are rerun from their starts by the single solver. Floating point differs from the single
-solver's (the batch chain's Jacobian, Cholesky), so the two agree in convergence and tolerance, not bit
-for bit; random restarts draw from ``rng`` in a different order.
+solver's (the batch chain's Jacobian, LU instead of Cholesky), so the two agree in convergence and
+tolerance, not bit for bit; random restarts draw from ``rng`` in a different order.
 
 The result is an :class:`IKBatchResult`: arrays over the batch (``q`` (N, dof), ``success`` (N,), ...),
 and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``list(result)``).
@@ -29,24 +29,26 @@ import numpy as np
 import pinocchio as pin
 
 from ..kinematics import batch
-from . import ik_solver as rules  # the single solver's constants, followed here
+from ..parameterizations import ROTATION_PARAMETERIZATIONS
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
-from .ik_solver import IKResult, LimitWeights, limit_weights, solve_one
+from .ik_solver import IKResult, solve_one
+from .ik_step import POSE_ROW_DAMPING, STALL_SPAN, LimitWeights, damping, gives_way, limit_weights, take_steps
 from .ik_target import Problem, RandomSource
 
-if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..robot import Robot
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
 
 TAIL = 4
 """When no more columns than this are left, all of them attempts that never give way (the last ones), the
 single-target solver runs each again from its start (~15 µs an iteration, a batch iteration ~125 µs)."""
-LAPACK_BELOW = 256
-"""Fewer columns than this solve their damped systems by np.linalg.solve, more by the column-wise Cholesky."""
 SPECULATE = 1024
 """When no more attempts than this are running, targets run their next ones at the same time (up to this
 many in all): a batch iteration costs about the same for one column as for a few hundred."""
 CHUNK_TARGETS = 65536
 """Larger batches are solved in chunks of this many targets (bounded buffers: ~1.6 KiB a target)."""
+
+log_rotation = ROTATION_PARAMETERIZATIONS["rotation_vector"].from_rotation
+"""log(C) (N, 3) [rad] of rotations C (N, 3, 3): the rotation vector, θ in [0, π]."""
 
 
 @dataclass(frozen=True)
@@ -86,7 +88,12 @@ class IKBatchResult:
 
 
 def solve_batch(
-    robot: Robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None, rng: RandomSource
+    robot: RobotLike,
+    problem: Problem,
+    p_d: np.ndarray,
+    C_d: np.ndarray,
+    q0: np.ndarray | None,
+    rng: RandomSource,
 ) -> IKBatchResult:
     """Solve every target (p_d (N, 3), C_d (N, 3, 3)) vectorized; see the module doc."""
     kin, joints, dof, n, c = robot.engine, robot.engine.coordinates, robot.dof, len(p_d), CHUNK_TARGETS
@@ -101,13 +108,16 @@ def solve_batch(
     tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
     lower, upper = joints.lower[:, None], joints.upper[:, None]
     limits = limit_weights(robot.engine)
+    # a full pose's rotation rows are weighted by ρ: |S e|² in the damping, λ² S⁻² on A's diagonal (ik_step)
+    row_damping = POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
+    row_weight_sq = 1.0 / row_damping  # S²
     winner = np.full(n, attempts, dtype=np.intp)  # each target's first converged attempt (none yet)
     launched = np.zeros(n, dtype=np.intp)  # attempts started so far
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
     # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
     # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
-    # iterations (newest first), the target's p_d (3) and C_d (9), the attempt's start (dof)
-    H, P, S = 2 * dof, 2 * dof + rules.STALL_SPAN, 2 * dof + rules.STALL_SPAN + 12  # history, p_d, start
+    # iterations (oldest first), the target's p_d (3) and C_d (9), the attempt's start (dof)
+    H, P, S = 2 * dof, 2 * dof + STALL_SPAN, 2 * dof + STALL_SPAN + 12  # history, p_d, start
     meta, state = np.empty((3, 0), dtype=np.intp), np.empty((S + dof, 0))
     space = _Workspace(max(n, SPECULATE), dof)
     new = np.arange(n)
@@ -146,7 +156,7 @@ def solve_batch(
         )
         e = np.empty((6, r))
         np.subtract(pd, T[:3, 3], out=e[:3])
-        _log3_columns(Cd, T[:3, :3], e[3:])
+        e[3:] = log_rotation(np.einsum("ikn,jkn->nij", Cd, T[:3, :3]), warn=False).T  # log(C_d Cᵀ)
         if rows is None:
             err, (ep, er) = e, np.sqrt(np.einsum("kin,kin->kn", e.reshape(2, 3, r), e.reshape(2, 3, r)))
         else:
@@ -156,10 +166,8 @@ def solve_batch(
             err = e_d if sqrt_w is None else e_d * sqrt_w[:, None]
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
-        stalled = (it >= rules.STALL_FROM) & (score > rules.STALL_RATIO * history[-1])  # STALL_SPAN earlier
-        gives_way = ((it == rules.PROBE_ITERATIONS) & (score > rules.GIVE_UP) | stalled) & ~patient
-        end = done | (it == max_iterations) | gives_way
-        history[1:], history[0] = history[:-1].copy(), score  # newest first
+        end = done | (it == max_iterations) | (gives_way(it, score, history) & ~patient)
+        history[:-1], history[-1] = history[1:].copy(), score  # oldest first
         ended = np.empty(0, dtype=np.intp)
         if end.any():
             log.append((tid[end], att[end], it[end], score[end], ep[end], er[end], q[:, end].T))
@@ -176,7 +184,11 @@ def solve_batch(
             w = None
             if limits.any:
                 w, state[dof:H] = limits.inverse_weights(q, state[dof:H])
-            np.clip(_step(J, w, err, score, q, problem, space), lower, upper, out=q)
+            squared = row_weight_sq @ (err * err)  # |S e|²
+            diagonal = row_damping[:, None] * damping(squared, problem.damping_sq)
+            nullspace = (problem.q_ns, problem.gain, score)
+            step = take_steps(q, J, err, w, diagonal, nullspace, space.buffers)
+            np.clip(step, lower, upper, out=q)
             meta[2] += 1
         # next attempts: one per target that needs one; when few columns run, several at once per target
         # (_resolve takes the outcomes in attempt order, as if the attempts had run one after another)
@@ -211,97 +223,21 @@ def _resolve(
     return IKBatchResult(best_q, success, total, ep[first], er[first], att[first])
 
 
-def _log3_columns(Cd: np.ndarray, C: np.ndarray, out: np.ndarray) -> None:
-    """log(C_d Cᵀ) (3, r) into ``out`` for columns of rotations Cd, C (3, 3, r): θ = atan2(|w|/2, (tr − 1)/2),
-    log = θ·w/|w| with w = vee(C_d Cᵀ − C C_dᵀ) = Σ_k c_k × d_k (c_k, d_k the k-th columns of C and C_d) and
-    tr(C_d Cᵀ) = Σ C_d∘C; Pinocchio's log3 column by column where θ is within 0.15 rad of π."""
-    roll, back = [1, 2, 0], [2, 0, 1]
-    w = np.einsum("ikn,ikn->in", Cd[back], C[roll]) - np.einsum("ikn,ikn->in", Cd[roll], C[back])
-    norm = np.sqrt(np.einsum("in,in->n", w, w))
-    cos = 0.5 * (np.einsum("ikn,ikn->n", Cd, C) - 1.0)
-    theta = np.arctan2(0.5 * norm, cos)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        np.multiply(w, np.where(norm > 1e-12, theta / norm, 0.5), out=out)
-    for i in np.flatnonzero(cos < -0.988).tolist():  # near π the axis from w is inaccurate
-        out[:, i] = pin.log3(Cd[..., i] @ C[..., i].T)
-
-
 class _Workspace:
     """Buffers for up to ``capacity`` columns reused from iteration to iteration (fresh arrays of a few MiB
-    cost a page fault per 4 KiB): poses, two Jacobians (compacted one into the other), J W⁻¹ and A."""
+    cost a page fault per 4 KiB): poses, two Jacobians (compacted one into the other), and the step's
+    J W⁻¹ and A (``buffers``)."""
 
     def __init__(self, capacity: int, dof: int) -> None:
         self.capacity, self.pose = capacity, np.empty((4, 4, capacity))
         self.jac, self.spare = np.empty((6, dof, capacity)), np.empty((6, dof, capacity))
-        self.weighted, self.normal = np.empty((6, dof, capacity)), np.empty((6, 6, capacity))
+        self.buffers = (np.empty((6, dof, capacity)), np.empty(36 * capacity))
 
     def compact(self, J: np.ndarray, keep: np.ndarray) -> np.ndarray:
         """J's kept columns, in the spare Jacobian buffer (which becomes the next iteration's)."""
         out = np.compress(keep, J, axis=2, out=self.spare[..., : int(keep.sum())])
         self.jac, self.spare = self.spare, self.jac
         return out
-
-
-def _step(
-    J: np.ndarray,
-    w: np.ndarray | None,
-    err: np.ndarray,
-    score: np.ndarray,
-    q: np.ndarray,
-    problem: Problem,
-    space: _Workspace,
-) -> np.ndarray:
-    """q + Δq for every column (J (m, dof, r), err (m, r), q (dof, r)): weighted damped least squares
-    (and the nullspace pull) as the single solver's, A = J W⁻¹ Jᵀ + λ² I by Cholesky."""
-    m, r = len(J), J.shape[2]
-    JW = J if w is None else np.multiply(J, w, out=space.weighted[:m, :, :r])  # J W⁻¹
-    A = space.normal[:m, :m, :r]
-    if r < LAPACK_BELOW:
-        np.einsum("ikn,jkn->ijn", JW, J, out=A)
-    else:  # the lower triangle only: the Cholesky factorization reads no more
-        for i in range(m):
-            np.einsum("kn,jkn->jn", JW[i], J[: i + 1], out=A[i, : i + 1])
-    # a full pose's rotation rows weighted by ρ = ROTATION_ROW_WEIGHT (as the single solver): λ² =
-    # DAMPING_SCALE·(|e_p|² + ρ²|e_R|²) + λ_min², and A's diagonal takes λ²·(1, 1, 1, ρ⁻², ρ⁻², ρ⁻²)
-    rho = rules.ROTATION_ROW_WEIGHT if problem.rows is None else 1.0
-    squared = np.einsum("in,in->n", err, err)
-    if rho != 1.0:
-        squared += (rho**2 - 1.0) * np.einsum("in,in->n", err[3:], err[3:])
-    damping = rules.DAMPING_SCALE * squared + problem.damping_sq
-    for i in range(len(A)):
-        A[i, i] += damping if i < 3 else damping / rho**2
-    z = None
-    if problem.q_ns is not None:
-        z = (problem.gain * np.minimum(1.0, score / rules.NULLSPACE_FADE)) * (problem.q_ns[:, None] - q)
-        err = err - np.einsum("ijn,jn->in", J, z)
-    if r < LAPACK_BELOW:  # LAPACK per (m, m) system: ~1 µs each, against ~80 µs of calls for Cholesky
-        y = np.linalg.solve(A.transpose(2, 0, 1), err.T[..., None])[..., 0].T
-    else:
-        y = _cholesky_solve(A, err)
-    return q + np.einsum("ijn,in->jn", JW, y) + (0.0 if z is None else z)
-
-
-def _cholesky_solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """x with A x = b for columns of symmetric positive definite A (m, m, r), b (m, r): A = L Lᵀ (L
-    overwrites A's lower triangle), then the two triangular solves, each step over every column at once
-    (pivots floored at 1e-300)."""
-    m, L = len(A), A
-    inverse = np.empty_like(b)  # 1 / L_jj
-    for j in range(m):
-        pivot = A[j, j] - np.einsum("kn,kn->n", L[j, :j], L[j, :j]) if j else A[j, j]
-        inverse[j] = 1.0 / np.sqrt(np.maximum(pivot, 1e-300))
-        if j + 1 < m:
-            column = A[j + 1 :, j] - np.einsum("ikn,kn->in", L[j + 1 :, :j], L[j, :j]) if j else A[1:, 0]
-            L[j + 1 :, j] = column * inverse[j]
-    x = np.empty_like(b)  # y of L y = b, then overwritten from the bottom up by x of Lᵀ x = y
-    for i in range(m):
-        x[i] = (b[i] - np.einsum("kn,kn->n", L[i, :i], x[:i]) if i else b[i]) * inverse[i]
-    for i in range(m - 1, -1, -1):
-        if i + 1 < m:
-            x[i] = (x[i] - np.einsum("kn,kn->n", L[i + 1 :, i], x[i + 1 :])) * inverse[i]
-        else:
-            x[i] *= inverse[i]
-    return x
 
 
 __all__ = ["IKBatchResult", "solve_batch"]

@@ -5,7 +5,7 @@ error is the single-frame one (:mod:`kinengine.control.ik`): e_F = (p_d − p, l
 or, with ``rows=``/``weights=``, e_D = (C_dᵀ e_p, C_dᵀ e_R) in the frame's target frame D, kept rows only,
 each times √w. Its Jacobian is J_F = J_e0 ("local_world_aligned", folded with the coordinate map M for
 mimic robots), rotated and cut the same way. The solver stacks them, e = (e_F1, e_F2, ...),
-J = (J_F1; J_F2; ...), and takes the single-frame step (:func:`.ik_solver.take_step`): Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ +
+J = (J_F1; J_F2; ...), and takes the single-frame step (:func:`.ik_step.take_step`): Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ +
 λ² S⁻²)⁻¹ e (+ the nullspace pull), S weighting a full pose's rotation rows by 0.2 m/rad, λ² =
 DAMPING_SCALE·(weighted |e|²) + λ_min², Chan & Dubey's limit weights W, every iterate clipped into the limits.
 Success: EVERY frame within ``tol_position`` [m] and ``tol_rotation`` [rad]. Attempts are ranked by
@@ -29,12 +29,13 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError, ParameterizationError
+from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT, first_seeds
-from .ik_solver import DAMPING_SCALE, ROTATION_ROW_WEIGHT, IKResult, gives_way, limit_weights, take_step
+from .ik_solver import IKResult
 from .ik_target import Options, Problem, RandomSource, checked_problem, single_target
 
-if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..robot import Robot
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
 
 
 @dataclass(frozen=True)
@@ -73,7 +74,7 @@ def _per_frame(name: str, value: object, frames: Mapping[str, object]) -> dict[s
 
 
 def checked_goals(
-    robot: Robot, target: Mapping[Any, Any], rows: object, weights: object, options: Options
+    robot: RobotLike, target: Mapping[Any, Any], rows: object, weights: object, options: Options
 ) -> list[FrameGoal]:
     """Each frame's target and options checked (OptionError, FrameNotFoundError, ParameterizationError)."""
     if not target:
@@ -106,7 +107,7 @@ def checked_goals(
     return goals
 
 
-def _seeds(robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None) -> np.ndarray:
+def _seeds(robot: RobotLike, goals: list[FrameGoal], q0: np.ndarray | None) -> np.ndarray:
     """The seeded attempts' starts (S, dof): q0, or the stored seeds nearest any frame's target ranked by
     Σ_F (|Δp| + 0.2·‖ΔC‖_F/√2) over the frames' kept rows (‖ΔC‖_F/√2 = 2 sin(θ/2) ≈ θ, the metric of
     the stored tables), then the middle of the ranges (or the nullspace target)."""
@@ -148,7 +149,7 @@ def _layout(goals: list[FrameGoal]) -> list[tuple]:
 
 
 def solve_frames(
-    robot: Robot, goals: list[FrameGoal], q0: np.ndarray | None, generator: RandomSource
+    robot: RobotLike, goals: list[FrameGoal], q0: np.ndarray | None, generator: RandomSource
 ) -> MultiIKResult:
     """Attempts from each seed, then ``restarts`` random ones; the first that brings every frame within
     the tolerances (or the best by Σ_F score) wins. The linear algebra is the single-frame solver's
@@ -177,13 +178,13 @@ def solve_frames(
     m = layout[-1][4]
     err, J, e, A = np.empty(m), np.empty((m, robot.dof)), np.empty(6), np.empty((m, m))
     e_p, e_r = e[:3], e[3:]  # views
-    limits = limit_weights(kin)
+    limits = step.limit_weights(kin)
     weigh, bounds = limits.inverse_weights_one if limits.any else None, (lower, upper)
-    rotation_sq = ROTATION_ROW_WEIGHT**2  # a full pose's rotation rows weigh ρ, as in the single solver:
+    rotation_sq = step.ROTATION_ROW_WEIGHT**2  # a full pose's rotation rows weigh ρ, as in the single solver:
     row_damping = np.ones(m)  # (J W⁻¹Jᵀ + λ² S⁻²) with S = diag(1, 1, 1, ρ, ρ, ρ) on those blocks
     for _, _, _, start, stop, S, _, _ in layout:
         if S is None:
-            row_damping[start + 3 : stop] = 1.0 / rotation_sq
+            row_damping[start:stop] = step.POSE_ROW_DAMPING
     best, total = None, 0
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
@@ -213,7 +214,11 @@ def solve_frames(
                 per_frame.append((ep, er))
                 score += ep + SEED_ROTATION_WEIGHT * er
                 done = done and ep <= tol_p and er <= tol_r
-            if done or iteration == max_iterations or (not last and gives_way(iteration, score, history)):
+            if (
+                done
+                or iteration == max_iterations
+                or (not last and step.gives_way(iteration, score, history))
+            ):
                 break
             history.append(score)
             iteration += 1
@@ -227,8 +232,10 @@ def solve_frames(
                     J[start:stop] = S @ J_F
                 else:
                     J[start:stop] = (S @ J_F) * sqrt_w[:, None]
-            damping = (DAMPING_SCALE * squared + damping_sq) * row_damping
-            previous = take_step(q, J, err, A, damping, weigh, previous, bounds, (q_ns, gain, score), dposv)
+            diagonal = step.damping(squared, damping_sq) * row_damping
+            previous = step.take_step(
+                q, J, err, A, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
+            )
         total += iteration
         if best is None or score < best[2]:
             best = (q, per_frame, score, attempt, done)
@@ -243,7 +250,7 @@ def solve_frames(
 
 
 def inverse_kinematics_frames(
-    robot: Robot,
+    robot: RobotLike,
     target: Mapping[Any, Any],
     q0: object,
     rows: object,

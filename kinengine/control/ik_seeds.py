@@ -14,8 +14,8 @@ import numpy as np
 
 from .ik_target import Problem
 
-if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..robot import Robot
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
 
 NEAREST_SEEDS = 10
 SEED_TABLE_SIZE = 4096
@@ -66,7 +66,7 @@ class SeedTables:
 
 
 def _seed_table(
-    robot: Robot,
+    robot: RobotLike,
     frame: str,
     use_p: bool,
     use_R: bool,
@@ -93,7 +93,7 @@ def _embed(p: np.ndarray | None, C: np.ndarray | None, n: int) -> np.ndarray:
     return np.hstack(parts) if parts else np.zeros((n, 1))
 
 
-def _default_start(robot: Robot, problem: Problem) -> np.ndarray:
+def _default_start(robot: RobotLike, problem: Problem) -> np.ndarray:
     """The seeded start that is not from a table: the middle of the joint ranges (0 for an unbounded joint),
     or the nullspace target clipped into the limits."""
     joints = robot.engine.coordinates
@@ -104,7 +104,7 @@ def _default_start(robot: Robot, problem: Problem) -> np.ndarray:
 
 
 def first_seeds(
-    robot: Robot, problem: Problem, p_d: np.ndarray | None, C_d: np.ndarray | None, q0: np.ndarray | None
+    robot: RobotLike, problem: Problem, p_d: np.ndarray | None, C_d: np.ndarray | None, q0: np.ndarray | None
 ) -> np.ndarray:
     """The seeded attempts' starts (N, S, dof) for targets p_d (N, 3) | None, C_d (N, 3, 3) | None."""
     joints = robot.engine.coordinates
@@ -135,7 +135,7 @@ class BatchSeeds:
     (target, attempt) pairs, each attempt < ``count``."""
 
     def __init__(
-        self, robot: Robot, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None
+        self, robot: RobotLike, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None
     ) -> None:
         joints, n = robot.engine.coordinates, len(p_d)
         self.given = (

@@ -1,50 +1,25 @@
 """The single-target IK solver: damped least squares iterations (see :mod:`kinengine.control.ik` for the
-error, the step and the seeds) from each seed in turn, with Chan & Dubey's joint-limit weights
-(:class:`LimitWeights`); returns an :class:`IKResult`.
+error and the seeds, :mod:`kinengine.control.ik_step` for the step, the damping, the joint-limit weights and
+the give-way rule) from each seed in turn; returns an :class:`IKResult`.
 
-Damping λ² = DAMPING_SCALE·|e|² + λ_min². An attempt other than the last gives way to the next seed when
-its score |e_p| + 0.2 m/rad·|e_R| is still above GIVE_UP after PROBE_ITERATIONS iterations, or when, from
-STALL_FROM iterations on, it has not fallen below STALL_RATIO × its value STALL_SPAN iterations earlier.
 A full pose target is iterated in the frame F itself (e_F = blockdiag(Cᵀ, Cᵀ) e, J_F likewise): the step
 and the norms are the same in any frame (Robot Dynamics lecture notes, ETH Zurich, §2.8)."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
+from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT
 from .ik_target import Problem, RandomSource
 
-if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..kinematics.engine import Kinematics
-    from ..robot import Robot
-
-PROBE_ITERATIONS = 10
-GIVE_UP = 1e-2
-"""[m] score |e_p| + 0.2 m/rad·|e_R| above which an attempt gives way after PROBE_ITERATIONS iterations."""
-STALL_FROM, STALL_SPAN, STALL_RATIO = 4, 3, 0.8
-"""From iteration STALL_FROM on, an attempt whose score is above STALL_RATIO × its score STALL_SPAN iterations
-earlier gives way (stuck on a joint limit or in a local minimum: such attempts crawl for max_iterations,
-and on 1,000 random targets they cost the ABB IRB 120 more iterations than the converging ones)."""
-DAMPING_SCALE = 0.1
-"""λ² = DAMPING_SCALE·|e|² + λ_min² (Sugihara's rule λ² = ½ eᵀW_E e + λ_min² with W_E = 0.2·I, e weighted as
-below): weaker than ½|e|², so the first steps from a stored seed go further."""
-ROTATION_ROW_WEIGHT = SEED_ROTATION_WEIGHT
-"""[m/rad] a full pose's rotation rows (error and Jacobian) are weighted by this in the least squares, which
-then minimizes |e_p|² + (0.2 m/rad·|e_R|)², the squared pose distance that ranks attempts and seeds
-(the step is Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e, S = diag(1, 1, 1, ρ, ρ, ρ)). With the stall rule and
-DAMPING_SCALE 0.1, against unweighted rows, ½|e|² and no stall rule, on 3 x 1,000 random targets
-(rng 31-33): 7.2 instead of 15.9 mean iterations on the ABB IRB 120 (UR5 7.9 / 15.8, Panda arm
-8.6 / 15.4), successes 3000, 2998, 2995 instead of 3000, 2996, 2993."""
-NULLSPACE_FADE = 5e-2
-"""[m] the nullspace pull is gain · min(1, score / this): full strength far from the target, fading with
-the error so that its second-order effect on the task (∝ |z|²) vanishes and the solve converges."""
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
 
 
 @dataclass(frozen=True)
@@ -66,109 +41,8 @@ class IKResult:
         )
 
 
-class LimitWeights:
-    """Chan & Dubey's weighted least norm: w_i = 1 + |∂φ/∂q_i| while joint i approaches a limit (|∂φ/∂q_i|
-    grew since the last iteration), else 1, with φ = Σ (u−l)² / (4 (u−q)(q−l)), so
-    ∂φ/∂q = (u−l)² (2q − u − l) / (4 (u−q)² (q−l)²); unbounded joints: 1.
-    ``continuous`` (dof,) bool, optional: kept as the indices of the joints a solution wraps into [-π, π)
-    (None if there are none)."""
-
-    def __init__(self, lower: np.ndarray, upper: np.ndarray, continuous: np.ndarray | None = None) -> None:
-        self.bounded = np.isfinite(lower) & np.isfinite(upper)
-        self.any = bool(self.bounded.any())
-        self.lower, self.upper = np.where(self.bounded, lower, -1.0), np.where(self.bounded, upper, 1.0)
-        self.middle_twice = self.lower + self.upper
-        self.quarter_span_sq = np.where(self.bounded, self.upper - self.lower, 0.0) ** 2 / 4  # 0: unbounded
-        columns = (self.lower, self.upper, self.middle_twice, self.quarter_span_sq)
-        self._rows = np.column_stack(columns).tolist()  # per joint (l, u, l + u, (u − l)²/4)
-        self.continuous = np.flatnonzero(continuous) if continuous is not None and continuous.any() else None
-
-    def wrap(self, q: np.ndarray) -> None:
-        """The continuous joints' angles of q (dof,) or (n, dof) into [-π, π), in place."""
-        turns = self.continuous
-        if turns is not None:
-            q[..., turns] = np.remainder(q[..., turns] + np.pi, 2 * np.pi) - np.pi
-
-    def inverse_weights(self, q: np.ndarray, previous: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(1 / w, |∂φ/∂q|) for columns q (dof, r) (one configuration a column, the batched solver's layout),
-        given |∂φ/∂q| of the last iteration (dof, r) (−1 where there is none: every joint weighted).
-        Distances to the limits are floored at 1e-12 (a joint on its limit gets a huge finite gradient,
-        weight ~0)."""
-        lower, upper = self.lower[:, None], self.upper[:, None]
-        distances = np.maximum(upper - q, 1e-12) * np.maximum(q - lower, 1e-12)
-        spread = np.abs(2 * q - self.middle_twice[:, None])
-        grad = self.quarter_span_sq[:, None] * spread / (distances * distances)
-        return np.where(grad > previous, 1.0 / (1.0 + grad), 1.0), grad
-
-    def inverse_weights_one(self, q: np.ndarray, previous: list | None) -> tuple[np.ndarray, list]:
-        """:meth:`inverse_weights` for one q (dof,) in plain floats (a dozen numpy calls on a 6-vector cost
-        more than the arithmetic); ``previous`` and the returned gradient are lists."""
-        grad: list[float] = []
-        append = grad.append
-        for qi, (lo, hi, mid2, quarter) in zip(q.tolist(), self._rows, strict=True):
-            du, dl = hi - qi, qi - lo
-            d = (du if du > 1e-12 else 1e-12) * (dl if dl > 1e-12 else 1e-12)
-            append(quarter * abs(2.0 * qi - mid2) / (d * d))
-        if previous is None:
-            return np.array([1.0 / (1.0 + g) for g in grad]), grad
-        inverse = [1.0 / (1.0 + g) if g > p else 1.0 for g, p in zip(grad, previous, strict=True)]
-        return np.array(inverse), grad
-
-
-def limit_weights(kin: Kinematics) -> LimitWeights:
-    """The robot's LimitWeights (its coordinates' limits and continuous joints), made once per robot."""
-    c = kin.coordinates
-    return kin.memoized("ik limit weights", lambda: LimitWeights(c.lower, c.upper, c.continuous))
-
-
-def gives_way(iteration: int, score: float, history: list[float]) -> bool:
-    """Whether an attempt other than the last makes way for the next seed at this iteration (its score
-    still above GIVE_UP after PROBE_ITERATIONS, or stalled: see STALL_FROM); ``history``: earlier scores."""
-    return (iteration == PROBE_ITERATIONS and score > GIVE_UP) or (
-        iteration >= STALL_FROM and score > STALL_RATIO * history[iteration - STALL_SPAN]
-    )
-
-
-def take_step(
-    q: np.ndarray,
-    J: np.ndarray,
-    err: np.ndarray,
-    A: np.ndarray,
-    damping: np.ndarray | float,
-    weigh: Callable[[np.ndarray, list | None], tuple[np.ndarray, list]] | None,
-    previous: list | None,
-    bounds: tuple[np.ndarray, np.ndarray],
-    nullspace: tuple[np.ndarray | None, float, float],
-    dposv: Callable[..., tuple],
-) -> list | None:
-    """One damped, limit-weighted step in place: q ← clip(q + W⁻¹Jᵀ A⁻¹ e (+ z), lower, upper) with
-    A = J W⁻¹Jᵀ + diag(damping) written into the (m, m) buffer ``A`` and solved by Cholesky (``dposv``; least
-    squares where it is not positive definite). ``weigh``: LimitWeights.inverse_weights_one (None: W = I),
-    ``previous`` its last gradient, which is returned for the next step. ``nullspace`` (q_ns, gain, score):
-    the pull z towards q_ns (None: none)."""
-    JW = J
-    if weigh is not None:
-        w, previous = weigh(q, previous)
-        JW = J * w
-    np.dot(JW, J.T, out=A)
-    A.reshape(-1)[:: len(A) + 1] += damping
-    q_ns, gain, score = nullspace
-    if q_ns is None:
-        _, x, info = dposv(A, err)
-        q += np.dot(JW.T, x if info == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
-    else:
-        z = (gain * min(1.0, score / NULLSPACE_FADE)) * (q_ns - q)
-        b = np.column_stack((err, J @ z))
-        _, x, info = dposv(A, b)
-        if info:
-            x = np.linalg.lstsq(A, b, rcond=None)[0]
-        q += JW.T @ (x[:, 0] - x[:, 1]) + z
-    np.minimum(np.maximum(q, bounds[0], out=q), bounds[1], out=q)
-    return previous
-
-
 def solve_one(
-    robot: Robot,
+    robot: RobotLike,
     problem: Problem,
     p_d: np.ndarray | None,
     C_d: np.ndarray | None,
@@ -209,12 +83,12 @@ def solve_one(
     target = pin.SE3(C_d, p_d) if full else None
     # Rows weighted by S = diag(1, 1, 1, ρ, ρ, ρ): (S J W⁻¹Jᵀ S + λ² I) x = S e is (J W⁻¹Jᵀ + λ² S⁻²)(S x) = e
     # with Δq = W⁻¹Jᵀ (S x): the weights only scale the damping on the diagonal.
-    rotation_sq = ROTATION_ROW_WEIGHT**2 if full else 1.0
-    row_damping = np.array([1.0, 1.0, 1.0] + [1.0 / rotation_sq] * 3) if full else 1.0
+    rotation_sq = step.ROTATION_ROW_WEIGHT**2 if full else 1.0
+    row_damping = step.POSE_ROW_DAMPING if full else 1.0
     subtract, hypot = np.subtract, math.hypot
     m = len(rows) if rows is not None else part.stop - part.start
     A = np.empty((m, m))
-    limits = limit_weights(kin)
+    limits = step.limit_weights(kin)
     weigh = limits.inverse_weights_one if limits.any else None
     bounds = (lower, upper)
     best, total = None, 0
@@ -254,7 +128,11 @@ def solve_one(
                 squared = float(err @ err)
             score = ep + SEED_ROTATION_WEIGHT * er
             done = ep <= tol_p and er <= tol_r
-            if done or iteration == max_iterations or (not last and gives_way(iteration, score, history)):
+            if (
+                done
+                or iteration == max_iterations
+                or (not last and step.gives_way(iteration, score, history))
+            ):
                 break
             if not movable:  # no joint moves the frame: the error stays as it is
                 break
@@ -271,8 +149,10 @@ def solve_one(
                     J = J * sqrt_w[:, None]
             elif not full:
                 J = J[part]
-            damping = (DAMPING_SCALE * squared + damping_sq) * row_damping
-            previous = take_step(q, J, err, A, damping, weigh, previous, bounds, (q_ns, gain, score), dposv)
+            diagonal = step.damping(squared, damping_sq) * row_damping
+            previous = step.take_step(
+                q, J, err, A, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
+            )
         total += iteration
         if best is None or score < best[3]:
             best = (q, ep, er, score, attempt)
@@ -285,19 +165,4 @@ def solve_one(
     return IKResult(q, bool(ep <= tol_p and er <= tol_r), total, ep, er, attempt)
 
 
-__all__ = [
-    "DAMPING_SCALE",
-    "GIVE_UP",
-    "NULLSPACE_FADE",
-    "PROBE_ITERATIONS",
-    "ROTATION_ROW_WEIGHT",
-    "STALL_FROM",
-    "STALL_RATIO",
-    "STALL_SPAN",
-    "IKResult",
-    "LimitWeights",
-    "gives_way",
-    "limit_weights",
-    "solve_one",
-    "take_step",
-]
+__all__ = ["IKResult", "solve_one"]

@@ -13,8 +13,8 @@ import numpy as np
 from ..errors import OptionError, ParameterizationError
 from ..parameterizations import get_position, get_rotation
 
-if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..robot import Robot
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
 
 MAX_TARGET_DISTANCE = 1e9
 """[m] a target position farther than this from the root is refused (its squared error would overflow)."""
@@ -85,7 +85,7 @@ def _count(name: str, value: object, high: int) -> int:
 
 
 def checked_problem(
-    robot: Robot,
+    robot: RobotLike,
     frame: str | None,
     rows: object,
     weights: object,
@@ -170,7 +170,7 @@ class RandomSource:
         self.rng = rng
         self.generator: np.random.Generator | None = None
 
-    def configurations(self, robot: Robot, size: int | None = None) -> np.ndarray:
+    def configurations(self, robot: RobotLike, size: int | None = None) -> np.ndarray:
         if self.generator is None:
             self.generator = np.random.default_rng(self.rng)  # type: ignore[arg-type]  # checked in __init__
         return robot.random_configuration(self.generator, size=size)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -26,29 +26,14 @@ import numpy.typing as npt
 from ..errors import ConfigurationError, KinematicSingularityError, ParameterizationError
 from ..kinematics.options import checked_tolerance
 
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
+
 ROW_LABELS = ("vx", "vy", "vz", "wx", "wy", "wz")
 ROW_SETS = {"all": (0, 1, 2, 3, 4, 5), "linear": (0, 1, 2), "angular": (3, 4, 5)}
 DEFAULT_TOLERANCE = 1e-6
 """σ at or below which a direction counts as lost [m/rad for linear rows, 1 for angular rows]."""
 Rows = str | Sequence[str | int]
-
-
-class ManipulabilityRobot(Protocol):
-    """What these functions read of the Robot passed in (public attributes of :class:`kinengine.Robot`)."""
-
-    @property
-    def end_effector(self) -> str: ...
-
-    @property
-    def dof(self) -> int: ...
-
-    def check_configuration(
-        self, q: npt.ArrayLike, *, check_limits: bool = True, batch: bool = True
-    ) -> npt.NDArray[np.float64]: ...
-
-    def frame_pose(self, q: npt.ArrayLike, frame: str | None = None) -> npt.NDArray[np.float64]: ...
-
-    def jacobian(self, q: npt.ArrayLike, frame: str | None = None) -> npt.NDArray[np.float64]: ...
 
 
 """'all', 'linear', 'angular', or row labels (vx vy vz wx wy wz) / indices 0-5."""
@@ -136,7 +121,7 @@ def analyze_jacobian(
 
 
 def singularity_report(
-    robot: ManipulabilityRobot,
+    robot: RobotLike,
     q: npt.ArrayLike,
     frame: str | None = None,
     rows: Rows = "all",
@@ -150,7 +135,7 @@ def singularity_report(
 
 
 def manipulability(
-    robot: ManipulabilityRobot, q: npt.ArrayLike, frame: str | None = None, rows: Rows = "all"
+    robot: RobotLike, q: npt.ArrayLike, frame: str | None = None, rows: Rows = "all"
 ) -> float | npt.NDArray[np.float64]:
     """Yoshikawa's w = sqrt(det(J Jᵀ)) of J_e0[rows]: float for q (dof,), (N,) for q (N, dof)."""
     index = list(_rows(rows))
@@ -161,9 +146,7 @@ def manipulability(
     return float(w) if J.ndim == 2 else w
 
 
-def velocity_ellipsoid(
-    robot: ManipulabilityRobot, q: npt.ArrayLike, frame: str | None = None
-) -> VelocityEllipsoid:
+def velocity_ellipsoid(robot: RobotLike, q: npt.ArrayLike, frame: str | None = None) -> VelocityEllipsoid:
     """The velocity manipulability ellipsoid of ``frame``'s origin (eigenvectors of J_v J_vᵀ), q (dof,)."""
     frame = robot.end_effector if frame is None else frame
     q = robot.check_configuration(q, check_limits=False, batch=False)
@@ -175,7 +158,7 @@ def velocity_ellipsoid(
 
 
 def require_regular(
-    robot: ManipulabilityRobot,
+    robot: RobotLike,
     q: npt.ArrayLike,
     frame: str | None = None,
     rows: Rows = "all",

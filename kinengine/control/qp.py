@@ -29,17 +29,18 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import OptionError
-from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
 from ..kinematics.relative import relative_terms
-from ..urdf.description import RobotDescription
+
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
 
 ROWS = ("x", "y", "z", "rx", "ry", "rz")
 SOLVERS = ("daqp", "proxqp")
@@ -76,34 +77,10 @@ class PostureTarget:
     _mask: np.ndarray | None = field(default=None, repr=False)
 
 
-class QPRobot(Protocol):
-    """What DifferentialIK reads of the Robot passed in (public attributes of :class:`kinengine.Robot`)."""
-
-    @property
-    def engine(self) -> Kinematics: ...
-
-    @property
-    def dof(self) -> int: ...
-
-    @property
-    def description(self) -> RobotDescription: ...
-
-    @property
-    def joint_names(self) -> Sequence[str]: ...
-
-    @property
-    def lower_limits(self) -> npt.NDArray[np.float64]: ...
-
-    @property
-    def upper_limits(self) -> npt.NDArray[np.float64]: ...
-
-    def frame_id(self, frame: str) -> int: ...
-
-
 class _PoseTerm:
     """A PoseTarget resolved against the robot: frame ids, row indices, buffers."""
 
-    def __init__(self, robot: QPRobot, target: PoseTarget) -> None:
+    def __init__(self, robot: RobotLike, target: PoseTarget) -> None:
         self.target = target
         self.fid = robot.frame_id(target.frame)
         self.fb = None if target.relative_to is None else robot.frame_id(target.relative_to)
@@ -135,7 +112,7 @@ class DifferentialIK:
 
     def __init__(
         self,
-        robot: QPRobot,
+        robot: RobotLike,
         tasks: Sequence[PoseTarget | PostureTarget],
         *,
         damping: float = 1e-12,
@@ -194,7 +171,7 @@ class DifferentialIK:
 
     @staticmethod
     def _velocity_limits(
-        robot: QPRobot, limits: npt.ArrayLike | Mapping[str, float] | None
+        robot: RobotLike, limits: npt.ArrayLike | Mapping[str, float] | None
     ) -> npt.NDArray[np.float64]:
         urdf = {j.name: j.velocity for j in robot.description.joints}
         out = np.array(

@@ -43,31 +43,21 @@ views that the next update overwrites; copy what you keep.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
-from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, as_rows, pose_map
-from ..analytic.singular import check_on_singularity
+from ..analytic import as_rows, pose_map
+from ..analytic.options import DEFAULTS, AnalyticOptions
 from ..errors import OptionError
-from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
 from .frame_task import FrameTask, as_frame_tasks
 from .task_fast import fast_update
 from .task_frame import FrameBlock, FrameKinematics, joint_jacobians
 
-
-class TaskRobot(Protocol):
-    """What a Task reads of the Robot it is built from (public attributes of :class:`kinengine.Robot`)."""
-
-    @property
-    def engine(self) -> Kinematics: ...
-
-    @property
-    def dof(self) -> int: ...
-
-    def frame_id(self, frame: str) -> int: ...
+if TYPE_CHECKING:  # named for the checker only
+    from .robot_like import RobotLike
 
 
 class Task:
@@ -83,23 +73,24 @@ class Task:
 
     def __init__(
         self,
-        robot: TaskRobot,
+        robot: RobotLike,
         frames: str | FrameTask | Sequence[str | FrameTask],
-        position: str | None = "cartesian",
-        rotation: str | None = "euler_zyx",
+        position: str | None = DEFAULTS.position,
+        rotation: str | None = DEFAULTS.rotation,
         *,
-        rows: Sequence[str | int] | None = None,
+        rows: Sequence[str | int] | None = DEFAULTS.rows,
         check_inputs: bool = True,
         continuous: bool = True,
-        singularity_threshold: float = DEFAULT_SINGULARITY_THRESHOLD,
+        singularity_threshold: float = DEFAULTS.singularity_threshold,
         relative_to: str | None = None,
-        on_singularity: str = "raise",
+        on_singularity: str = DEFAULTS.on_singularity,
     ) -> None:
-        specs = as_frame_tasks(frames, position, rotation, rows, relative_to)
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity).checked()
+        specs = as_frame_tasks(frames, options.position, options.rotation, options.rows, relative_to)
         if not specs:
             raise OptionError("a task needs at least one frame: pass a frame name or a list of them")
-        self._nan = check_on_singularity(on_singularity)
-        self.on_singularity = on_singularity
+        self.options = options
+        self._nan, self.on_singularity = options.nan, on_singularity
         pmaps = [pose_map(f.position, f.rotation, as_rows(f.rows)) for f in specs]
         self.frame_tasks, self.frames = specs, tuple(f.frame for f in specs)
         uniform = all(
@@ -114,7 +105,7 @@ class Task:
             f"{f.frame}:{part.name}" for f, pm in zip(specs, pmaps, strict=False) for part in pm.parts
         )
         self.check_inputs, self.continuous = check_inputs, continuous
-        self.singularity_threshold = singularity_threshold
+        self.singularity_threshold = options.singularity_threshold
         kin = robot.engine
         self._coords = coords = kin.coordinates
         self._model = model = kin.model

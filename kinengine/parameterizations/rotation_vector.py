@@ -93,6 +93,45 @@ def _b_prime_over_theta_closed(
     return -2.0 / (t * t) + 0.25 / (t * half * half) + 0.5 / (xp.tan(0.5 * theta) * t * theta)
 
 
+NEAR_PI_COS = -0.988
+"""cos θ below which (θ > 171°) the closed form's axis, from 2 sin θ n, loses digits: the quaternion route."""
+
+
+def _log_by_quaternion(xp: Namespace, *C: Component) -> Entries:
+    """φ from the canonical quaternion of C (scipy's ``as_rotvec``, θ <= π, its sign rule at θ = π)."""
+    w, x, y, z = quaternion_from_matrix(xp, *C)
+    s2 = x * x + y * y + z * z  # sin²(θ/2)
+    if xp is math:
+        scale = (
+            2.0 / w * (1.0 - s2 / (3.0 * w * w))
+            if s2 < _TINY_SIN2
+            else 2.0 * math.atan2(math.sqrt(s2), w) / math.sqrt(s2)
+        )
+    else:
+        small = s2 < _TINY_SIN2
+        s = np.sqrt(np.where(small, 1.0, s2))
+        scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.atan2(s, w) / s)
+    return scale * x, scale * y, scale * z
+
+
+def _log_closed_form(*C: Component) -> Entries:
+    """φ of arrays of C's 9 entries: with w = vee(C − Cᵀ) = 2 sin θ n and cos θ = (tr C − 1)/2,
+    θ = atan2(|w|/2, cos θ) and φ = (θ/|w|) w (→ w/2 as θ → 0); where cos θ < NEAR_PI_COS, the quaternion
+    route (a third of the numpy passes: the batched IK's log, where C is mostly near I)."""
+    c00, c01, c02, c10, c11, c12, c20, c21, c22 = C
+    w0, w1, w2 = c21 - c12, c02 - c20, c10 - c01
+    norm = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    cos = 0.5 * (c00 + c11 + c22 - 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(norm > 1e-300, np.arctan2(0.5 * norm, cos) / norm, 0.5)
+    phi = (scale * w0, scale * w1, scale * w2)
+    near = cos < NEAR_PI_COS
+    if near.any():
+        for out, value in zip(phi, _log_by_quaternion(np, *(c[near] for c in C)), strict=True):
+            out[near] = value
+    return phi
+
+
 class RotationVector(RotationParameterization):
     """χ_R = φ = θ n [rad]; E = J_l(φ)⁻¹ (left Jacobian: ω in I); singular only at θ = 2π k, k >= 1."""
 
@@ -111,19 +150,9 @@ class RotationVector(RotationParameterization):
         return super().from_rotation(C, warn=warn)
 
     def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
-        w, x, y, z = quaternion_from_matrix(xp, *C)
-        s2 = x * x + y * y + z * z  # sin²(θ/2)
-        if xp is math:
-            scale = (
-                2.0 / w * (1.0 - s2 / (3.0 * w * w))
-                if s2 < _TINY_SIN2
-                else 2.0 * math.atan2(math.sqrt(s2), w) / math.sqrt(s2)
-            )
-        else:
-            small = s2 < _TINY_SIN2
-            s = np.sqrt(np.where(small, 1.0, s2))
-            scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.atan2(s, w) / s)
-        return scale * x, scale * y, scale * z
+        if xp is not math:  # arrays: the closed form, the quaternion route only near θ = π
+            return _log_closed_form(*C)
+        return _log_by_quaternion(xp, *C)
 
     def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
         # θ < JLOG3_MAX_ANGLE: E_R = Jlog3(C)·Cᵀ (Jlog3 maps the angular velocity in the frame's own axes to

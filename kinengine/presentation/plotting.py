@@ -30,7 +30,7 @@ if TYPE_CHECKING:
     import matplotlib.axes
     from mpl_toolkits.mplot3d.axes3d import Axes3D  # no type information: Any to the checker
 
-    from ..robot import Robot
+    from ..control.robot_like import RobotLike
 
 AXIS_FRACTION = 0.15
 """Default arrow and triad length as a fraction of the skeleton's largest extent."""
@@ -64,7 +64,7 @@ class Drawing:
 
 
 def drawing(
-    robot: Robot,
+    robot: RobotLike,
     q: npt.ArrayLike | None = None,
     *,
     frames: Sequence[str] = (),
@@ -111,7 +111,7 @@ def drawing(
 
 
 def plot_robot(
-    robot: Robot,
+    robot: RobotLike,
     q: npt.ArrayLike | None = None,
     ax: matplotlib.axes.Axes | None = None,
     *,
@@ -228,11 +228,11 @@ def plot_robot(
     return ax3d
 
 
-def _title(robot: Robot, q: np.ndarray, frame: str) -> str:
+def _title(robot: RobotLike, q: np.ndarray, frame: str) -> str:
     """'<robot> at q = (...) [rad]', then ``frame``'s pose in the root frame: p [m], rotation vector [rad]."""
     types = {j.type for j in robot.description.joints if j.movable and j.mimic is None}
     unit = "m" if types == {"prismatic"} else "rad, m" if "prismatic" in types else "rad"
-    chi = robot.pose_parameters(q, frame, "cartesian", "rotation_vector")
+    chi = robot.pose_parameters(q, frame, "cartesian", "rotation_vector", on_singularity=None)
     lines = (
         f"{robot.name} at q = {_vector(q, '.3g')} [{unit}]",
         f"{frame} in {robot.description.root}: p = {_vector(chi[:3])} m, "

@@ -36,7 +36,7 @@ from . import viewer_nodes as nodes
 from . import viewer_scene as scene
 
 if TYPE_CHECKING:
-    from ..robot import Robot
+    from ..control.robot_like import RobotLike
 
 DEFAULT_PORT = 8080
 SINGULARITY_WARNING = 0.1
@@ -68,7 +68,7 @@ class Viewer:
 
     def __init__(
         self,
-        robot: Robot,
+        robot: RobotLike,
         q: npt.ArrayLike | None = None,
         *,
         port: int | None = None,
@@ -238,7 +238,9 @@ class Viewer:
         name = self._parameterization.value
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)  # gimbal lock: the readout says so in red
-            chi = self.robot.pose_parameters(self.q, self.readout_frame, "cartesian", name)
+            chi = self.robot.pose_parameters(
+                self.q, self.readout_frame, "cartesian", name, on_singularity=None
+            )
         distance = float(get_rotation(name).singularity_distance(chi[3:]))
         self.readout = {"chi": chi, "distance": distance, "singular": distance < self.singularity_warning}
         labels = ("x", "y", "z", *get_rotation(name).labels)
@@ -272,7 +274,7 @@ class Viewer:
 
 
 def view(
-    robot: Robot,
+    robot: RobotLike,
     q: npt.ArrayLike | None = None,
     *,
     port: int | None = None,

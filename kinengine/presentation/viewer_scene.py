@@ -26,7 +26,7 @@ from ..errors import KinematicsError
 from ..urdf.packages import resolve_uri
 
 if TYPE_CHECKING:
-    from ..robot import Robot
+    from ..control.robot_like import RobotLike
 
 DEFAULT_COLOR = (170, 170, 180)
 """RGB of a visual whose URDF gives no material colour."""
@@ -146,18 +146,18 @@ def _load_mesh(
     return mesh, ""
 
 
-def link_poses(robot: Robot, q: np.ndarray, links: tuple[str, ...]) -> dict[str, np.ndarray]:
+def link_poses(robot: RobotLike, q: np.ndarray, links: tuple[str, ...]) -> dict[str, np.ndarray]:
     """T_IL (4, 4) [m] of each link at q (dof,), from kinengine's forward kinematics."""
     return {name: robot.frame_pose(q, name) for name in links}
 
 
-def skeleton(robot: Robot, poses: dict[str, np.ndarray]) -> npt.NDArray[np.float64]:
+def skeleton(robot: RobotLike, poses: dict[str, np.ndarray]) -> npt.NDArray[np.float64]:
     """(M, 2, 3) [m]: parent link origin -> child link origin of every URDF joint (fixed ones included)."""
     segments = [(poses[j.parent][:3, 3], poses[j.child][:3, 3]) for j in robot.description.joints]
     return np.array(segments, dtype=float).reshape(-1, 2, 3)
 
 
-def slider_ranges(robot: Robot) -> list[tuple[float, float]]:
+def slider_ranges(robot: RobotLike) -> list[tuple[float, float]]:
     """(min, max) per coordinate [rad or m]: the joint limits; ±π for a continuous joint,
     ±UNBOUNDED_PRISMATIC for a prismatic joint without limits."""
     kinds = {j.name: j.type for j in robot.description.joints}

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from lxml import etree
+
 Vector3 = tuple[float, float, float]
 
 MOVABLE_TYPES = ("revolute", "continuous", "prismatic")
@@ -97,63 +99,46 @@ class RobotDescription:
         return tuple(j for j in self.joints if j.movable and j.mimic is None)
 
     def to_xml(self) -> str:
-        """A minimal, canonical URDF of this description (what Pinocchio parses)."""
-        out = [f"<robot name={quoteattr(self.name)}>"]
+        """A minimal, canonical URDF of this description (what Pinocchio parses), serialized by lxml (which
+        escapes and quotes every attribute value)."""
+        robot = etree.Element("robot", name=self.name)
+        robot.text = "\n  "
         for link in self.links:
-            out.append(f"  <link name={quoteattr(link.name)}>")
+            element = etree.SubElement(robot, "link", name=link.name)
             if link.inertial is not None:
                 i = link.inertial
-                ixx, ixy, ixz, iyy, iyz, izz = (repr(float(v)) for v in i.inertia)
-                out.append(
-                    f'    <inertial><origin xyz="{_v(i.xyz)}" rpy="{_v(i.rpy)}"/>'
-                    f'<mass value="{float(i.mass)!r}"/>'
-                    f'<inertia ixx="{ixx}" ixy="{ixy}" ixz="{ixz}" iyy="{iyy}" '
-                    f'iyz="{iyz}" izz="{izz}"/></inertial>'
+                inertial = etree.SubElement(element, "inertial")
+                etree.SubElement(inertial, "origin", xyz=_v(i.xyz), rpy=_v(i.rpy))
+                etree.SubElement(inertial, "mass", value=repr(float(i.mass)))
+                names = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+                etree.SubElement(
+                    inertial, "inertia", {n: repr(float(v)) for n, v in zip(names, i.inertia, strict=True)}
                 )
-            out.append("  </link>")
+            element.tail = "\n  "
         for j in self.joints:
-            out.append(f'  <joint name={quoteattr(j.name)} type="{j.type}">')
-            out.append(f"    <parent link={quoteattr(j.parent)}/><child link={quoteattr(j.child)}/>")
-            out.append(f'    <origin xyz="{_v(j.xyz)}" rpy="{_v(j.rpy)}"/>')
+            element = etree.SubElement(robot, "joint", name=j.name, type=j.type)
+            etree.SubElement(element, "parent", link=j.parent)
+            etree.SubElement(element, "child", link=j.child)
+            etree.SubElement(element, "origin", xyz=_v(j.xyz), rpy=_v(j.rpy))
             if j.movable:
-                out.append(f'    <axis xyz="{_v(j.axis)}"/>')
-                lim = [f'effort="{float(j.effort or 0.0)!r}"', f'velocity="{float(j.velocity or 0.0)!r}"']
+                etree.SubElement(element, "axis", xyz=_v(j.axis))
+                limit = {"effort": repr(float(j.effort or 0.0)), "velocity": repr(float(j.velocity or 0.0))}
                 if j.lower is not None and j.upper is not None:
-                    lim += [f'lower="{float(j.lower)!r}"', f'upper="{float(j.upper)!r}"']
-                out.append(f"    <limit {' '.join(lim)}/>")
+                    limit.update(lower=repr(float(j.lower)), upper=repr(float(j.upper)))
+                etree.SubElement(element, "limit", limit)
             if j.mimic is not None:
                 m = j.mimic
-                out.append(
-                    f"    <mimic joint={quoteattr(m.joint)} "
-                    f'multiplier="{float(m.multiplier)!r}" offset="{float(m.offset)!r}"/>'
-                )
-            out.append("  </joint>")
-        out.append("</robot>")
-        return "\n".join(out) + "\n"
+                mimic = {
+                    "joint": m.joint,
+                    "multiplier": repr(float(m.multiplier)),
+                    "offset": repr(float(m.offset)),
+                }
+                etree.SubElement(element, "mimic", mimic)
+            element.tail = "\n  "
+        if len(robot):
+            robot[-1].tail = "\n"
+        return etree.tostring(robot, encoding="unicode") + "\n"
 
 
 def _v(v: Vector3) -> str:
     return " ".join(repr(float(x)) for x in v)
-
-
-def quoteattr(value: str) -> str:
-    """``value`` escaped and quoted as an XML attribute value, exactly as ``xml.sax.saxutils.quoteattr``
-    does it (written out here: importing xml.sax.saxutils imports urllib.request, http, ssl and email)."""
-    for raw, entity in _ATTRIBUTE_ENTITIES:
-        value = value.replace(raw, entity)
-    if '"' not in value:
-        return f'"{value}"'
-    if "'" not in value:
-        return f"'{value}'"
-    return '"' + value.replace('"', "&quot;") + '"'
-
-
-# In this order: "&" first, so that the other entities are not escaped twice.
-_ATTRIBUTE_ENTITIES = (
-    ("&", "&amp;"),
-    (">", "&gt;"),
-    ("<", "&lt;"),
-    ("\n", "&#10;"),
-    ("\r", "&#13;"),
-    ("\t", "&#9;"),
-)

@@ -10,7 +10,6 @@ the tree (:mod:`.tree`). Pinocchio never parses the input itself, only
 from __future__ import annotations
 
 import os
-import stat
 import warnings
 
 from lxml import etree
@@ -21,9 +20,8 @@ from .elements import Where, read_joint, read_link, read_name
 from .limits import LIMITS, Limits
 from .magnitudes import check_magnitudes
 from .safe_xml import parse_xml
+from .source import read_bytes_once
 from .tree import assemble
-
-_NONBLOCKING = getattr(os, "O_NONBLOCK", 0)  # a FIFO swapped in after the check must not block open()
 
 
 def parse_urdf(
@@ -68,36 +66,9 @@ def parse_urdf(
 
 
 def read_urdf_file(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> RobotDescription:
-    """The validated description of the URDF file at ``path``; URDFError naming the path otherwise."""
-    try:
-        source = os.fspath(path)
-    except TypeError:
-        raise URDFError(f"expected a path to a .urdf file, got {type(path).__name__}") from None
-    if isinstance(source, bytes):
-        source = os.fsdecode(source)
-    try:
-        fd = os.open(source, os.O_RDONLY | _NONBLOCKING)
-    except FileNotFoundError:
-        raise URDFError("no such file", source=source) from None
-    except (OSError, ValueError) as exc:  # ValueError: a NUL character in the path
-        reason = getattr(exc, "strerror", None) or exc
-        raise URDFError(f"cannot open the file: {reason}", source=source) from None
-    try:
-        info = os.fstat(fd)
-        if not stat.S_ISREG(info.st_mode):
-            kind = "a directory" if stat.S_ISDIR(info.st_mode) else "a device, FIFO or socket"
-            raise URDFError(f"not a regular file ({kind})", source=source)
-        if info.st_size > limits.max_bytes:
-            raise URDFError(
-                f"the file is {info.st_size} bytes, more than Limits.max_bytes = {limits.max_bytes}",
-                source=source,
-            )
-        with os.fdopen(fd, "rb", closefd=False) as f:
-            data = f.read(limits.max_bytes + 1)
-    except OSError as exc:
-        raise URDFError(f"cannot read the file: {exc.strerror}", source=source) from None
-    finally:
-        os.close(fd)
+    """The validated description of the URDF file at ``path``; URDFError naming the path otherwise
+    (the file is read once: :func:`.source.read_bytes_once`)."""
+    source, data = read_bytes_once(path, limits)
     return parse_urdf(data, source=source, limits=limits)
 
 

@@ -116,7 +116,7 @@ def format_table(report: dict) -> str:
             f" [floor disagrees: {p.get('difference')}]" if p["status"] == "disagrees" else ""
         )
         if "success" in row:
-            note = f"{row['success']:.1%} reached; " + note
+            note = f"{row['success']:.1%} reached, {_achieved(row)}; " + note
         floor_us = _us(p["min_us"]) if "min_us" in p else "-"
         lines.append(
             f"{row['robot']:<12} {case_label(row):<42} {row['n']:>7} {ours} {floor_us:>10} "
@@ -163,9 +163,16 @@ def format_table(report: dict) -> str:
     return "\n".join(lines + (["", "peer notes:"] + notes if notes else []))
 
 
+def _achieved(result: dict) -> str:
+    """The achieved IK error max(|Δp| [m], angle [rad]) per target: median and maximum."""
+    if "error_median" not in result:  # a report written before the errors were recorded
+        return "error not recorded"
+    return f"error median {result['error_median']:.0e}, max {result['error_max']:.0e}"
+
+
 def _peer_cell(result: dict, ours: float | None) -> str:
     if result["status"] == "ok":
-        reached = f" [{result['success']:.0%}]" if "success" in result else ""
+        reached = f" [{result['success']:.0%}, {_achieved(result)}]" if "success" in result else ""
         return _us(result["min_us"]) + (f" ({result['min_us'] / ours:.1f}×)" if ours else "") + reached
     if result["status"] == "disagrees":
         return "disagrees" + (f" {result['difference']:.0e}" if result["difference"] is not None else "")

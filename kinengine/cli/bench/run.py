@@ -106,7 +106,7 @@ def run_case(case: Case, settings: Settings, peers: list | None = None, peer_ato
     )
     row["pinocchio"] = {**floor, **(_rate(next(timings), case.n) if case.pinocchio is not None else {})}
     if case.targets is not None and result is not None:
-        row["success"] = ik_success(case, result)
+        row.update(ik_outcome(case, result))
     if case.kinengine is not None and case.pinocchio is not None:
         row["ratio"] = row["kinengine"]["min_us"] / row["pinocchio"]["min_us"]
     if peers:
@@ -114,8 +114,10 @@ def run_case(case: Case, settings: Settings, peers: list | None = None, peer_ato
     return row
 
 
-def ik_success(case: Case, Q: object, robot: Robot | None = None) -> float:
-    """Fraction of ``case.targets`` that the solutions Q (n, dof) reach within 1e-6 m and 1e-6 rad."""
+def ik_outcome(case: Case, Q: object, robot: Robot | None = None) -> dict[str, float]:
+    """How well the solutions Q (n, dof) reach ``case.targets``: ``success`` the fraction within 1e-6 m and
+    1e-6 rad (and the limits), and the achieved error max(|Δp| [m], angle [rad]) per target, its median
+    ``error_median`` and maximum ``error_max``: rates are compared at the accuracy each library reaches."""
     if robot is None:
         robot = cast(Robot, case.robot)  # IK rows carry their robot
     Q = np.asarray(Q, dtype=float)
@@ -126,7 +128,12 @@ def ik_success(case: Case, Q: object, robot: Robot | None = None) -> float:
     cos = (np.einsum("nij,nij->n", F[:, :3, :3], T[:, :3, :3]) - 1.0) / 2.0
     angle = np.arccos(np.clip(cos, -1.0, 1.0))
     inside = np.all((robot.lower_limits <= Q) & (robot.upper_limits >= Q), axis=1)
-    return float(np.mean((dp <= 1e-6) & (angle <= 1e-6 + 2e-8) & inside))
+    error = np.maximum(dp, angle)
+    return {
+        "success": float(np.mean((dp <= 1e-6) & (angle <= 1e-6 + 2e-8) & inside)),
+        "error_median": float(np.median(error)),
+        "error_max": float(np.max(error)),
+    }
 
 
 def _rate(timing: dict[str, float], n: int) -> dict[str, float]:
@@ -143,8 +150,8 @@ def _run_peer(peer: Peer, case: Case, expected: object, settings: Settings, atol
             return {"status": "skipped", "note": "no kinengine result to check the answer against"}
         fn, to_numpy = prepared
         if case.targets is not None:  # IK: each library finds its own solutions; count the reached targets
-            success = ik_success(case, to_numpy(fn()))
-            return {"status": "ok", "success": success, **_rate(measure(fn, settings), case.n)}
+            outcome = ik_outcome(case, to_numpy(fn()))
+            return {"status": "ok", **outcome, **_rate(measure(fn, settings), case.n)}
         got, expected = np.asarray(to_numpy(fn()), dtype=float), np.asarray(expected, dtype=float)
     except Skip as skip:
         return {"status": "skipped", "note": str(skip)}
