@@ -33,7 +33,7 @@ from .ik_solutions import IKSolutions, candidates_to_solutions, joined, one_pose
 from .ik_target import batch_targets, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..robot import Robot
+    from .robot_like import RobotLike
 
 EXTRA_HINT = "closed-form IK needs the solver library EAIK: pip install 'kinengine[ik]'"
 METHODS = ("auto", "closed_form", "numeric")
@@ -79,7 +79,7 @@ class Geometry:
     C_tool: np.ndarray  # (3, 3) C_IF(0)
 
 
-def chain_geometry(robot: Robot, frame: str) -> Geometry:
+def chain_geometry(robot: RobotLike, frame: str) -> Geometry:
     """Axes and offsets of the joints that move ``frame`` (KinematicsError for a prismatic or mimic joint)."""
     kin = robot.engine
     model, coords = kin.model, kin.coordinates
@@ -121,7 +121,7 @@ def chain_geometry(robot: Robot, frame: str) -> Geometry:
 class ClosedFormChain:
     """One robot's frame: its geometry, EAIK's solver for it, and the joint data the answers need."""
 
-    def __init__(self, robot: Robot, frame: str) -> None:
+    def __init__(self, robot: RobotLike, frame: str) -> None:
         EAIK = _eaik()
         self.frame = frame
         self.geometry = g = chain_geometry(robot, frame)
@@ -178,22 +178,23 @@ class ClosedFormChain:
         return np.repeat(np.arange(n), counts), Q, LS
 
 
-def chain_of(robot: Robot, frame: str | None) -> ClosedFormChain:
-    """The robot's closed-form solver of ``frame`` (default: end effector), built once and kept."""
+def chain_of(robot: RobotLike, frame: str | None) -> ClosedFormChain | KinematicsError:
+    """The robot's closed-form solver of ``frame`` (default: end effector), built once and kept; the error
+    that says why there is none, kept likewise."""
     name = robot.end_effector if frame is None else frame
     robot.engine.frame_id(name)  # FrameNotFoundError with suggestions first
     _eaik()
     return robot.engine.memoized(("closed-form IK", name), lambda: _built(robot, name))
 
 
-def _built(robot: Robot, frame: str) -> ClosedFormChain | KinematicsError:
+def _built(robot: RobotLike, frame: str) -> ClosedFormChain | KinematicsError:
     try:
         return ClosedFormChain(robot, frame)
     except KinematicsError as exc:  # kept too: the answer "no closed form" is as costly to find
         return exc
 
 
-def solver_of(robot: Robot, frame: str | None) -> ClosedFormChain:
+def solver_of(robot: RobotLike, frame: str | None) -> ClosedFormChain:
     chain = chain_of(robot, frame)
     if isinstance(chain, KinematicsError):
         raise type(chain)(*chain.args)
@@ -201,7 +202,7 @@ def solver_of(robot: Robot, frame: str | None) -> ClosedFormChain:
 
 
 def ik_solutions(
-    robot: Robot,
+    robot: RobotLike,
     T: npt.ArrayLike,
     frame: str | None = None,
     *,
@@ -279,7 +280,7 @@ def _decomposed(EAIK: object, g: Geometry, locked: list[tuple[int, float]]) -> A
         return None
 
 
-def _not_six_message(robot: Robot, frame: str, g: Geometry, EAIK: object) -> str:
+def _not_six_message(robot: RobotLike, frame: str, g: Geometry, EAIK: object) -> str:
     n = len(g.joints)
     joints = f"{n} revolute joint{'' if n == 1 else 's'}" + (f" ({', '.join(g.joints)})" if n else "")
     head = f"frame {frame!r} is moved by {joints}; closed-form IK needs 6"

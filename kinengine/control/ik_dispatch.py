@@ -19,13 +19,13 @@ from .closed_form import METHODS, available, chain_of, ik_solutions
 from .ik_solutions import residuals
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from ..robot import Robot
+    from .robot_like import RobotLike
     from .ik_batch import IKBatchResult
     from .ik_solver import IKResult
 
 
 def closed_form_or_none(
-    robot: Robot,
+    robot: RobotLike,
     target: npt.ArrayLike,
     frame: str | None,
     q0: object,
@@ -66,7 +66,7 @@ def _shape(target: npt.ArrayLike) -> tuple[int, ...]:
         return ()
 
 
-def _middle(robot: Robot) -> np.ndarray:
+def _middle(robot: RobotLike) -> np.ndarray:
     """The middle of each joint's range; where a range is unbounded, 0 clipped into it (read-only)."""
     lo, hi = robot.engine.coordinates.lower, robot.engine.coordinates.upper
     both = np.isfinite(lo) & np.isfinite(hi)
@@ -78,7 +78,7 @@ def _middle(robot: Robot) -> np.ndarray:
 
 
 def nearest_result(
-    robot: Robot,
+    robot: RobotLike,
     target: npt.ArrayLike,
     frame: str | None,
     q0: object,

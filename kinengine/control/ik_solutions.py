@@ -31,7 +31,7 @@ import numpy as np
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from ..robot import Robot
+    from .robot_like import RobotLike
 
 ACCEPT = 1e-9
 """[m and rad] a candidate whose frame pose is further than this from the target is no solution."""
@@ -61,7 +61,7 @@ class Chain(Protocol):
     limits: tuple[list[float], list[float], list[bool], list[int]]  # lower, upper, continuous, columns
     pose: Callable[[np.ndarray], np.ndarray]  # T_IF of a q (dof,), unchecked
     whole: bool  # the chain's joints are all of q's coordinates, in order
-    robot: Robot
+    robot: RobotLike
 
 
 @dataclass(frozen=True)
@@ -311,7 +311,7 @@ def _all_turns(
 
 
 def residuals(
-    robot: Robot, frame: str, q: np.ndarray, poses: np.ndarray, row: np.ndarray | None = None
+    robot: RobotLike, frame: str, q: np.ndarray, poses: np.ndarray, row: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Position [m] and rotation [rad, to first order: |C − C_d|_F / √2] errors of frame at q (M, dof)
     against poses[row] (M, 4, 4) (row None: poses itself)."""
@@ -326,7 +326,7 @@ def residuals(
     return np.sqrt(err_p2), np.sqrt(np.maximum(D.sum(axis=1) - err_p2, 0.0) / 2.0)
 
 
-def _repaired(robot: Robot, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:
+def _repaired(robot: RobotLike, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:
     """Degenerate answers (the position met, the rotation about a line of aligned joint axes not) and
     an idealized chain's answers: a few damped least-squares iterations from each."""
     result = robot.inverse_kinematics(

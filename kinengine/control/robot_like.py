@@ -16,6 +16,9 @@ from ..kinematics.engine import Kinematics
 from ..urdf import RobotDescription
 
 if TYPE_CHECKING:  # manipulability types its own argument against RobotLike
+    from ..kinematics.handle import FrameHandle
+    from .ik import IKResult
+    from .ik_batch import IKBatchResult
     from .manipulability import VelocityEllipsoid
 
 
@@ -100,6 +103,20 @@ class RobotLike(Protocol):
     ) -> FloatArray: ...
 
     def velocity_ellipsoid(self, q: npt.ArrayLike, frame: str | None = None) -> VelocityEllipsoid: ...
+
+    def frame(self, name: str | None = None, *, check_inputs: bool = True) -> FrameHandle: ...
+
+    def inverse_kinematics(
+        self,
+        target: npt.ArrayLike,
+        frame: str | None = None,
+        q0: npt.ArrayLike | None = None,
+        *,
+        tol_position: float = 1e-6,
+        tol_rotation: float = 1e-6,
+        restarts: int = 3,
+        method: str = "auto",
+    ) -> IKResult | IKBatchResult: ...
 
 
 __all__ = ["RobotLike"]

@@ -13,12 +13,12 @@ from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
+from xml.sax.saxutils import quoteattr
 
 import numpy as np
 import numpy.typing as npt
 
 from ..model.editing import rpy_from_matrix
-from ..urdf.description import quoteattr
 from .convert import pose_matrix, translation
 
 SPHERE, CAPSULE, CYLINDER, BOX, MESH = 2, 3, 5, 6, 7  # mjtGeom

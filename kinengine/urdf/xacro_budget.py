@@ -13,9 +13,9 @@ import os
 import time
 from types import ModuleType
 from typing import Any
+from xml.sax.saxutils import quoteattr
 
 from ..errors import ResourceLimitError, URDFError
-from .description import quoteattr
 from .limits import Limits
 from .source import read_bytes_once
 
