@@ -2,7 +2,9 @@
 
 A pose counts as reached when the solver returns a configuration within the joint limits whose frame
 pose equals the target: the closed-form solver's solutions are checked by forward kinematics to 1e-9
-(:mod:`kinengine.control.ik_solutions`); the numeric solver's to its tolerances (1e-6 m, 1e-6 rad).
+(:mod:`kinengine.control.ik_solutions`); the numeric solver's to its tolerances (1e-6 m, 1e-6 rad). The
+numeric solver first tries each voxel's centre in position alone and solves the voxel's poses only
+where that succeeds (a pose whose position is unreachable is unreachable).
 The manipulability of a voxel is the largest Yoshikawa measure w = sqrt(det(J Jᵀ)) over every solution
 of every reached pose in it (0 where none is reached).
 """
@@ -17,9 +19,11 @@ import numpy.typing as npt
 from ..errors import KinematicsError
 from ..robot import Robot
 
-NUMERIC_RESTARTS = 5
-"""Random restarts of the numeric solver after its seeded attempt (an unreached cell is one it missed
-that often)."""
+NUMERIC_RESTARTS = 3
+"""Random restarts of the numeric solver after its seeded attempt, per (voxel, orientation) pose."""
+POSITION_RESTARTS = 10
+"""Random restarts of the numeric solver for a voxel's centre alone (position rows): a voxel whose centre
+it cannot reach in position is unreached in every orientation, and its poses are not solved."""
 
 
 @dataclass(frozen=True)
@@ -71,11 +75,27 @@ def solve_chunk(
         pose_of = np.nonzero(valid)[0]
         Q = q[valid]
     else:
-        result = robot.inverse_kinematics(T, frame, method="numeric", restarts=NUMERIC_RESTARTS, rng=seed)
+        position_seed, pose_seed = seed.spawn(2)
+        centre = robot.inverse_kinematics(
+            poses(centers, np.eye(3)[None]),
+            frame,
+            rows=("x", "y", "z"),
+            method="numeric",
+            restarts=POSITION_RESTARTS,
+            rng=np.random.default_rng(position_seed),
+        )
+        candidates = np.flatnonzero(np.repeat(np.asarray(centre.success, dtype=bool), n_rot))
+        result = robot.inverse_kinematics(
+            T[candidates],
+            frame,
+            method="numeric",
+            restarts=NUMERIC_RESTARTS,
+            rng=np.random.default_rng(pose_seed),
+        )
         success = np.asarray(result.success, dtype=bool)
         Q = np.asarray(result.q)[success]
         inside = np.all((robot.lower_limits <= Q) & (robot.upper_limits >= Q), axis=1)
-        pose_of = np.flatnonzero(success)[inside]
+        pose_of = candidates[success][inside]
         Q = Q[inside]
         reached = np.zeros(V * n_rot, dtype=bool)
         reached[pose_of] = True
