@@ -44,6 +44,7 @@ if TYPE_CHECKING:
     from .control.ik import IKResult
     from .control.ik_batch import IKBatchResult
     from .control.ik_multi import MultiIKResult
+    from .control.ik_solutions import IKSolutions
     from .control.manipulability import SingularityReport
     from .control.pose_error import pose_error
     from .control.qp import DifferentialIK, PoseTarget, PostureTarget
@@ -58,6 +59,7 @@ _LAZY = {
     "FrameTask": "control.frame_task",
     "IKBatchResult": "control.ik_batch",
     "IKResult": "control.ik",
+    "IKSolutions": "control.ik_solutions",
     "MultiIKResult": "control.ik_multi",
     "PoseTarget": "control.qp",
     "PostureTarget": "control.qp",
@@ -80,6 +82,7 @@ __all__ = [
     "FrameTask",
     "IKBatchResult",
     "IKResult",
+    "IKSolutions",
     "KinematicSingularityError",
     "KinematicsError",
     "MultiIKResult",

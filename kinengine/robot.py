@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from types import MappingProxyType
-from typing import overload
+from typing import TYPE_CHECKING, overload
 
 from .arrays import ArrayLike, FloatArray, Matrix, Reference, Stack, Vector
 from .errors import OptionError
@@ -33,6 +33,9 @@ from .kinematics import Kinematics, resolve_reference
 from .kinematics import batch as _batch
 from .kinematics.handle import FrameHandle
 from .urdf import RobotDescription
+
+if TYPE_CHECKING:
+    from .control.ik_solutions import IKSolutions
 
 
 class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethods):
@@ -270,6 +273,26 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
             raise OptionError("`out=` is for batches q (N, dof); a single q returns fresh arrays")
         _batch.checked_workers(workers)
         return handle.kinematics(q, reference)
+
+    # -- closed-form inverse kinematics ---------------------------------------------------------
+    def ik_solutions(
+        self,
+        T: ArrayLike,
+        frame: str | None = None,
+        *,
+        q_near: ArrayLike | None = None,
+        within_limits: bool = True,
+        all_turns: bool = False,
+    ) -> IKSolutions:
+        """Every joint solution of the pose T_IF (4, 4) of ``frame`` (default: end effector) in the root link
+        frame [m], or of each pose of (N, 4, 4), in closed form (the ``ik`` extra: EAIK's subproblem
+        decomposition of the 6 revolute joints that move ``frame``). Each angle within its joint's range
+        (continuous joints in (−π, π]); ``all_turns``: every 2π shift within the limits too;
+        ``within_limits=False``: solutions outside the limits too, flagged. Sorted by distance to
+        ``q_near`` (dof,) or (N, dof) when given. See :mod:`kinengine.control.closed_form`."""
+        from .control.closed_form import ik_solutions
+
+        return ik_solutions(self, T, frame, q_near=q_near, within_limits=within_limits, all_turns=all_turns)
 
 
 def _rebuild_robot(

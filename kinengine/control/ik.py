@@ -66,6 +66,7 @@ def inverse_kinematics(
     nullspace_target: object = None,
     nullspace_gain: float = 0.1,
     min_damping: float = 1e-6,
+    method: str = "auto",
 ) -> IKResult | IKBatchResult:
     """q (within the limits) that puts ``frame`` (default: end effector) at ``target`` in I.
 
@@ -82,6 +83,10 @@ def inverse_kinematics(
     ``weights`` one spec for every frame or a mapping {frame: spec} (missing frames: all six rows, weight
     1). Success when every frame is within the tolerances; the result's position_error / rotation_error
     are the maxima over the frames, ``frame_errors`` each frame's (:mod:`kinengine.control.ik_multi`).
+
+    ``method``: "numeric" this solver; "closed_form" the solution nearest ``q0`` (default: the middle of
+    the ranges) among every closed-form one (:mod:`kinengine.control.ik_dispatch`); "auto" the closed form
+    for a pose target of a chain that has one (and the ``ik`` extra installed), else this solver.
     """
     options = Options(
         tol_position,
@@ -116,6 +121,21 @@ def inverse_kinematics(
     generator = RandomSource(rng)
     joints = robot.engine.coordinates
     start = None if q0 is None else joints.check(q0, name="q0", allow_batch=batch)
+    if method != "numeric":
+        from .ik_dispatch import closed_form_or_none
+
+        def numeric(T: npt.ArrayLike, start: object) -> IKResult | IKBatchResult:
+            return inverse_kinematics(
+                robot, T, frame, start, tol_position=tol_position, tol_rotation=tol_rotation,
+                max_iterations=max_iterations, restarts=restarts, rng=rng, min_damping=min_damping,
+                method="numeric",
+            )  # fmt: skip
+
+        plain = position is None and rotation is None and rows is None and weights is None
+        plain = plain and nullspace_target is None
+        solved = closed_form_or_none(robot, target, frame, q0, method, plain, numeric)
+        if solved is not None:
+            return solved
     if batch:
         from .ik_batch import solve_batch
 

@@ -140,12 +140,14 @@ class AnalysisMethods:
         nullspace_target: ArrayLike | None = None,
         nullspace_gain: float = 0.1,
         min_damping: float = 1e-6,
+        method: str = "auto",
     ) -> IKResult | IKBatchResult:
         """Differential IK (damped least squares) to a 4x4 pose, a batch of poses (N, 4, 4) (an IKBatchResult
         of N results, solved vectorized), a parameter target χ, or a mapping {frame: T_IF (4, 4)} solved for
         every frame at once (``frame`` None; ``rows``/``weights`` one spec or {frame: spec}; a MultiIKResult
         whose errors are the maxima over the frames, ``frame_errors`` per frame). See
-        :func:`kinengine.control.ik.inverse_kinematics` for the options."""
+        :func:`kinengine.control.ik.inverse_kinematics` for the options. ``method``: "auto" (the closed form
+        when the chain has one, see :meth:`ik_solutions`), "closed_form" or "numeric"."""
         from ..control import ik as _ik  # here: inverse kinematics is imported by its first call
 
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
@@ -166,4 +168,5 @@ class AnalysisMethods:
             nullspace_target=nullspace_target,
             nullspace_gain=nullspace_gain,
             min_damping=min_damping,
+            method=method,
         )

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ...errors import KinematicsError
 from ...robot import Robot
 from .row import Case
 
@@ -54,7 +55,10 @@ def ik_case(robot: Robot, frame: str) -> Case:
         "latency",
         "inverse_kinematics",
         IK_TARGETS,
-        lambda: [robot.inverse_kinematics(T, frame, q0=s) for T, s in zip(targets, starts, strict=True)],
+        lambda: [
+            robot.inverse_kinematics(T, frame, q0=s, method="numeric")
+            for T, s in zip(targets, starts, strict=True)
+        ],
         pinocchio,
         f"from starts 0.2 away; floor reached {reached}/{IK_TARGETS}",
         floor="Pinocchio's CLIK example (log6 error, Jlog6, damping 1e-10, integrate) per target",
@@ -71,11 +75,16 @@ def ik_cases(robot: Robot, frame: str, single: int, batch: int, seed: int = 2024
         if vectorized:
 
             def solve(targets: np.ndarray = targets) -> np.ndarray:
-                return robot.inverse_kinematics(targets, frame, rng=0).q
+                return robot.inverse_kinematics(targets, frame, rng=0, method="numeric").q
         else:
 
             def solve(targets: np.ndarray = targets) -> np.ndarray:
-                return np.array([robot.inverse_kinematics(T, frame, rng=i).q for i, T in enumerate(targets)])
+                return np.array(
+                    [
+                        robot.inverse_kinematics(T, frame, rng=i, method="numeric").q
+                        for i, T in enumerate(targets)
+                    ]
+                )
 
         cases.append(
             Case(
@@ -90,7 +99,34 @@ def ik_cases(robot: Robot, frame: str, single: int, batch: int, seed: int = 2024
                 frame=frame,
             )
         )
+    return cases + closed_form_cases(robot, frame, single, batch, seed)
+
+
+def closed_form_cases(robot: Robot, frame: str, single: int, batch: int, seed: int = 2024) -> list[Case]:
+    """``robot.ik_solutions``: every solution of random reachable targets, one by one and as one batch
+    (wrapping into the ranges and the limit filter included); none where the frame's chain has no closed
+    form or the ``ik`` extra is missing."""
+    rng = np.random.default_rng(seed)
+    try:
+        robot.ik_solutions(robot.frame_pose(robot.neutral(), frame), frame)
+    except KinematicsError:
+        return []
+    cases = []
+    for group, n in (("latency", single), ("throughput", batch)):
+        targets = robot.frame_pose(robot.random_configuration(rng, size=n), frame)
+        if group == "throughput":
+
+            def solve(targets: np.ndarray = targets) -> object:
+                return robot.ik_solutions(targets, frame).q
+        else:
+
+            def solve(targets: np.ndarray = targets) -> object:
+                return [robot.ik_solutions(T, frame).q for T in targets]
+
+        cases.append(
+            Case(group, "ik_solutions[all, closed form]", n, solve, None, "every solution within the limits")
+        )
     return cases
 
 
-__all__ = ["IK_TARGETS", "ik_case", "ik_cases"]
+__all__ = ["IK_TARGETS", "closed_form_cases", "ik_case", "ik_cases"]

@@ -1,0 +1,116 @@
+"""inverse_kinematics' choice of solver (``method=``) and the closed form's answer as an IKResult.
+
+"auto" (the default) takes the closed form (:mod:`kinengine.control.closed_form`) for a plain pose target
+(4, 4) or (N, 4, 4) — no rows=, weights=, position=/rotation= or nullspace_target= — when the ``ik`` extra
+is installed and the frame's chain has a decomposition, else the numeric solver; "closed_form" raises
+where "auto" falls back; "numeric" is the damped least-squares solver of :mod:`kinengine.control.ik`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import numpy as np
+import numpy.typing as npt
+
+from ..errors import KinematicsError, OptionError
+from .closed_form import METHODS, available, chain_of, ik_solutions
+from .ik_solutions import residuals
+
+if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
+    from ..robot import Robot
+    from .ik_batch import IKBatchResult
+    from .ik_solver import IKResult
+
+
+def closed_form_or_none(
+    robot: Robot,
+    target: npt.ArrayLike,
+    frame: str | None,
+    q0: object,
+    method: str,
+    plain: bool,
+    numeric: Callable[[npt.ArrayLike, object], IKResult | IKBatchResult],
+) -> IKResult | IKBatchResult | None:
+    """inverse_kinematics' dispatch: the closed-form answer nearest q0 (or the middle of the ranges) as an
+    IKResult / IKBatchResult, or None for the numeric solver. ``plain``: a pose target without
+    rows/weights/parameterizations/null-space preference (what the closed form answers). "auto" takes the
+    closed form when the library is installed and the chain has one; poses without a solution go to
+    ``numeric(T, q0)``. "closed_form" raises (KinematicsError) where "auto" falls back."""
+    if method not in METHODS:
+        raise OptionError(f"unknown method {method!r}; use 'auto', 'closed_form' or 'numeric'")
+    if method == "numeric":
+        return None
+    shape = _shape(target) if plain else ()
+    plain = len(shape) in (2, 3) and shape[-2:] == (4, 4)
+    if method == "auto" and (not plain or not available()):
+        return None
+    if not plain:
+        raise OptionError(
+            "method='closed_form' solves pose targets (4, 4) or (N, 4, 4) of one frame without rows=, "
+            "weights=, position=/rotation= or nullspace_target=; use method='numeric'"
+        )
+    if method == "auto":
+        chain = chain_of(robot, frame)
+        if isinstance(chain, KinematicsError):
+            return None
+    return nearest_result(robot, target, frame, q0, numeric, fall_back=method == "auto")
+
+
+def _shape(target: npt.ArrayLike) -> tuple[int, ...]:
+    """The target's shape, () for what is no array (the numeric path reports it)."""
+    try:
+        return tuple(np.shape(target))
+    except (TypeError, ValueError):
+        return ()
+
+
+def nearest_result(
+    robot: Robot,
+    target: object,
+    frame: str | None,
+    q0: object,
+    numeric: Callable[[npt.ArrayLike, object], IKResult | IKBatchResult] | None,
+    fall_back: bool,
+) -> IKResult | IKBatchResult:
+    """inverse_kinematics' closed-form answer: the solution nearest q0 (default: the middle of the joint
+    ranges, zero where a range is unbounded) as an IKResult (pose (4, 4)) or IKBatchResult (N, 4, 4).
+    Poses without a solution within the limits: ``numeric(T, q0)`` when ``fall_back``, else
+    success False at the reference q."""
+    from .ik_batch import IKBatchResult
+
+    coords = robot.engine.coordinates
+    single = np.ndim(target) == 2  # type: ignore[arg-type]
+    if q0 is None:
+        lo, hi = coords.lower, coords.upper
+        both = np.isfinite(lo) & np.isfinite(hi)
+        middle = np.zeros(robot.dof)
+        middle[both] = (lo[both] + hi[both]) / 2
+        reference: np.ndarray = np.clip(middle, lo, hi)
+    else:
+        reference = coords.check(q0, name="q0", allow_batch=not single)
+    found = ik_solutions(robot, target, frame, q_near=reference)  # type: ignore[arg-type]
+    poses = np.asarray(target, dtype=np.float64)
+    batch = poses if not single else poses[None]
+    count = np.atleast_1d(np.asarray(found.count))
+    solved = count > 0
+    q = np.repeat(reference[None], len(batch), axis=0) if reference.ndim == 1 else reference.copy()
+    if found.q.size:
+        q[solved] = (found.q[None] if single else found.q)[solved, 0]
+    err_p, err_r = np.full(len(batch), np.inf), np.full(len(batch), np.inf)
+    err_p[solved], err_r[solved] = residuals(robot, found.frame, q[solved], batch[solved])
+    zero = np.zeros(len(batch), dtype=np.intp)
+    result = IKBatchResult(q, solved, zero, err_p, err_r, zero.copy())
+    missing = np.flatnonzero(~solved)
+    if fall_back and numeric is not None and len(missing):
+        if single:
+            return numeric(poses, q0)
+        start = None if q0 is None else q[missing]
+        rest = numeric(batch[missing], start)
+        for name in ("q", "success", "iterations", "position_error", "rotation_error", "restarts"):
+            getattr(result, name)[missing] = getattr(rest, name)
+    return result[0] if single else result
+
+
+__all__ = ["closed_form_or_none", "nearest_result"]
