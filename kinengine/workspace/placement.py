@@ -132,7 +132,7 @@ def _solved(robot: Robot, frame: str, T: np.ndarray, method: str) -> int:
     if method == "closed_form":
         return int(np.sum(np.asarray(robot.ik_solutions(T, frame).count) > 0))
     result = robot.inverse_kinematics(T, frame, method="numeric", restarts=10, rng=0)
-    return int(np.sum(result.success))  # type: ignore[union-attr]
+    return int(np.sum(result.success))
 
 
 def _targets(targets: npt.ArrayLike) -> np.ndarray:

@@ -226,7 +226,7 @@ def reachability_map(
     model = robot.pinocchio_model()
     ball = reach_ball(model, frame_id, model.lowerPositionLimit, model.upperPositionLimit)
     grid = VoxelGrid.build(ball, voxel, bounds)
-    rotations = orientation_set(orientations)  # type: ignore[arg-type]
+    rotations = orientation_set(orientations)
     method = _resolve_method(robot, frame, method)
     V, n_rot = len(grid.centers), len(rotations)
     chunk_voxels = max(1, POSES_PER_CHUNK // n_rot)
