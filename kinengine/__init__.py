@@ -50,6 +50,7 @@ if TYPE_CHECKING:
     from .control.pose_error import pose_error
     from .control.qp import DifferentialIK, PoseTarget, PostureTarget
     from .control.task import Task
+    from .workspace import BasePlacements, ReachabilityMap, base_placements, reachability_map
 
 __version__ = "0.1.0"
 
@@ -66,10 +67,15 @@ _LAZY = {
     "SingularityReport": "control.manipulability",
     "Task": "control.task",
     "pose_error": "control.pose_error",
+    "BasePlacements": "workspace",
+    "ReachabilityMap": "workspace",
+    "base_placements": "workspace",
+    "reachability_map": "workspace",
 }
 
 __all__ = [
     "ACCELERATED",
+    "BasePlacements",
     "ConfigurationError",
     "DifferentialIK",
     "FrameHandle",
@@ -86,6 +92,7 @@ __all__ = [
     "ParameterizationError",
     "PoseTarget",
     "PostureTarget",
+    "ReachabilityMap",
     "RepresentationSingularityError",
     "ResourceLimitError",
     "Robot",
@@ -94,9 +101,11 @@ __all__ = [
     "URDFError",
     "__version__",
     "available_robots",
+    "base_placements",
     "load",
     "load_urdf_string",
     "pose_error",
+    "reachability_map",
 ]
 
 

@@ -20,6 +20,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("control", ("kinengine.control",)),
     ("tools and presentation", ("kinengine.verify", "kinengine.presentation")),
     ("facade", ("kinengine.robot", "kinengine.loading")),
+    ("workspace", ("kinengine.workspace",)),
     ("public API", ("kinengine", "kinengine.layers")),
     ("command line", ("kinengine.cli", "kinengine.__main__")),
 )
@@ -35,6 +36,7 @@ PUBLIC_API: tuple[str, ...] = (
     "kinengine.presentation",
     "kinengine.loading",
     "kinengine.robot",
+    "kinengine.workspace",
 )
 """What the command line may import (besides its own modules)."""
 

@@ -142,7 +142,10 @@ def manipulability(
     J = robot.jacobian(q, frame)[..., index, :]
     if len(index) > robot.dof:
         return 0.0 if J.ndim == 2 else np.zeros(len(J))
-    w = np.prod(np.linalg.svd(J, compute_uv=False), axis=-1)
+    if len(index) == robot.dof:  # square: Π σ_i = |det J| (an LU, several times cheaper than the SVD)
+        w = np.abs(np.linalg.det(J))
+    else:
+        w = np.prod(np.linalg.svd(J, compute_uv=False), axis=-1)
     return float(w) if J.ndim == 2 else w
 
 

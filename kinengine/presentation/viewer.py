@@ -255,6 +255,21 @@ class Viewer:
         self._root.visible = bool(visible)
         self._robot_visible.value = bool(visible)  # the page's checkbox follows (no-op if it is the caller)
 
+    def add_points(self, name: str, points: npt.ArrayLike, colors: npt.ArrayLike, size: float) -> None:
+        """Show points (n, 3) [m, root link frame] with RGB ``colors`` (n, 3) uint8 as squares of ``size`` [m]
+        under the scene node ``name`` (e.g. a reachability map's voxels); the same name replaces them."""
+        P = np.ascontiguousarray(points, dtype=np.float32).reshape(-1, 3)
+        C = np.ascontiguousarray(colors, dtype=np.uint8).reshape(-1, 3)
+        if len(C) != len(P):
+            raise KinematicsError(f"{len(P)} points but {len(C)} colors")
+        with self._lock:
+            server = self._server
+            if server is None:
+                raise KinematicsError("the viewer is closed")
+            server.scene.add_point_cloud(
+                name, points=P, colors=C, point_size=float(size), point_shape="square"
+            )
+
     # -- lifetime ----------------------------------------------------------------------------
     def close(self) -> None:
         """Stop the server (pages lose their connection); safe to call twice."""
