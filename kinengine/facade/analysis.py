@@ -8,6 +8,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
+import pinocchio as pin
 
 from ..analytic import DEFAULT_SINGULARITY_THRESHOLD, pose_map
 from ..analytic.hessian import analytic_hessian as _analytic_hessian
@@ -17,6 +18,8 @@ from ..control.manipulability import DEFAULT_TOLERANCE, Rows, SingularityReport,
 from ..kinematics import derivatives as _derivatives
 from ..kinematics import resolve_reference
 from ..kinematics.options import checked_parameterization, checked_threshold
+
+_jjtv, _fjtv = pin.computeJointJacobiansTimeVariation, pin.getFrameJacobianTimeVariation
 
 if TYPE_CHECKING:
     from ..control.ik import IKResult
@@ -37,14 +40,32 @@ class AnalysisMethods:
     ) -> FloatArray:
         """J̇ = dJ/dt of the geometric Jacobian in ``reference`` along q̇, (6, dof). See
         :mod:`kinengine.kinematics.derivatives`."""
+        try:  # the inline path: (frame, reference) seen before, no mimic map, q and q̇ ready
+            ready, model, data_of, fid, ref = self._jdot_paths[frame, reference]  # type: ignore[has-type]
+            if ready(q) and ready(qdot):
+                data = data_of()
+                _jjtv(model, data, q, qdot)
+                return _fjtv(model, data, fid, ref)  # type: ignore[no-any-return]
+        except (KeyError, TypeError, AttributeError):
+            pass
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
+        kin = robot.engine
+        coords = kin.coordinates
         ref, fid = (
             resolve_reference(reference),
-            robot.engine.frame_id(robot.end_effector if frame is None else frame),
+            kin.frame_id(robot.end_effector if frame is None else frame),
         )
-        qc: FloatArray = robot.engine.coordinates.check(q, allow_batch=False)
-        vc: FloatArray = robot.engine.coordinates.check(qdot, name="qdot", allow_batch=False)
-        return _derivatives.jacobian_time_variation(robot.engine, qc, vc, fid, ref)
+        qc: FloatArray = coords.check(q, allow_batch=False)
+        vc: FloatArray = coords.check(qdot, name="qdot", allow_batch=False)
+        # not at dof 1: eigenpy gives a (6, 1) result the shape (6,)
+        if coords.identity and kin.dof > 1 and (frame is None or type(frame) is str) and type(reference) is str:
+            try:
+                paths = self._jdot_paths  # type: ignore[has-type]
+            except AttributeError:
+                paths = self._jdot_paths = {}
+            if len(paths) < 256:
+                paths[frame, reference] = (coords.ready, kin.model, kin.data, fid, ref)
+        return _derivatives.jacobian_time_variation(kin, qc, vc, fid, ref)
 
     def kinematic_hessian(
         self, q: ArrayLike, frame: str | None = None, reference: Reference = "local_world_aligned"
