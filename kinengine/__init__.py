@@ -40,19 +40,21 @@ Jacobians (2 configurations or more) on a C chain without scratch memory, equal 
 chain and to Pinocchio to rounding (1e-14)."""
 
 if TYPE_CHECKING:
+    from .control.damped import damped_solve
     from .control.frame_task import FrameTask
     from .control.ik import IKResult
     from .control.ik_batch import IKBatchResult
     from .control.ik_multi import MultiIKResult
     from .control.manipulability import SingularityReport
     from .control.pose_error import pose_error
-    from .control.qp import DifferentialIK, PoseTarget, PostureTarget
+    from .control.qp import DifferentialIK, DiffIKStatus, PoseTarget, PostureTarget, StallWarning
     from .control.task import Task
 
 __version__ = "0.1.0"
 
 # Public name -> the module (below kinengine) that defines it, imported on first access.
 _LAZY = {
+    "DiffIKStatus": "control.qp",
     "DifferentialIK": "control.qp",
     "FrameTask": "control.frame_task",
     "IKBatchResult": "control.ik_batch",
@@ -61,6 +63,8 @@ _LAZY = {
     "PoseTarget": "control.qp",
     "PostureTarget": "control.qp",
     "SingularityReport": "control.manipulability",
+    "StallWarning": "control.qp",
+    "damped_solve": "control.damped",
     "Task": "control.task",
     "pose_error": "control.pose_error",
 }
@@ -68,6 +72,7 @@ _LAZY = {
 __all__ = [
     "ACCELERATED",
     "ConfigurationError",
+    "DiffIKStatus",
     "DifferentialIK",
     "FrameHandle",
     "FrameNotFoundError",
@@ -85,10 +90,12 @@ __all__ = [
     "ResourceLimitError",
     "Robot",
     "SingularityReport",
+    "StallWarning",
     "Task",
     "URDFError",
     "__version__",
     "available_robots",
+    "damped_solve",
     "load",
     "load_urdf_string",
     "pose_error",

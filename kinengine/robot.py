@@ -23,6 +23,9 @@ from types import MappingProxyType
 from typing import overload
 
 from .arrays import ArrayLike, FloatArray, Matrix, Reference, Stack, Vector
+from .control import manipulability as _manipulability
+from .control import rate_limits as _rate_limits
+from .control.manipulability import Rows
 from .errors import OptionError
 from .facade.analysis import AnalysisMethods
 from .facade.analytic import AnalyticMethods
@@ -270,6 +273,26 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
             raise OptionError("`out=` is for batches q (N, dof); a single q returns fresh arrays")
         _batch.checked_workers(workers)
         return handle.kinematics(q, reference)
+
+    # -- controller: URDF rate limits, manipulability gradient ---
+    @property
+    def velocity_limits(self) -> FloatArray:
+        """(dof,) each coordinate's URDF ``<limit velocity>`` [rad/s | m/s]; inf where absent (read-only)."""
+        return _rate_limits.urdf_velocity_limits(self)
+
+    @property
+    def effort_limits(self) -> FloatArray:
+        """(dof,) each coordinate's URDF ``<limit effort>`` [N·m | N]; inf where absent (read-only)."""
+        return _rate_limits.urdf_effort_limits(self)
+
+    def manipulability_gradient(
+        self, q: ArrayLike, frame: str | None = None, rows: Rows = "all"
+    ) -> FloatArray:
+        """∂w/∂q (dof,) of the manipulability w = sqrt(det(J Jᵀ)) of J_e0[rows] at q (dof,), from the
+        kinematic Hessian. See :func:`kinengine.control.manipulability.manipulability_gradient`."""
+        return _manipulability.manipulability_gradient(
+            self, self._coords.check(q, allow_batch=False), frame, rows
+        )
 
 
 def _rebuild_robot(

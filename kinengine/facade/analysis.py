@@ -30,6 +30,9 @@ if TYPE_CHECKING:
 class AnalysisMethods:
     """Derivatives (J̇, kinematic and analytic Hessians), singularity measures and inverse kinematics."""
 
+    _jdot_paths: dict[tuple[object, object], tuple]
+    """(frame, reference) -> (ready, model, data of this thread, frame id, reference) of J̇'s inline path."""
+
     # -- derivatives, singularities, inverse kinematics ----------------------------------------
     def jacobian_time_variation(
         self,
@@ -41,11 +44,11 @@ class AnalysisMethods:
         """J̇ = dJ/dt of the geometric Jacobian in ``reference`` along q̇, (6, dof). See
         :mod:`kinengine.kinematics.derivatives`."""
         try:  # the inline path: (frame, reference) seen before, no mimic map, q and q̇ ready
-            ready, model, data_of, fid, ref = self._jdot_paths[frame, reference]  # type: ignore[has-type]
+            ready, model, data_of, fid, ref = self._jdot_paths[frame, reference]
             if ready(q) and ready(qdot):
                 data = data_of()
                 _jjtv(model, data, q, qdot)
-                return _fjtv(model, data, fid, ref)  # type: ignore[no-any-return]
+                return _fjtv(model, data, fid, ref)
         except (KeyError, TypeError, AttributeError):
             pass
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
@@ -58,9 +61,14 @@ class AnalysisMethods:
         qc: FloatArray = coords.check(q, allow_batch=False)
         vc: FloatArray = coords.check(qdot, name="qdot", allow_batch=False)
         # not at dof 1: eigenpy gives a (6, 1) result the shape (6,)
-        if coords.identity and kin.dof > 1 and (frame is None or type(frame) is str) and type(reference) is str:
+        if (
+            coords.identity
+            and kin.dof > 1
+            and (frame is None or type(frame) is str)
+            and type(reference) is str
+        ):
             try:
-                paths = self._jdot_paths  # type: ignore[has-type]
+                paths = self._jdot_paths
             except AttributeError:
                 paths = self._jdot_paths = {}
             if len(paths) < 256:
