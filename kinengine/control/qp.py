@@ -137,6 +137,7 @@ class DifferentialIK:
         )
         self._hierarchy = Hierarchy(solver)
         self._lb, self._ub = np.zeros(n), np.zeros(n)
+        self._no_G, self._no_h = np.zeros((0, n)), np.zeros(0)
         self._constraints: list[VelocityConstraint] = []
         for constraint in constraints:
             self.add_constraint(constraint)
@@ -250,8 +251,8 @@ class DifferentialIK:
         weighted_sq = 0.0
         rows: list[np.ndarray] = []
         for k, term in enumerate(level.poses):
-            T, twist, gain, w = term.checked()
-            A, e, ff = term.rows_at(self._model, self._data, self._coords.fold, T, twist)
+            p, C, twist, gain, w = term.checked()
+            A, e, ff = term.rows_at(self._model, self._data, self._coords.fold, p, C, twist)
             self.last_error[6 * (offset + k) : 6 * (offset + k) + 6] = e
             if not term.all_rows:
                 A, e, ff = A[term.rows], e[term.rows], ff[term.rows]
@@ -285,6 +286,8 @@ class DifferentialIK:
 
     def _inequalities(self, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """The extra blocks stacked, in step units: G Δq <= h·dt."""
+        if not self._constraints:
+            return self._no_G, self._no_h
         blocks_G, blocks_h = [], []
         for constraint in self._constraints:
             got = constraint.inequalities(q, dt)
@@ -305,7 +308,7 @@ class DifferentialIK:
             blocks_G.append(G)
             blocks_h.append(h * dt)
         if not blocks_G:
-            return np.zeros((0, self.dof)), np.zeros(0)
+            return self._no_G, self._no_h
         return np.vstack(blocks_G), np.concatenate(blocks_h)
 
 

@@ -28,6 +28,9 @@ def number_option(
     what: str, value: object, low: float = 0.0, high: float = math.inf, open_low: bool = False
 ) -> float:
     """A finite real number in [low, high] ((low, high] with open_low), else OptionError naming ``what``."""
+    fast = type(value) is float and (value > low if open_low else value >= low) and value <= high
+    if fast and value - value == 0.0:  # a finite float in range: the common case, checked cheaply
+        return value  # type: ignore[return-value]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise OptionError(f"{what} must be a number, got {value!r:.60}")
     x = float(value)
@@ -144,17 +147,24 @@ class PoseTerm:
         self.A6 = np.zeros((6, robot.dof))
         self.e6 = np.zeros(6)
         self.ff6 = np.zeros(6)
+        self._checked_key: bytes | None = None
+        self._checked: tuple[np.ndarray, np.ndarray] = (np.zeros(3), np.eye(3))
 
-    def checked(self) -> tuple[np.ndarray, np.ndarray | None, float, float]:
-        """(T_target (4, 4), twist (6,) or None, gain, weight), each checked now (OptionError)."""
+    def checked(self) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, float, float]:
+        """(p_target (3,), C_target (3, 3), twist (6,) or None, gain, weight), each checked now
+        (OptionError)."""
         target = self.target
-        try:
-            p, C = single_target(target.T_target, None, None)  # the check inverse_kinematics makes
-        except KinematicsError as error:
-            raise OptionError(f"{self.name}.T_target: {error}") from None
-        assert p is not None and C is not None
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = C, p
+        T = target.T_target
+        key = T.tobytes() if type(T) is np.ndarray and T.dtype == np.float64 and T.shape == (4, 4) else None
+        if key is not None and key == self._checked_key:  # the very values checked at the last step
+            p, C = self._checked
+        else:
+            try:
+                p, C = single_target(T, None, None)  # the check inverse_kinematics makes
+            except KinematicsError as error:
+                raise OptionError(f"{self.name}.T_target: {error}") from None
+            assert p is not None and C is not None
+            self._checked_key, self._checked = key, (p, C)
         twist = None
         if target.twist is not None:
             try:
@@ -167,14 +177,15 @@ class PoseTerm:
                     f"{target.twist!r:.80}"
                 )
         gain = number_option(f"{self.name} gain", target.gain, 0.0, 1.0, open_low=True)
-        return T, twist, gain, number_option(f"{self.name} weight", target.weight)
+        return p, C, twist, gain, number_option(f"{self.name} weight", target.weight)
 
     def rows_at(
         self,
         model: pin.Model,
         data: pin.Data,
         fold: Callable[[np.ndarray], np.ndarray],
-        T_target: np.ndarray,
+        p_target: np.ndarray,
+        C_target: np.ndarray,
         twist: np.ndarray | None,
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(A (6, dof), e (6,), V (6,)): rows [position; rotation] of :mod:`.qp`'s doc and feed-forward V,
@@ -195,11 +206,10 @@ class PoseTerm:
             CB = MB.rotation
             C, p = CB.T @ MA.rotation, CB.T @ (MA.translation - MB.translation)
             Jv, Jw = CB.T @ inner[:3], CB.T @ inner[3:]
-        C_target = T_target[:3, :3]
         e, A, ff = term.e6, term.A6, term.ff6
         R = C.T @ C_target
         Jr = pin.Jlog3(R)  # d log3(R exp(δ)) = Jr δ
-        e[:3] = T_target[:3, 3] - p
+        e[:3] = p_target - p
         e[3:] = pin.log3(R)
         A[:3] = Jv
         A[3:] = Jr @ (C_target.T @ Jw)
