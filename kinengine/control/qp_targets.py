@@ -28,9 +28,10 @@ def number_option(
     what: str, value: object, low: float = 0.0, high: float = math.inf, open_low: bool = False
 ) -> float:
     """A finite real number in [low, high] ((low, high] with open_low), else OptionError naming ``what``."""
-    fast = type(value) is float and (value > low if open_low else value >= low) and value <= high
-    if fast and value - value == 0.0:  # a finite float in range: the common case, checked cheaply
-        return value  # type: ignore[return-value]
+    if type(value) is float:  # the common case, checked cheaply
+        x = value
+        if (x > low if open_low else x >= low) and x <= high and x - x == 0.0:  # in range and finite
+            return x
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise OptionError(f"{what} must be a number, got {value!r:.60}")
     x = float(value)
@@ -160,10 +161,11 @@ class PoseTerm:
             p, C = self._checked
         else:
             try:
-                p, C = single_target(T, None, None)  # the check inverse_kinematics makes
+                p_or_none, C_or_none = single_target(T, None, None)  # the check inverse_kinematics makes
             except KinematicsError as error:
                 raise OptionError(f"{self.name}.T_target: {error}") from None
-            assert p is not None and C is not None
+            assert p_or_none is not None and C_or_none is not None
+            p, C = p_or_none, C_or_none
             self._checked_key, self._checked = key, (p, C)
         twist = None
         if target.twist is not None:
