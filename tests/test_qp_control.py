@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 import pinocchio as pin
 import pytest
+from example_modules import load_example
 
 import kinengine
 from kinengine import DifferentialIK, PoseTarget, PostureTarget, damped_solve
@@ -147,14 +148,8 @@ def test_bad_numbers_and_shapes_are_option_or_configuration_errors(abb):
 
 
 # -- feed-forward ----------------------------------------------------------------------------------
-def _circle(T0, t, radius=0.05, omega=2.0):
-    """A circle in tool0's y-z plane of I at 0.1 m/s, and its twist [v; ω] in I."""
-    T = T0.copy()
-    T[1, 3] += radius * np.sin(omega * t)
-    T[2, 3] += radius * (np.cos(omega * t) - 1.0)
-    twist = np.zeros(6)
-    twist[1], twist[2] = radius * omega * np.cos(omega * t), -radius * omega * np.sin(omega * t)
-    return T, twist
+_circle = load_example("moving_target_tracking").circle
+"""(T (4, 4), twist (6,)) of a circle in tool0's y-z plane of I at 0.1 m/s (the example's)."""
 
 
 def _track_circle(robot, feed_forward, steps=3000):
