@@ -41,6 +41,7 @@ Jacobians (2 configurations or more) on a C chain without scratch memory, equal 
 chain and to Pinocchio to rounding (1e-14)."""
 
 if TYPE_CHECKING:
+    from .control.damped import damped_solve
     from .control.frame_task import FrameTask
     from .control.ik import IKResult
     from .control.ik_batch import IKBatchResult
@@ -48,7 +49,7 @@ if TYPE_CHECKING:
     from .control.ik_solutions import IKSolutions
     from .control.manipulability import SingularityReport
     from .control.pose_error import pose_error
-    from .control.qp import DifferentialIK, PoseTarget, PostureTarget
+    from .control.qp import DifferentialIK, DiffIKStatus, PoseTarget, PostureTarget, StallWarning
     from .control.task import Task
     from .workspace import BasePlacements, ReachabilityMap, base_placements, reachability_map
 
@@ -56,6 +57,7 @@ __version__ = "0.1.0"
 
 # Public name -> the module (below kinengine) that defines it, imported on first access.
 _LAZY = {
+    "DiffIKStatus": "control.qp",
     "DifferentialIK": "control.qp",
     "FrameTask": "control.frame_task",
     "IKBatchResult": "control.ik_batch",
@@ -65,6 +67,8 @@ _LAZY = {
     "PoseTarget": "control.qp",
     "PostureTarget": "control.qp",
     "SingularityReport": "control.manipulability",
+    "StallWarning": "control.qp",
+    "damped_solve": "control.damped",
     "Task": "control.task",
     "pose_error": "control.pose_error",
     "BasePlacements": "workspace",
@@ -77,6 +81,7 @@ __all__ = [
     "ACCELERATED",
     "BasePlacements",
     "ConfigurationError",
+    "DiffIKStatus",
     "DifferentialIK",
     "FrameHandle",
     "FrameNotFoundError",
@@ -97,11 +102,13 @@ __all__ = [
     "ResourceLimitError",
     "Robot",
     "SingularityReport",
+    "StallWarning",
     "Task",
     "URDFError",
     "__version__",
     "available_robots",
     "base_placements",
+    "damped_solve",
     "load",
     "load_urdf_string",
     "pose_error",

@@ -31,6 +31,7 @@ from .analytic.hessian import analytic_hessian as _analytic_hessian
 from .analytic.options import DEFAULTS, AnalyticOptions
 from .arrays import ArrayLike, FloatArray, Matrix, Reference, Stack, Vector
 from .control import manipulability as _manipulability
+from .control import rate_limits as _rate_limits
 from .control.manipulability import DEFAULT_TOLERANCE, Rows, SingularityReport, VelocityEllipsoid
 from .errors import OptionError
 from .kinematics import Kinematics, resolve_reference
@@ -50,6 +51,8 @@ if TYPE_CHECKING:  # imported by the first call that needs them
     from .control.ik_solutions import IKSolutions
     from .control.task import Task
     from .presentation.viewer import Viewer
+
+_jjtv, _fjtv = pin.computeJointJacobiansTimeVariation, pin.getFrameJacobianTimeVariation
 
 FastPath = tuple[Callable[[object], bool], Callable[[FloatArray], FloatArray]]
 """(ready, J_A): the input test CoordinateMap.ready and J_A(q) for a q that passed it."""
@@ -83,6 +86,7 @@ class Robot:
         self._end_effector = end_effector if end_effector is not None else _default_end_effector(description)
         self._handles: dict[object, FrameHandle] = {}  # frame name (None: end effector) -> checked handle
         self._analytic_paths: dict[tuple, FastPath | None] = {}  # analytic_jacobian's options -> J_A(q)
+        self._jdot_paths: dict[tuple[object, object], tuple] = {}  # (frame, reference) -> J̇'s inline path
 
     # -- description ------------------------------------------------------------------------
     name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
@@ -377,11 +381,29 @@ class Robot:
     ) -> FloatArray:
         """J̇ = dJ/dt of the geometric Jacobian in ``reference`` along q̇, (6, dof). See
         :mod:`kinengine.kinematics.derivatives`."""
+        try:  # the inline path: (frame, reference) seen before, no mimic map, q and q̇ ready
+            ready, model, data_of, fid, ref = self._jdot_paths[frame, reference]
+            if ready(q) and ready(qdot):
+                data = data_of()
+                _jjtv(model, data, q, qdot)
+                return _fjtv(model, data, fid, ref)
+        except (KeyError, TypeError):
+            pass
+        kin, coords = self._kin, self._coords
         ref = resolve_reference(reference)
-        fid = self._kin.frame_id(self._end_effector if frame is None else frame)
-        qc: FloatArray = self._coords.check(q, allow_batch=False)
-        vc: FloatArray = self._coords.check(qdot, name="qdot", allow_batch=False)
-        return _derivatives.jacobian_time_variation(self._kin, qc, vc, fid, ref)
+        fid = kin.frame_id(self._end_effector if frame is None else frame)
+        qc: FloatArray = coords.check(q, allow_batch=False)
+        vc: FloatArray = coords.check(qdot, name="qdot", allow_batch=False)
+        # not at dof 1: eigenpy gives a (6, 1) result the shape (6,)
+        if (
+            coords.identity
+            and kin.dof > 1
+            and (frame is None or type(frame) is str)
+            and type(reference) is str
+        ):
+            if len(self._jdot_paths) < 256:
+                self._jdot_paths[frame, reference] = (coords.ready, kin.model, kin.data, fid, ref)
+        return _derivatives.jacobian_time_variation(kin, qc, vc, fid, ref)
 
     def kinematic_hessian(
         self, q: ArrayLike, frame: str | None = None, reference: Reference = "local_world_aligned"
@@ -737,6 +759,26 @@ class Robot:
         from .control.closed_form import ik_solutions
 
         return ik_solutions(self, T, frame, q_near=q_near, within_limits=within_limits, all_turns=all_turns)
+
+    # -- controller: URDF rate limits, manipulability gradient ---
+    @property
+    def velocity_limits(self) -> FloatArray:
+        """(dof,) each coordinate's URDF ``<limit velocity>`` [rad/s | m/s]; inf where absent (read-only)."""
+        return _rate_limits.urdf_velocity_limits(self)
+
+    @property
+    def effort_limits(self) -> FloatArray:
+        """(dof,) each coordinate's URDF ``<limit effort>`` [N·m | N]; inf where absent (read-only)."""
+        return _rate_limits.urdf_effort_limits(self)
+
+    def manipulability_gradient(
+        self, q: ArrayLike, frame: str | None = None, rows: Rows = "all"
+    ) -> FloatArray:
+        """∂w/∂q (dof,) of the manipulability w = sqrt(det(J Jᵀ)) of J_e0[rows] at q (dof,), from the
+        kinematic Hessian. See :func:`kinengine.control.manipulability.manipulability_gradient`."""
+        return _manipulability.manipulability_gradient(
+            self, self._coords.check(q, allow_batch=False), frame, rows
+        )
 
 
 def _rebuild_robot(

@@ -83,6 +83,6 @@ def test_info_lists_coordinates_types_limits_and_mimic_joints(capsys, tmp_path):
     assert main(["info", str(path)]) == 0
     out = capsys.readouterr().out.splitlines()
     assert "root link (the frame poses are given in): base" in out
-    assert out[4].split() == ["0", "shoulder", "revolute", "-2.5", "2.5"]
-    assert out[6].split() == ["2", "spin", "continuous", "-inf", "inf"]
+    assert out[4].split() == ["0", "shoulder", "revolute", "-2.5", "2.5", "2", "10"]  # + velocity, effort
+    assert out[6].split() == ["2", "spin", "continuous", "-inf", "inf", "2", "10"]
     assert "  - finger_b_joint (mimic, revolute) = -1.5·finger_a_joint + 0.2" in out

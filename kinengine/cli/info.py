@@ -1,4 +1,5 @@
-"""``kinengine info ROBOT``: joints (coordinate index, type, limits), mimic joints and frames."""
+"""``kinengine info ROBOT``: joints (coordinate index, type, position, velocity and effort limits), mimic
+joints and frames."""
 
 from __future__ import annotations
 
@@ -13,12 +14,22 @@ def _run(args: argparse.Namespace) -> int:
     print(f"{printable(robot.name)}: {robot.dof} dof, source {printable(robot.source)}")
     print(f"end effector: {printable(robot.end_effector)}")
     print(f"root link (the frame poses are given in): {printable(robot.description.root)}")
-    print(f"{'q':>3} {'joint':<28} {'type':<11} {'lower':>10} {'upper':>10}")
+    print(f"{'q':>3} {'joint':<28} {'type':<11} {'lower':>10} {'upper':>10} {'velocity':>10} {'effort':>10}")
     kinds = {j.name: j.type for j in robot.description.joints}
-    for i, (name, lo, hi) in enumerate(
-        zip(robot.joint_names, robot.lower_limits, robot.upper_limits, strict=True)
-    ):
-        print(f"{i:>3} {printable(name):<28} {kinds[name]:<11} {lo:>10.5g} {hi:>10.5g}")
+    rows = zip(
+        robot.joint_names,
+        robot.lower_limits,
+        robot.upper_limits,
+        robot.velocity_limits,
+        robot.effort_limits,
+        strict=True,
+    )
+    for i, (name, lo, hi, vel, eff) in enumerate(rows):
+        print(
+            f"{i:>3} {printable(name):<28} {kinds[name]:<11} {lo:>10.5g} {hi:>10.5g} "
+            f"{vel:>10.5g} {eff:>10.5g}"
+        )
+    print("(limits in rad or m; velocity in rad/s or m/s; effort in N m or N; inf: none in the URDF)")
     for joint in robot.description.joints:
         if joint.mimic is not None:
             m = joint.mimic

@@ -19,9 +19,9 @@ from .closed_form import METHODS, available, chain_of, ik_solutions
 from .ik_solutions import residuals
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
-    from .robot_like import RobotLike
     from .ik_batch import IKBatchResult
     from .ik_solver import IKResult
+    from .robot_like import RobotLike
 
 
 def closed_form_or_none(

@@ -149,6 +149,29 @@ def manipulability(
     return float(w) if J.ndim == 2 else w
 
 
+def manipulability_gradient(
+    robot: RobotLike, q: npt.ArrayLike, frame: str | None = None, rows: Rows = "all"
+) -> npt.NDArray[np.float64]:
+    """∂w/∂q (dof,) of Yoshikawa's w = Π σ_i of J_e0[rows] at one q (dof,), from the kinematic Hessian
+    H[:, j, k] = ∂J[:, j]/∂q_k: ∂σ_i/∂q_k = u_iᵀ (∂J/∂q_k) v_i (J = U Σ Vᵀ), so
+    ∂w/∂q_k = Σ_i (Π_{j≠i} σ_j) u_iᵀ (∂J/∂q_k) v_i. Units of w per [rad | m]. Zero when len(rows) > dof
+    (w ≡ 0). Exact where the σ_i are distinct; ascend it (q̇ = k·∂w/∂q, e.g. in a lower priority level)
+    to steer away from singularities.
+    """
+    index = list(_rows(rows))
+    J = robot.jacobian(q, frame)
+    if J.ndim != 2:
+        raise ParameterizationError("manipulability_gradient takes one configuration q (dof,), not a batch")
+    if len(index) > robot.dof:
+        return np.zeros(robot.dof)
+    J = J[index]
+    H = robot.kinematic_hessian(q, frame)[index]  # (m, dof, dof)
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    others = np.array([np.prod(np.delete(s, i)) for i in range(len(s))])
+    dsigma = np.einsum("mi,mjk,ij->ik", U, H, Vt)  # [i, k] = u_iᵀ ∂J/∂q_k v_i
+    return np.asarray(others @ dsigma, dtype=np.float64)
+
+
 def velocity_ellipsoid(robot: RobotLike, q: npt.ArrayLike, frame: str | None = None) -> VelocityEllipsoid:
     """The velocity manipulability ellipsoid of ``frame``'s origin (eigenvectors of J_v J_vᵀ), q (dof,)."""
     frame = robot.end_effector if frame is None else frame

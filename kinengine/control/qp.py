@@ -5,31 +5,42 @@ controller calls each cycle), solved by DAQP (or ProxQP) through ``qpsolvers``.
 ...                                       kinengine.PostureTarget(robot.neutral(), weight=1e-3)])
 >>> qdot = ik.solve(q, dt)           # [rad/s | m/s], (dof,); q += qdot * dt
 
-The step Δq = q̇·dt minimizes
+The step Δq = q̇·dt of one priority level minimizes
 
-    Σ_targets w_i ‖A_i Δq − k_i e_i‖² + w_p ‖Δq − k_p (q_ref − q)‖² + (λ + μ Σ_i w_i ‖k_i e_i‖²) ‖Δq‖²
+    Σ_i w_i ‖A_i Δq − (k_i e_i + V_i dt)‖² + w_p ‖Δq − k_p (q_ref − q)‖² + (λ + μ Σ_i w_i ‖k_i e_i‖²) ‖Δq‖²
 
-subject to max(q_min − q, −q̇_max dt) ≤ Δq ≤ min(q_max − q, q̇_max dt) (joint position limits as velocity
-bounds over the step, and joint velocity limits q̇_max from the URDF's ``<limit velocity>``, overridable).
-λ (``damping``) is a constant Tikhonov term; μ (``lm_damping``) the Levenberg–Marquardt term that grows
-with the error, so the step stays short and well conditioned far from the target and near singularities
-and vanishes at convergence (Newton steps there).
+subject to lb ≤ Δq ≤ ub (joint position limits as bounds over the step, joint velocity limits q̇_max from
+the URDF's ``<limit velocity>``, optional acceleration limits around the previous q̇) and any extra linear
+inequality block G q̇ ≤ h (:class:`VelocityConstraint`). λ (``damping``) is a constant Tikhonov term; μ
+(``lm_damping``) the Levenberg–Marquardt term that grows with the error, so the step stays short and well
+conditioned far from the target and near singularities and vanishes at convergence (Newton steps there).
 
 A :class:`PoseTarget`'s error e is decoupled: position rows "x", "y", "z" are p_target − p in the root frame
 I (in B with ``relative_to`` B), with A = J_v (LOCAL_WORLD_ALIGNED linear rows, or the relative Jacobian's
 in B); rotation rows "rx", "ry", "rz" are r = log3(C_Fᵀ C_target), in the frame F's own axes, with
-A = Jlog3(C_targetᵀ C_F) · C_Fᵀ J_ω, the exact derivative (d r = −A dq), so a full target converges
+A = Jlog3(C_Fᵀ C_target) · C_targetᵀ J_ω, the exact derivative (d r = −A dq), so a full target converges
 quadratically. Rows select a sub-task: ("x", "y", "z", "rx", "ry") leaves the rotation about F's z axis free
 (a 5-D target: position plus tool axis). The gain k ∈ (0, 1] is the fraction of the error removed per step
 (1: a full Newton step). Units: e in [m] and [rad].
+
+Feed-forward: a target's twist [v; ω] (``PoseTarget.twist``) is the velocity of the target's origin and its
+angular velocity, both in I's axes (in B's, relative to B, with ``relative_to`` B) — the convention of
+``robot.jacobian(q, frame)`` ("local_world_aligned"). It adds V dt to the wanted change of e: V = v on
+the position rows, Jlog3(C_Fᵀ C_target) C_targetᵀ ω on the rotation rows (the rate of r while the target
+turns), so a target moving at a known twist is followed without the lag e = V dt / k of a pure feedback.
+
+Priorities: ``DifferentialIK(robot, level_1, level_2, ...)``. Each level is solved as a QP with the bounds,
+then the next one only in the null space of every higher level's task rows: Δq = Δq_1 + Z z, Z an
+orthonormal basis of the null space of the stacked A of the levels above (SVD, singular values at or below
+``1e-9·max(1, σ_max)`` count as zero), so a lower level can never change what a higher one achieved, and
+the bounds still hold. See docs/controller.md.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Literal, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -37,257 +48,279 @@ import pinocchio as pin
 
 from ..errors import OptionError
 from ..kinematics.memory import create_data
-from ..kinematics.relative import relative_terms
+from .qp_levels import Hierarchy, LevelTerms, Limits, step_bounds
+from .qp_status import DiffIKStatus, StallWarning, StatusMonitor
+from .qp_targets import ROWS, Level, PoseTarget, PostureTarget, VelocityConstraint, number_option
+from .rate_limits import checked_rate_limits, urdf_velocity_limits
+from .robot_like import RobotLike
 
-if TYPE_CHECKING:  # named for the checker only
-    from .robot_like import RobotLike
-
-ROWS = ("x", "y", "z", "rx", "ry", "rz")
 SOLVERS = ("daqp", "proxqp")
-_LWA = pin.LOCAL_WORLD_ALIGNED
-_BIG = 1e20  # stands for an infinite bound
-
-
-@dataclass(eq=False)
-class PoseTarget:
-    """Drive ``frame`` to ``T_target`` (4, 4): its pose in the root frame I, or in ``relative_to`` B.
-
-    rows: a subset of ("x", "y", "z", "rx", "ry", "rz") (module doc: position rows in I or B, rotation rows
-    in the frame's own axes); None: all six. gain in (0, 1]: fraction of the error removed per step.
-    weight >= 0: its weight in the cost. Assign ``T_target`` between steps to track a moving target.
-    """
-
-    frame: str
-    T_target: np.ndarray
-    rows: Sequence[str] | None = None
-    gain: float = 1.0
-    weight: float = 1.0
-    relative_to: str | None = None
-
-
-@dataclass(eq=False)
-class PostureTarget:
-    """Pull q towards ``q_ref`` (dof,) with ``weight`` (a regularization; small, e.g. 1e-3). ``joints``: names
-    of the coordinates it acts on (None: all). Give a large weight on a coordinate to lock it there."""
-
-    q_ref: np.ndarray
-    weight: float = 1e-3
-    gain: float = 1.0
-    joints: Sequence[str] | None = None
-    _mask: np.ndarray | None = field(default=None, repr=False)
-
-
-class _PoseTerm:
-    """A PoseTarget resolved against the robot: frame ids, row indices, buffers."""
-
-    def __init__(self, robot: RobotLike, target: PoseTarget) -> None:
-        self.target = target
-        self.fid = robot.frame_id(target.frame)
-        self.fb = None if target.relative_to is None else robot.frame_id(target.relative_to)
-        rows = ROWS if target.rows is None else tuple(target.rows)
-        for r in rows:
-            if r not in ROWS:
-                raise OptionError(f"PoseTarget rows are among {ROWS}, got {r!r}")
-        if len(set(rows)) != len(rows) or not rows:
-            raise OptionError(f"PoseTarget rows must be distinct and not empty, got {rows!r}")
-        self.rows = np.array([ROWS.index(r) for r in rows], dtype=np.intp)
-        self.all_rows = rows == ROWS
-        if not (0.0 < target.gain <= 1.0) or not (target.weight >= 0.0 and math.isfinite(target.weight)):
-            raise OptionError(
-                f"PoseTarget gain must be in (0, 1] and weight finite >= 0, got gain {target.gain!r}, "
-                f"weight {target.weight!r}"
-            )
-        self.A6 = np.zeros((6, robot.dof))
-        self.e6 = np.zeros(6)
+LIMIT_MODES = ("clip", "scale")
 
 
 class DifferentialIK:
-    """One QP per control step: see the module doc. Build once, call :meth:`solve` every cycle.
+    """One QP per control step (per priority level): see the module doc. Build once, call :meth:`solve`
+    every cycle.
 
-    robot: a kinengine Robot. tasks: PoseTarget and PostureTarget entries. damping λ >= 0 and
-    lm_damping μ >= 0 as in the module doc. velocity_limits: None (the URDF's; a joint without one is
-    unbounded), an array (dof,) [rad/s | m/s], or a mapping joint name -> limit overriding the URDF's (0
-    locks a joint). position_limits: False ignores the joint limits. solver: "daqp" (default) or "proxqp".
+    robot: a kinengine Robot. tasks: PoseTarget and PostureTarget entries (the first priority level);
+    ``*lower_levels``: further lists, each solved only in the null space of the levels before it.
+    damping λ >= 0 and lm_damping μ >= 0 as in the module doc. velocity_limits: None (the URDF's; a joint
+    without one is unbounded), an array (dof,) [rad/s | m/s], or a mapping joint name -> limit overriding
+    the URDF's (0 locks a joint). acceleration_limits: None (none), an array (dof,) or a mapping name -> limit
+    [rad/s² | m/s²] (> 0, inf for none): |q̇ − q̇_prev| <= a·dt, with q̇_prev the q̇ this solver returned last
+    (zero after construction or :meth:`reset`) or ``solve(..., previous_qdot=...)``; the velocity bound from
+    each position limit then also lets the joint brake in time (q̇²/(2a) + q̇·dt <= q_max − q).
+    position_limits: False ignores the joint limits. limits: "clip" (the QP: each bound cuts its own
+    coordinate, which may turn the Cartesian direction) or "scale" (the unconstrained step times the largest
+    s <= 1 that satisfies every bound: the direction is kept; "clip" when no such s exists). solver: "daqp"
+    (default) or "proxqp". constraints: :class:`VelocityConstraint` blocks G q̇ ≤ h. stall_window (steps),
+    stall_decrease (relative) and stall_residual: the stall test of :class:`DiffIKStatus`; warn_on_stall:
+    warn (:class:`StallWarning`) the first time a step stalls after construction or :meth:`reset`.
     """
 
     def __init__(
         self,
         robot: RobotLike,
         tasks: Sequence[PoseTarget | PostureTarget],
-        *,
+        *lower_levels: Sequence[PoseTarget | PostureTarget],
         damping: float = 1e-12,
         lm_damping: float = 1e-3,
         velocity_limits: npt.ArrayLike | Mapping[str, float] | None = None,
+        acceleration_limits: npt.ArrayLike | Mapping[str, float] | None = None,
         position_limits: bool = True,
+        limits: str = "clip",
         solver: str = "daqp",
+        constraints: Sequence[VelocityConstraint] = (),
+        stall_window: int = 100,
+        stall_decrease: float = 1e-3,
+        stall_residual: float = 1e-4,
+        warn_on_stall: bool = False,
     ) -> None:
         if solver not in SOLVERS:
             raise OptionError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
-        if not (damping >= 0 and lm_damping >= 0):
-            raise OptionError(f"damping and lm_damping must be >= 0, got {damping!r}, {lm_damping!r}")
-        self.robot, self.solver, self.damping, self.lm_damping = (
-            robot,
-            solver,
-            float(damping),
-            float(lm_damping),
-        )
+        if limits not in LIMIT_MODES:
+            raise OptionError(f"limits must be one of {', '.join(LIMIT_MODES)}, got {limits!r}")
+        self.damping = number_option("damping", damping)
+        self.lm_damping = number_option("lm_damping", lm_damping)
+        if (
+            isinstance(stall_window, bool)
+            or not isinstance(stall_window, (int, np.integer))
+            or stall_window < 1
+        ):
+            raise OptionError(f"stall_window must be a whole number of steps >= 1, got {stall_window!r}")
+        self.stall_window = int(stall_window)
+        self.stall_decrease = number_option("stall_decrease", stall_decrease, 0.0, 1.0)
+        self.stall_residual = number_option("stall_residual", stall_residual)
+        self.warn_on_stall, self.limits = bool(warn_on_stall), limits
+        self.robot, self.solver = robot, solver
         kin = robot.engine
         self._model, self._coords = kin.model, kin.coordinates
         self._data = create_data(self._model, "a DifferentialIK")
         n = self.dof = robot.dof
-        self._pose_terms: list[_PoseTerm] = []
-        self._postures: list[PostureTarget] = []
-        for task in tasks:
-            if isinstance(task, PoseTarget):
-                self._pose_terms.append(_PoseTerm(robot, task))
-            elif isinstance(task, PostureTarget):
-                mask = (
-                    np.ones(n)
-                    if task.joints is None
-                    else np.array([1.0 if name in set(task.joints) else 0.0 for name in robot.joint_names])
-                )
-                unknown = set(task.joints or ()) - set(robot.joint_names)
-                if unknown:
-                    raise OptionError(
-                        f"PostureTarget joints {sorted(unknown)} are not coordinates of the robot; "
-                        f"known: {', '.join(robot.joint_names)}"
-                    )
-                task._mask = mask
-                self._postures.append(task)
-            else:
-                raise OptionError(f"tasks are PoseTarget or PostureTarget entries, got {task!r}")
-        if not self._pose_terms and not self._postures:
+        self._levels = [Level(robot, level, i) for i, level in enumerate((tasks, *lower_levels))]
+        if not any(level.poses or level.postures for level in self._levels):
             raise OptionError("DifferentialIK needs at least one task")
-        self.velocity_limits = self._velocity_limits(robot, velocity_limits)
-        self._lower = robot.lower_limits if position_limits else np.full(n, -np.inf)
-        self._upper = robot.upper_limits if position_limits else np.full(n, np.inf)
-        self._H, self._c = np.zeros((n, n)), np.zeros(n)
-        self._lb, self._ub = np.zeros(n), np.zeros(n)
-        self._diag = self._H.reshape(-1)[:: n + 1]  # a view of H's diagonal
-        self._AtA = np.zeros((n, n))
-        self.last_error = np.full(6 * len(self._pose_terms), np.nan)
-        self.qp_calls = 0
-        """How many solves needed the QP solver (a bound active); the others were one linear solve."""
-
-    @staticmethod
-    def _velocity_limits(
-        robot: RobotLike, limits: npt.ArrayLike | Mapping[str, float] | None
-    ) -> npt.NDArray[np.float64]:
-        urdf = {j.name: j.velocity for j in robot.description.joints}
-        out = np.array(
-            [urdf.get(name) if urdf.get(name) else np.inf for name in robot.joint_names], dtype=float
+        self._pose_terms = [t for level in self._levels for t in level.poses]
+        self._postures = [p for level in self._levels for p in level.postures]
+        self.velocity_limits = checked_rate_limits(
+            robot, velocity_limits, urdf_velocity_limits(robot), "velocity_limits"
         )
-        if limits is None:
-            return out
-        if isinstance(limits, Mapping):
-            for name, value in limits.items():
-                if name not in robot.joint_names:
-                    raise OptionError(
-                        f"velocity_limits names unknown joint {name!r}; known: {', '.join(robot.joint_names)}"
-                    )
-                out[robot.joint_names.index(name)] = float(value)
-        else:
-            out = np.array(limits, dtype=float).reshape(-1)
-            if out.shape != (robot.dof,):
-                raise OptionError(f"velocity_limits must have shape ({robot.dof},), got {out.shape}")
-        if not (out >= 0).all():
-            raise OptionError("velocity_limits must be >= 0 (inf for none)")
-        return out
+        self.acceleration_limits = checked_rate_limits(
+            robot, acceleration_limits, np.full(n, np.inf), "acceleration_limits"
+        )
+        if acceleration_limits is not None and not (self.acceleration_limits > 0).all():
+            raise OptionError("acceleration_limits must be > 0 (inf for none)")
+        self._limits = Limits(
+            robot.lower_limits if position_limits else np.full(n, -np.inf),
+            robot.upper_limits if position_limits else np.full(n, np.inf),
+            self.velocity_limits,
+            self.acceleration_limits,
+        )
+        self._hierarchy = Hierarchy(solver)
+        self._lb, self._ub = np.zeros(n), np.zeros(n)
+        self._no_G, self._no_h = np.zeros((0, n)), np.zeros(0)
+        self._constraints: list[VelocityConstraint] = []
+        for constraint in constraints:
+            self.add_constraint(constraint)
+        self.last_error = np.full(6 * len(self._pose_terms), np.nan)
+        self.reset()
+
+    # -- state ------------------------------------------------------------------------------------
+    def reset(self, qdot: npt.ArrayLike | None = None) -> None:
+        """Start a new episode: the previous q̇ of the acceleration limits becomes ``qdot`` (default zero:
+        at rest), the stall history is cleared and the stall warning may be given again."""
+        self._qdot = (
+            np.zeros(self.dof)
+            if qdot is None
+            else self._coords.check(qdot, name="qdot", allow_batch=False).copy()
+        )
+        self._monitor = StatusMonitor(
+            self.robot.joint_names,
+            self.stall_window,
+            self.stall_decrease,
+            self.stall_residual,
+            self.warn_on_stall,
+        )
+
+    @property
+    def status(self) -> DiffIKStatus:
+        """The :class:`DiffIKStatus` of the last :meth:`solve`."""
+        return self._monitor.status
+
+    def add_constraint(self, constraint: VelocityConstraint) -> None:
+        """Plug in an extra block G q̇ ≤ h (:class:`VelocityConstraint`), evaluated at every solve."""
+        if not callable(getattr(constraint, "inequalities", None)):
+            raise OptionError(
+                f"a constraint needs a method inequalities(q, dt) -> (G, h) or None, got {constraint!r:.60}"
+            )
+        self._constraints.append(constraint)
+
+    @property
+    def qp_calls(self) -> int:
+        """How many solves needed the QP solver (a bound active); the others were one linear solve."""
+        return self._hierarchy.qp_calls
 
     @property
     def tasks(self) -> tuple[PoseTarget | PostureTarget, ...]:
+        """Every task of every level, the pose targets first."""
         return tuple(t.target for t in self._pose_terms) + tuple(self._postures)
 
-    def solve(self, q: npt.ArrayLike, dt: float) -> npt.NDArray[np.float64]:
+    @property
+    def levels(self) -> tuple[tuple[PoseTarget | PostureTarget, ...], ...]:
+        """The tasks of each priority level, highest first."""
+        return tuple(tuple(t.target for t in lv.poses) + tuple(lv.postures) for lv in self._levels)
+
+    # -- the step ---------------------------------------------------------------------------------
+    @overload
+    def solve(
+        self,
+        q: npt.ArrayLike,
+        dt: float,
+        *,
+        info: Literal[False] = ...,
+        previous_qdot: npt.ArrayLike | None = ...,
+    ) -> npt.NDArray[np.float64]: ...
+    @overload
+    def solve(
+        self, q: npt.ArrayLike, dt: float, *, info: Literal[True], previous_qdot: npt.ArrayLike | None = ...
+    ) -> tuple[npt.NDArray[np.float64], DiffIKStatus]: ...
+
+    def solve(
+        self, q: npt.ArrayLike, dt: float, *, info: bool = False, previous_qdot: npt.ArrayLike | None = None
+    ) -> npt.NDArray[np.float64] | tuple[npt.NDArray[np.float64], DiffIKStatus]:
         """q̇ (dof,) [rad/s | m/s] for one step of ``dt`` [s] from q (dof,): q + q̇·dt is the QP's step.
 
         ``last_error`` then holds each PoseTarget's 6 error rows [p_target − p; log3(C_Fᵀ C_target)] at q
-        (before the step), stacked.
+        (before the step), stacked; ``status`` the :class:`DiffIKStatus` (returned too with ``info=True``).
+        ``previous_qdot``: the q̇ the acceleration limits start from (default: the last one returned).
         """
-        if not dt > 0:
-            raise OptionError(f"dt must be > 0 [s], got {dt!r}")
+        dt = number_option("dt [s]", dt, 0.0, 1e6, open_low=True)
         q = self._coords.check(q, allow_batch=False)
-        model, data = self._model, self._data
+        if previous_qdot is not None:
+            self._qdot = self._coords.check(previous_qdot, name="previous_qdot", allow_batch=False).copy()
+        model, data, n = self._model, self._data, self.dof
         qp = q if self._coords.identity else self._coords.to_pinocchio(q)
         if self._pose_terms:
-            pin.computeJointJacobians(model, data, qp)
-        H, c, diag, AtA = self._H, self._c, self._diag, self._AtA
+            if n:
+                pin.computeJointJacobians(model, data, qp)
+            else:  # Pinocchio's frame Jacobian crashes at nv = 0: the poses only
+                pin.forwardKinematics(model, data, qp)
+        # each level: (H, c, wsq, A rows) with the cost ½ΔqᵀHΔq + cᵀΔq (damping not included)
+        self._residual_sq, stack, offset, terms = 0.0, len(self._levels) > 1, 0, []
+        for level in self._levels:
+            terms.append(self._level_terms(level, q, dt, offset, stack))
+            offset += len(level.poses)
+        residual = math.sqrt(self._residual_sq)
+        lb, ub = step_bounds(self._limits, q, dt, self._qdot, self._lb, self._ub)
+        G, h = self._inequalities(q, dt)
+        if n == 0:
+            step, status = np.zeros(0), "unconstrained"
+            scale = 1.0
+        else:
+            step, status, scale = self._hierarchy.solve(terms, lb, ub, G, h, self.limits == "scale")
+        qdot = np.asarray(step / dt, dtype=np.float64)
+        self._qdot = qdot.copy()
+        status_now = self._monitor.record(status, scale, step, lb, ub, G, h, residual)
+        return (qdot, status_now) if info else qdot
+
+    def _level_terms(self, level: Level, q: np.ndarray, dt: float, offset: int, stack: bool) -> LevelTerms:
+        """(H, c, A rows or None): the level's cost ½ΔqᵀHΔq + cᵀΔq, its damping included."""
+        n = self.dof
+        H, c, diag = level.H, level.c, level.diag
         H.fill(0.0)
         c.fill(0.0)
         weighted_sq = 0.0
-        for k, term in enumerate(self._pose_terms):
-            A, e = self._pose_rows(term, model, data)
-            self.last_error[6 * k : 6 * k + 6] = e
-            target = term.target
-            if term.all_rows:
-                e *= target.gain
-            else:
-                A, e = A[term.rows], e[term.rows] * target.gain
-            w = target.weight
-            np.dot(A.T, A, out=AtA)
-            if w != 1.0:
-                AtA *= w
-                e *= math.sqrt(w)
-                A = A * math.sqrt(w)
-            H += AtA
-            c -= A.T.dot(e)
-            weighted_sq += float(e.dot(e))
-        for posture in self._postures:
-            w, mask = posture.weight, posture._mask
-            assert mask is not None  # set by __init__
-            e = posture.gain * (np.asarray(posture.q_ref, dtype=float) - q) * mask
+        rows: list[np.ndarray] = []
+        for k, term in enumerate(level.poses):
+            p, C, twist, gain, w = term.checked()
+            A, e, ff = term.rows_at(self._model, self._data, self._coords.fold, p, C, twist)
+            self.last_error[6 * (offset + k) : 6 * (offset + k) + 6] = e
+            if not term.all_rows:
+                A, e, ff = A[term.rows], e[term.rows], ff[term.rows]
+            self._residual_sq += float(e @ e)
+            e *= gain
+            b = e + ff * dt if twist is not None else e
+            if stack:
+                rows.append(A.copy())
+            if n:
+                if w != 1.0:
+                    H += w * (A.T @ A)
+                    c -= w * (A.T @ b)
+                else:
+                    H += A.T @ A
+                    c -= A.T @ b
+            weighted_sq += w * float(e @ e)
+        for posture in level.postures:
+            mask = posture._mask
+            assert mask is not None  # set by Level
+            q_ref = self._coords.check(posture.q_ref, name="PostureTarget q_ref", allow_batch=False)
+            w = number_option("PostureTarget weight", posture.weight)
+            gain = number_option("PostureTarget gain", posture.gain, 0.0, 1.0, open_low=True)
+            e = gain * (q_ref - q) * mask
             diag += w * mask
             c -= w * e
-            weighted_sq += w * float(e.dot(e))
+            weighted_sq += w * float(e @ e)
+            if stack:
+                rows.append(np.eye(n)[mask > 0])
         diag += self.damping + self.lm_damping * weighted_sq
-        vmax = self.velocity_limits * dt
-        lb, ub = self._lb, self._ub
-        np.maximum(self._lower - q, -vmax, out=lb)
-        np.minimum(self._upper - q, vmax, out=ub)
-        np.maximum(ub, np.minimum(lb, 0.0), out=ub)  # q outside its limits: move back as fast as allowed
-        np.minimum(lb, ub, out=lb)
-        # H is positive definite: when the unconstrained minimizer −H⁻¹c lies within the bounds it is the
-        # QP's solution (no bound active), found by one linear solve; otherwise the QP solver decides.
-        try:
-            step = np.linalg.solve(H, -c)
-        except np.linalg.LinAlgError:
-            step = None
-        if step is None or not ((step >= lb).all() and (step <= ub).all()):
-            self.qp_calls += 1
-            import qpsolvers  # only when a bound is active: keeps `import kinengine` light
+        return H, c, (np.vstack(rows) if rows else np.zeros((0, n))) if stack else None
 
-            step = qpsolvers.solve_qp(
-                H, c, lb=np.clip(lb, -_BIG, _BIG), ub=np.clip(ub, -_BIG, _BIG), solver=self.solver
-            )
-            if step is None:  # cannot happen for a box QP with H > 0; a safe answer anyway
-                step = np.zeros(self.dof)
-            np.clip(step, lb, ub, out=step)  # the solver's tolerance (~1e-14) off a bound: onto it
-        return np.asarray(step / dt, dtype=np.float64)  # float64 already (H, c are): no copy
-
-    def _pose_rows(
-        self, term: _PoseTerm, model: pin.Model, data: pin.Data
-    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-        """(A (6, dof), e (6,)): rows [position; rotation] of the module doc, at the current Data."""
-        fold = self._coords.fold
-        MA = pin.updateFramePlacement(model, data, term.fid)
-        JA = fold(pin.getFrameJacobian(model, data, term.fid, _LWA).reshape(6, -1))
-        T_target = term.target.T_target
-        if term.fb is None:
-            C, p, Jv, Jw = MA.rotation, MA.translation, JA[:3], JA[3:]
-        else:
-            MB = pin.updateFramePlacement(model, data, term.fb)
-            JB = fold(pin.getFrameJacobian(model, data, term.fb, _LWA).reshape(6, -1))
-            inner = relative_terms(MA.homogeneous, JA, MB.homogeneous, JB)
-            CB = MB.rotation
-            C, p = CB.T @ MA.rotation, CB.T @ (MA.translation - MB.translation)
-            Jv, Jw = CB.T @ inner[:3], CB.T @ inner[3:]
-        C_target = T_target[:3, :3]
-        e, A = term.e6, term.A6
-        e[:3] = T_target[:3, 3] - p
-        e[3:] = pin.log3(C.T @ C_target)
-        A[:3] = Jv
-        A[3:] = pin.Jlog3(C_target.T @ C) @ (C.T @ Jw)
-        return A, e
+    def _inequalities(self, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """The extra blocks stacked, in step units: G Δq <= h·dt."""
+        if not self._constraints:
+            return self._no_G, self._no_h
+        blocks_G, blocks_h = [], []
+        for constraint in self._constraints:
+            got = constraint.inequalities(q, dt)
+            if got is None:
+                continue
+            G, h = np.asarray(got[0], dtype=float), np.asarray(got[1], dtype=float).reshape(-1)
+            G = G.reshape(-1, self.dof) if G.size or not self.dof else G
+            if (
+                G.ndim != 2
+                or G.shape[1] != self.dof
+                or h.shape != (G.shape[0],)
+                or not (np.isfinite(G).all() and not np.isnan(h).any())
+            ):
+                raise OptionError(
+                    f"constraint {constraint!r:.60} returned G {G.shape}, h {h.shape}: need (m, {self.dof}) "
+                    "and (m,), finite (h may be +inf)"
+                )
+            blocks_G.append(G)
+            blocks_h.append(h * dt)
+        if not blocks_G:
+            return self._no_G, self._no_h
+        return np.vstack(blocks_G), np.concatenate(blocks_h)
 
 
-__all__ = ["ROWS", "SOLVERS", "DifferentialIK", "PoseTarget", "PostureTarget"]
+__all__ = [
+    "LIMIT_MODES",
+    "ROWS",
+    "SOLVERS",
+    "DiffIKStatus",
+    "DifferentialIK",
+    "PoseTarget",
+    "PostureTarget",
+    "StallWarning",
+    "VelocityConstraint",
+]

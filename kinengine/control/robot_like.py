@@ -104,6 +104,10 @@ class RobotLike(Protocol):
 
     def velocity_ellipsoid(self, q: npt.ArrayLike, frame: str | None = None) -> VelocityEllipsoid: ...
 
+    def kinematic_hessian(
+        self, q: npt.ArrayLike, frame: str | None = None, reference: Reference = "local_world_aligned"
+    ) -> FloatArray: ...
+
     def frame(self, name: str | None = None, *, check_inputs: bool = True) -> FrameHandle: ...
 
     def inverse_kinematics(

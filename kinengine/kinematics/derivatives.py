@@ -43,9 +43,13 @@ def jacobian_time_variation(
     pin.computeJointJacobiansTimeVariation(
         model, data, coords.to_pinocchio(q), coords.velocity_to_pinocchio(qdot)
     )
-    Jw = coords.fold(
-        pin.getFrameJacobian(model, data, fid, pin.WORLD).reshape(6, -1)
-    )  # eigenpy: (6, 1) -> (6,)
+    if coords.identity or ref == pin.WORLD:
+        # without mimic joints Pinocchio's J̇ in ``ref`` is the time derivative of the Jacobian in ``ref``
+        # (tests compare it with finite differences of J); J̇ = J̇_pin·M since M is constant
+        return coords.fold(pin.getFrameJacobianTimeVariation(model, data, fid, ref).reshape(6, -1))
+    # below revolute mimic joints Pinocchio 4.1's LOCAL / LOCAL_WORLD_ALIGNED J̇ is wrong (WORLD is right):
+    # change the reference of WORLD's J̇ here (module doc)
+    Jw = coords.fold(pin.getFrameJacobian(model, data, fid, pin.WORLD).reshape(6, -1))
     dJw = coords.fold(pin.getFrameJacobianTimeVariation(model, data, fid, pin.WORLD).reshape(6, -1))
     M = pin.updateFramePlacement(model, data, fid)
     return _change_reference(Jw, dJw[:, :, None], qdot[:, None], M.rotation, M.translation, ref)[:, :, 0]
