@@ -40,6 +40,7 @@ Jacobians (2 configurations or more) on a C chain without scratch memory, equal 
 chain and to Pinocchio to rounding (1e-14)."""
 
 if TYPE_CHECKING:
+    from .collision import Box, Capsule, CollisionAvoidance, Distances, Mesh, Sphere
     from .control.frame_task import FrameTask
     from .control.ik import IKResult
     from .control.ik_batch import IKBatchResult
@@ -53,6 +54,12 @@ __version__ = "0.1.0"
 
 # Public name -> the module (below kinengine) that defines it, imported on first access.
 _LAZY = {
+    "Box": "collision.shapes",
+    "Capsule": "collision.shapes",
+    "CollisionAvoidance": "collision.avoidance",
+    "Distances": "collision.checker",
+    "Mesh": "collision.shapes",
+    "Sphere": "collision.shapes",
     "DifferentialIK": "control.qp",
     "FrameTask": "control.frame_task",
     "IKBatchResult": "control.ik_batch",
@@ -67,8 +74,12 @@ _LAZY = {
 
 __all__ = [
     "ACCELERATED",
+    "Box",
+    "Capsule",
+    "CollisionAvoidance",
     "ConfigurationError",
     "DifferentialIK",
+    "Distances",
     "FrameHandle",
     "FrameNotFoundError",
     "FrameTask",
@@ -76,6 +87,7 @@ __all__ = [
     "IKResult",
     "KinematicSingularityError",
     "KinematicsError",
+    "Mesh",
     "MultiIKResult",
     "OptionError",
     "ParameterizationError",
@@ -85,6 +97,7 @@ __all__ = [
     "ResourceLimitError",
     "Robot",
     "SingularityReport",
+    "Sphere",
     "Task",
     "URDFError",
     "__version__",

@@ -15,6 +15,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("model", ("kinengine.model",)),
     ("kinematics", ("kinengine.kinematics",)),
     ("analytic", ("kinengine.analytic",)),
+    ("collision", ("kinengine.collision",)),
     ("control", ("kinengine.control",)),
     ("tools and presentation", ("kinengine.verify", "kinengine.presentation")),
     ("facade", ("kinengine.facade", "kinengine.robot", "kinengine.loading")),

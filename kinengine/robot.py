@@ -26,6 +26,7 @@ from .arrays import ArrayLike, FloatArray, Matrix, Reference, Stack, Vector
 from .errors import OptionError
 from .facade.analysis import AnalysisMethods
 from .facade.analytic import AnalyticMethods
+from .facade.collisions import CollisionMethods
 from .facade.configurations import ConfigurationMethods
 from .facade.editing import EditingMethods
 from .facade.presentation import PresentationMethods
@@ -35,7 +36,14 @@ from .kinematics.handle import FrameHandle
 from .urdf import RobotDescription
 
 
-class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMethods, PresentationMethods):
+class Robot(
+    ConfigurationMethods,
+    AnalyticMethods,
+    AnalysisMethods,
+    EditingMethods,
+    PresentationMethods,
+    CollisionMethods,
+):
     """A fixed-base robot: one coordinate per independent movable joint.
 
     Build it with :func:`kinengine.load` or :func:`kinengine.load_urdf_string`. The
@@ -102,7 +110,7 @@ class Robot(ConfigurationMethods, AnalyticMethods, AnalysisMethods, EditingMetho
         """Pickle and deepcopy: rebuilt from its validated description, URDF text, name and end effector
         (a fresh Pinocchio model and Data in the receiving process; nothing per-thread is sent)."""
         state = (self._description, self._urdf_text, self._name, self._end_effector, dict(self._packages))
-        return _rebuild_robot, state
+        return _rebuild_robot, state, self._collision_state()
 
     # -- kinematics -------------------------------------------------------------------------
     def frame_id(self, frame: str) -> int:

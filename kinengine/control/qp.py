@@ -40,6 +40,7 @@ from ..kinematics.engine import Kinematics
 from ..kinematics.memory import create_data
 from ..kinematics.relative import relative_terms
 from ..urdf.description import RobotDescription
+from .constraints import InequalityConstraint, checked_constraints, step_inequalities
 
 ROWS = ("x", "y", "z", "rx", "ry", "rz")
 SOLVERS = ("daqp", "proxqp")
@@ -131,6 +132,8 @@ class DifferentialIK:
     lm_damping μ >= 0 as in the module doc. velocity_limits: None (the URDF's; a joint without one is
     unbounded), an array (dof,) [rad/s | m/s], or a mapping joint name -> limit overriding the URDF's (0
     locks a joint). position_limits: False ignores the joint limits. solver: "daqp" (default) or "proxqp".
+    constraints: objects whose ``inequality(robot, q, dt)`` returns (G, h), G q̇ ≤ h, added to the QP
+    (:class:`InequalityConstraint`, e.g. :class:`kinengine.CollisionAvoidance`).
     """
 
     def __init__(
@@ -143,6 +146,7 @@ class DifferentialIK:
         velocity_limits: npt.ArrayLike | Mapping[str, float] | None = None,
         position_limits: bool = True,
         solver: str = "daqp",
+        constraints: Sequence[InequalityConstraint] = (),
     ) -> None:
         if solver not in SOLVERS:
             raise OptionError(f"solver must be one of {', '.join(SOLVERS)}, got {solver!r}")
@@ -190,6 +194,7 @@ class DifferentialIK:
         self._AtA = np.zeros((n, n))
         self.last_error = np.full(6 * len(self._pose_terms), np.nan)
         self.qp_calls = 0
+        self.constraints = checked_constraints(constraints)
         """How many solves needed the QP solver (a bound active); the others were one linear solve."""
 
     @staticmethod
@@ -271,16 +276,21 @@ class DifferentialIK:
         np.minimum(lb, ub, out=lb)
         # H is positive definite: when the unconstrained minimizer −H⁻¹c lies within the bounds it is the
         # QP's solution (no bound active), found by one linear solve; otherwise the QP solver decides.
+        G, h = step_inequalities(self.constraints, self.robot, q, dt, self.dof)
         try:
             step = np.linalg.solve(H, -c)
         except np.linalg.LinAlgError:
             step = None
-        if step is None or not ((step >= lb).all() and (step <= ub).all()):
+        if (
+            step is None
+            or not ((step >= lb).all() and (step <= ub).all())
+            or (G is not None and not (G @ step <= h).all())
+        ):
             self.qp_calls += 1
             import qpsolvers  # only when a bound is active: keeps `import kinengine` light
 
             step = qpsolvers.solve_qp(
-                H, c, lb=np.clip(lb, -_BIG, _BIG), ub=np.clip(ub, -_BIG, _BIG), solver=self.solver
+                H, c, G, h, lb=np.clip(lb, -_BIG, _BIG), ub=np.clip(ub, -_BIG, _BIG), solver=self.solver
             )
             if step is None:  # cannot happen for a box QP with H > 0; a safe answer anyway
                 step = np.zeros(self.dof)

@@ -1,0 +1,285 @@
+"""Collision geometry, pairs, distances and the CollisionAvoidance constraint (kinengine.collision), checked
+against closed forms for primitives, coal's own distance query run directly on shapes placed by kinengine's
+frame poses, finite differences of the distance, and raw Pinocchio + coal on Pinocchio's own URDF model."""
+
+from __future__ import annotations
+
+import pickle
+
+import coal
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import kinengine
+from kinengine import Box, Capsule, CollisionAvoidance, DifferentialIK, PoseTarget, PostureTarget, Sphere
+from kinengine.errors import OptionError, URDFError
+
+R_BALL = 0.05
+BALL_AT = np.array([0.3, 0.0, 0.1])  # the ball's centre in link_2 [m]
+
+ARM = f"""<robot name="ball_arm">
+  <link name="base"/>
+  <link name="link_1"><collision><origin xyz="0 0 0.05"/><geometry><cylinder radius="0.03" length="0.1"/></geometry></collision></link>
+  <link name="link_2"><collision><origin xyz="{BALL_AT[0]} {BALL_AT[1]} {BALL_AT[2]}"/><geometry><sphere radius="{R_BALL}"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="link_1"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="link_1"/><child link="link_2"/><origin xyz="0 0 0.1"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+@pytest.fixture(scope="module")
+def arm():
+    return kinengine.load_urdf_string(ARM)
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return kinengine.load("panda")
+
+
+def ball_centre(robot, q):
+    return (robot.frame_pose(q, "link_2") @ np.append(BALL_AT, 1.0))[:3]
+
+
+def _transform(T):
+    return coal.Transform3s(np.ascontiguousarray(T[:3, :3]), np.ascontiguousarray(T[:3, 3]))
+
+
+def random_q(robot, n, seed=0):
+    return robot.random_configuration(rng=seed, size=n)
+
+
+# -- closed forms --------------------------------------------------------------------------------------
+def test_sphere_sphere_distance_and_witness_points_match_the_closed_form(arm):
+    c2, r2 = np.array([0.2, 0.25, 0.3]), 0.07
+    robot = arm.with_obstacles([Sphere(r2, c2)])
+    for q in random_q(robot, 50):
+        D = robot.distances(q)
+        k = D.links.index(("link_2", "obstacle_0"))
+        c1 = ball_centre(robot, q)
+        gap = np.linalg.norm(c2 - c1)
+        u = (c2 - c1) / gap
+        assert D.distance[k] == pytest.approx(gap - R_BALL - r2, abs=1e-9)
+        np.testing.assert_allclose(D.p1[k], c1 + R_BALL * u, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(D.p2[k], c2 - r2 * u, rtol=0, atol=1e-9)
+
+
+def test_box_sphere_distance_matches_the_closed_form_and_witnesses_lie_on_the_surfaces(arm):
+    T = np.eye(4)
+    T[:3, :3] = pin.rpy.rpyToMatrix(0.3, -0.2, 0.5)
+    T[:3, 3] = [0.25, -0.2, 0.15]
+    half = np.array([0.05, 0.08, 0.04])
+    robot = arm.with_obstacles([Box(2 * half, T)])
+    checked = 0
+    for q in random_q(robot, 100, seed=1):
+        D = robot.distances(q)
+        k = D.links.index(("link_2", "obstacle_0"))
+        local = T[:3, :3].T @ (ball_centre(robot, q) - T[:3, 3])
+        if np.all(np.abs(local) <= half):
+            continue  # centre inside the box: no simple closed form
+        closest = np.clip(local, -half, half)
+        expected = np.linalg.norm(local - closest) - R_BALL
+        assert D.distance[k] == pytest.approx(expected, abs=1e-9)
+        p2_local = T[:3, :3].T @ (D.p2[k] - T[:3, 3])
+        if expected > 0:
+            np.testing.assert_allclose(p2_local, closest, rtol=0, atol=1e-9)  # on the box's surface
+            assert np.linalg.norm(D.p1[k] - ball_centre(robot, q)) == pytest.approx(R_BALL, abs=1e-9)
+        checked += 1
+    assert checked > 50
+
+
+# -- coal directly ------------------------------------------------------------------------------------
+def test_panda_distances_equal_coal_on_shapes_placed_by_kinengine(panda):
+    robot = panda.with_obstacles(
+        [Box((0.2, 0.3, 0.1), [0.4, 0.1, 0.3]), Capsule(0.05, 0.3, [0.3, -0.3, 0.5])]
+    )
+    geometry = robot.collision_geometry()
+    objects = geometry.geometryObjects
+    for q in random_q(robot, 20, seed=2):
+        D = robot.distances(q)
+
+        def placement(obj):
+            if obj.parentJoint == 0:  # the base link and the obstacles: placed in the root link frame
+                return obj.placement.homogeneous
+            joint = robot.engine.model.names[obj.parentJoint]  # a shape is placed on its joint's frame
+            return robot.frame_pose(q, joint) @ obj.placement.homogeneous
+
+        _, gdata = robot.collision_checker().data()  # the placements of this thread's last query (at q)
+        for i, obj in enumerate(objects):  # placed by kinengine's own frame poses: the same, to rounding
+            np.testing.assert_allclose(gdata.oMg[i].homogeneous, placement(obj), rtol=0, atol=1e-12)
+        for k, cp in enumerate(geometry.collisionPairs):
+            a, b = objects[cp.first], objects[cp.second]
+            result = coal.DistanceResult()
+            Ta, Tb = gdata.oMg[cp.first].homogeneous, gdata.oMg[cp.second].homogeneous
+            d = coal.distance(
+                a.geometry, _transform(Ta), b.geometry, _transform(Tb), coal.DistanceRequest(), result
+            )
+            assert D.distance[k] == pytest.approx(d, abs=1e-9), D.pairs[k]
+            if d > 0:
+                np.testing.assert_allclose(D.p1[k], result.getNearestPoint1(), rtol=0, atol=1e-9)
+                np.testing.assert_allclose(D.p2[k], result.getNearestPoint2(), rtol=0, atol=1e-9)
+                assert np.linalg.norm(D.p2[k] - D.p1[k]) == pytest.approx(d, abs=1e-9)
+        assert robot.min_distance(q) == pytest.approx(D.distance.min(), abs=0)
+
+
+# -- gradients ----------------------------------------------------------------------------------------
+def test_distance_gradient_matches_finite_differences(arm):
+    T = np.eye(4)
+    T[:3, :3] = pin.rpy.rpyToMatrix(0.1, 0.4, -0.3)
+    T[:3, 3] = [0.1, 0.3, 0.2]
+    robot = arm.with_obstacles([Sphere(0.06, [0.2, 0.25, 0.3]), Box((0.1, 0.12, 0.08), T)])
+    checker = robot.collision_checker()
+    h = 1e-6
+    for q in random_q(robot, 30, seed=3):
+        rows, _d, G = checker.gradients(q)
+        assert G.shape == (len(rows), robot.dof)
+        ball = [r for r in range(len(rows)) if checker.links[rows[r]][0] == "link_2"]  # closed forms in coal
+        rows, G = rows[ball], G[ball]
+        assert len(rows) == 2
+        for i in range(robot.dof):
+            e = np.zeros(robot.dof)
+            e[i] = h
+            fd = (checker.distances(q + e).distance[rows] - checker.distances(q - e).distance[rows]) / (2 * h)
+            np.testing.assert_allclose(G[:, i], fd, rtol=0, atol=1e-6)
+
+
+def test_panda_gradients_match_finite_differences_for_separated_pairs(panda):
+    robot = panda.with_obstacles([Sphere(0.05, [0.45, 0.1, 0.45])])
+    checker = robot.collision_checker()
+    h = 1e-5
+    q = np.array([0.1, -0.6, 0.1, -2.2, 0.1, 1.7, 0.7, 0.02])
+    rows, _d, G = checker.gradients(q, 0.1)
+    obstacle_rows = [r for r in range(len(rows)) if checker.links[rows[r]][1] == "obstacle_0"]
+    assert obstacle_rows  # the hand and fingers are near the ball
+    for i in range(robot.dof):
+        e = np.zeros(robot.dof)
+        e[i] = h
+        fd = (checker.distances(q + e).distance[rows] - checker.distances(q - e).distance[rows]) / (2 * h)
+        # sphere-to-convex distances come from GJK (tolerance ~1e-6 m): the difference quotient is that noisy
+        np.testing.assert_allclose(G[obstacle_rows, i], fd[obstacle_rows], rtol=0, atol=2e-3)
+
+
+# -- self-collision against raw Pinocchio + coal ----------------------------------------------------------
+def test_10000_panda_configurations_classified_like_raw_pinocchio_and_coal(panda):
+    checker = panda.collision_checker()
+    model = pin.buildModelFromUrdf(str(panda.source))
+    geometry = pin.buildGeomFromUrdf(
+        model,
+        str(panda.source),
+        pin.GeometryType.COLLISION,
+        package_dirs=[str(panda.source).split("/robots/")[0] + "/.."],
+    )
+    for obj in geometry.geometryObjects:
+        if isinstance(obj.geometry, coal.BVHModelBase):
+            obj.geometry.buildConvexHull(True, "Qt")
+            obj.geometry = obj.geometry.convex
+    names = [o.name for o in geometry.geometryObjects]
+    for a, b in checker.pairs:
+        geometry.addCollisionPair(pin.CollisionPair(names.index(a), names.index(b)))
+    data, gdata = model.createData(), pin.GeometryData(geometry)
+    Q = random_q(panda, 10_000, seed=4)
+    # kinengine's q -> Pinocchio's q of its own URDF model, joint by joint (the finger mimic copies its leader)
+    coords = panda.engine.coordinates
+    Q_pin = np.zeros((len(Q), model.nq))
+    for k, name in enumerate(coords.pinocchio_names):
+        j = model.joints[model.getJointId(name)]
+        Q_pin[:, j.idx_q] = Q[:, coords.leader[k]] * coords.multiplier[k] + coords.offset[k]
+    raw = np.array([pin.computeCollisions(model, data, geometry, gdata, q, True) for q in Q_pin])
+    ours = panda.in_collision(Q)
+    assert ours.dtype == bool and ours.shape == (10_000,)
+    assert 0.02 < raw.mean() < 0.98  # both classes are sampled
+    np.testing.assert_array_equal(ours, raw)
+    assert [panda.in_collision(q) for q in Q[:200]] == list(raw[:200])
+
+
+# -- control ------------------------------------------------------------------------------------------------
+def _sweep(robot, avoid, dt=0.002):
+    q0 = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+    T0 = robot.frame_pose(q0, "panda_hand")
+    constraints = [CollisionAvoidance(min_distance=0.01, influence_distance=0.05)] if avoid else []
+    target = PoseTarget("panda_hand", T0.copy(), rows=("x", "y", "z"))
+    ik = DifferentialIK(robot, [target, PostureTarget(q0, 1e-3)], constraints=constraints)
+    q, n = q0.copy(), int(2.0 / dt)
+    d_min, error = np.inf, []
+    for k in range(int(1.5 * n)):
+        target.T_target = T0.copy()
+        target.T_target[1, 3] += 0.4 * min(k / n, 1.0)  # 0.4 m along y in 2 s, then hold for 1 s
+        q = q + ik.solve(q, dt) * dt
+        d_min = min(d_min, robot.min_distance(q))
+        error.append(np.linalg.norm(robot.frame_pose(q, "panda_hand")[:3, 3] - target.T_target[:3, 3]))
+    return d_min, np.array(error)
+
+
+def test_panda_hand_through_a_box_collides_without_avoidance_and_keeps_clear_with_it():
+    arm = kinengine.load("panda_arm")
+    T0 = arm.frame_pose(np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]), "panda_hand")
+    robot = arm.with_obstacles([Box((0.1, 0.1, 0.1), T0[:3, 3] + [0.0, 0.2, -0.1])])
+    d_free, _ = _sweep(robot, avoid=False)
+    assert d_free < 0.0
+    d_avoid, error = _sweep(robot, avoid=True)
+    assert d_avoid >= 0.01 - 1e-4
+    assert error.max() < 0.03 and error[-1] < 0.005  # the hand goes over the box and reaches the target
+
+
+def test_differential_ik_respects_a_constraint_row():
+    robot = kinengine.load("abb_irb120")
+    q = np.array([0.3, 0.2, -0.4, 0.5, 0.7, 1.0])
+
+    class Cap:
+        def inequality(self, robot, q, dt):
+            return np.eye(robot.dof)[:1], np.array([0.05])  # q̇_1 <= 0.05 rad/s
+
+    target = PoseTarget("tool0", robot.frame_pose(q + 0.3))
+    free = DifferentialIK(robot, [target]).solve(q, 0.01)
+    capped = DifferentialIK(robot, [target], constraints=[Cap()]).solve(q, 0.01)
+    assert free[0] > 0.05 and capped[0] == pytest.approx(0.05, abs=1e-9)
+    with pytest.raises(OptionError, match="inequality"):
+        DifferentialIK(robot, [target], constraints=[object()])
+
+
+# -- model, pairs, obstacles -----------------------------------------------------------------------------
+def test_abb_ships_its_collision_meshes(abb):
+    geometry = abb.collision_geometry()
+    assert geometry.ngeoms == 7
+    assert all(isinstance(o.geometry, coal.ConvexBase) for o in geometry.geometryObjects)
+    assert ("link_1", "link_2") not in abb.collision_pairs()  # adjacent
+    assert ("base_link", "link_2") in abb.collision_pairs()
+    assert abb.min_distance(abb.neutral()) > 0
+    assert abb.collision_geometry() is geometry  # built once
+
+
+def test_srdf_disables_pairs_and_pickling_keeps_obstacles_and_srdf(arm, tmp_path):
+    robot = arm.with_obstacles([Sphere(0.05, [0.5, 0.5, 0.5], name="ball")])
+    assert ("link_2", "ball") in robot.collision_pairs()
+    assert ("link_1", "ball") in robot.collision_pairs()
+    srdf = tmp_path / "arm.srdf"
+    srdf.write_text(
+        '<robot name="ball_arm"><disable_collisions link1="ball" link2="link_1" reason="x"/></robot>'
+    )
+    assert ("link_1", "ball") not in robot.collision_pairs(srdf=srdf)
+    limited = robot.with_srdf(srdf)
+    copy = pickle.loads(pickle.dumps(limited))
+    assert copy.collision_pairs() == limited.collision_pairs() == [("link_2", "ball")]
+    q = np.array([0.2, 0.3])
+    assert copy.min_distance(q) == limited.min_distance(q)
+    assert (
+        pickle.loads(pickle.dumps(arm)).collision_pairs() == []
+    )  # base-fixed cylinder vs ball arm: adjacent
+
+
+def test_missing_meshes_and_bad_obstacles_are_clear_errors(arm, tmp_path):
+    text = ARM.replace('<sphere radius="0.05"/>', '<mesh filename="meshes/ball.stl"/>').replace(
+        '<cylinder radius="0.03" length="0.1"/>', '<mesh filename="package://nowhere_pkg/c.stl"/>'
+    )
+    path = tmp_path / "arm.urdf"
+    path.write_text(text)
+    robot = kinengine.load(str(path))
+    with pytest.raises(URDFError, match=r"2 collision mesh files not found: .*nowhere_pkg") as caught:
+        robot.distances(robot.neutral())
+    assert "'meshes/ball.stl' of link 'link_2'" in str(caught.value)
+    with pytest.raises(OptionError, match="radius"):
+        Sphere(-1.0)
+    with pytest.raises(OptionError, match="pose"):
+        Box((0.1, 0.1, 0.1), np.ones((4, 4)))
+    with pytest.raises(OptionError, match="obstacles are"):
+        arm.with_obstacles(["box"])
