@@ -29,6 +29,7 @@ PUBLIC_API: tuple[str, ...] = (
     "kinengine.errors",
     "kinengine.parameterizations",
     "kinengine.urdf",
+    "kinengine.collision",
     "kinengine.verify",
     "kinengine.reference",
     "kinengine.presentation",

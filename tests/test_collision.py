@@ -283,3 +283,25 @@ def test_missing_meshes_and_bad_obstacles_are_clear_errors(arm, tmp_path):
         Box((0.1, 0.1, 0.1), np.ones((4, 4)))
     with pytest.raises(OptionError, match="obstacles are"):
         arm.with_obstacles(["box"])
+
+
+def test_collision_pairs_command_writes_an_srdf_the_robot_reads(tmp_path, capsys):
+    from kinengine.cli import main
+
+    srdf = tmp_path / "abb.srdf"
+    assert main(["collision-pairs", "abb_irb120", "--samples", "300", "--write", str(srdf)]) == 0
+    out = capsys.readouterr().out
+    assert "6 pairs adjacent or rigidly joined" in out and "15 pairs sampled in 300" in out
+    abb = kinengine.load("abb_irb120")
+    limited = abb.with_srdf(srdf)
+    text = srdf.read_text()
+    never = text.count('reason="Never"')
+    assert len(limited.collision_pairs()) == 15 - never - text.count('reason="Always"')
+    # every pair left out as "Never" is free in every one of 300 fresh configurations
+    free = set(abb.collision_pairs()) - set(limited.collision_pairs())
+    checker = abb.collision_checker()
+    for q in abb.random_configuration(rng=7, size=300):
+        hit = checker.colliding_pairs(q)
+        assert not any(h and checker.links[k] in free for k, h in enumerate(hit))
+    with pytest.raises(SystemExit, match="2"):
+        main(["collision-pairs", "abb_irb120", "--samples", "0"])

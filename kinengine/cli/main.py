@@ -1,4 +1,5 @@
-"""The kinengine command line: list, info, pose, verify, bench and show (one module per command).
+"""The kinengine command line: list, info, pose, verify, bench, show, view and collision-pairs (one module per
+command).
 
 Every sub-command handler takes the parsed arguments and returns an exit code. Every bad input
 ends in one line on stderr, ``kinengine: error: ...``, and exit status 2: argparse's own errors
@@ -20,7 +21,7 @@ from collections.abc import Sequence
 from typing import TextIO
 
 from .. import KinematicsError, __version__
-from . import bench, catalog, info, pose, show, verify, view
+from . import bench, catalog, collisions, info, pose, show, verify, view
 from .arguments import OneLineParser, one_line, summary
 
 
@@ -29,7 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"kinengine {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    for command in (catalog, info, pose, verify, bench, show, view):
+    for command in (catalog, info, pose, verify, bench, show, view, collisions):
         command.add_parser(sub)
     return parser
 
