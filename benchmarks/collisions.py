@@ -2,7 +2,8 @@
 and a DifferentialIK step with CollisionAvoidance.
 
 Robot: example-robot-data's Panda (8 dof with the finger; meshes as convex hulls, as kinengine builds them),
-its default pairs (adjacent links left out: 42 link pairs, 99 shape pairs), 1,000 random configurations within the limits
+its default pairs (adjacent links left out: 42 link pairs, 99 shape pairs), 1,000 random configurations
+within the limits
 (seeded). "Raw" is the code a user writes inline on Pinocchio on the same GeometryModel (its own
 GeometryData with Pinocchio's defaults): ``pin.computeDistances(model, data, geom, gdata, q)``, then reading
 the results out (the smallest distance, or every distance and both witness points), and
