@@ -4,7 +4,10 @@ frame poses, finite differences of the distance, and raw Pinocchio + coal on Pin
 
 from __future__ import annotations
 
+import importlib.util
 import pickle
+import sys
+from pathlib import Path
 
 import coal
 import numpy as np
@@ -12,7 +15,7 @@ import pinocchio as pin
 import pytest
 
 import kinengine
-from kinengine import Box, Capsule, CollisionAvoidance, DifferentialIK, PoseTarget, PostureTarget, Sphere
+from kinengine import Box, Capsule, DifferentialIK, PoseTarget, Sphere
 from kinengine.errors import OptionError, URDFError
 
 R_BALL = 0.05
@@ -193,32 +196,31 @@ def test_10000_panda_configurations_classified_like_raw_pinocchio_and_coal(panda
 
 
 # -- control ------------------------------------------------------------------------------------------------
-def _sweep(robot, avoid, dt=0.002):
-    q0 = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
-    T0 = robot.frame_pose(q0, "panda_hand")
-    constraints = [CollisionAvoidance(min_distance=0.01, influence_distance=0.05)] if avoid else []
-    target = PoseTarget("panda_hand", T0.copy(), rows=("x", "y", "z"))
-    ik = DifferentialIK(robot, [target, PostureTarget(q0, 1e-3)], constraints=constraints)
-    q, n = q0.copy(), int(2.0 / dt)
-    d_min, error = np.inf, []
-    for k in range(int(1.5 * n)):
-        target.T_target = T0.copy()
-        target.T_target[1, 3] += 0.4 * min(k / n, 1.0)  # 0.4 m along y in 2 s, then hold for 1 s
-        q = q + ik.solve(q, dt) * dt
-        d_min = min(d_min, robot.min_distance(q))
-        error.append(np.linalg.norm(robot.frame_pose(q, "panda_hand")[:3, 3] - target.T_target[:3, 3]))
-    return d_min, np.array(error)
+@pytest.fixture(scope="module")
+def example():
+    """examples/collision_avoidance.py, whose sweep the test below runs."""
+    path = Path(__file__).resolve().parents[1] / "examples" / "collision_avoidance.py"
+    spec = importlib.util.spec_from_file_location("collision_avoidance", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up while the file executes
+    try:
+        spec.loader.exec_module(module)
+        yield module
+    finally:
+        del sys.modules[spec.name]
 
 
-def test_panda_hand_through_a_box_collides_without_avoidance_and_keeps_clear_with_it():
-    arm = kinengine.load("panda_arm")
-    T0 = arm.frame_pose(np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]), "panda_hand")
-    robot = arm.with_obstacles([Box((0.1, 0.1, 0.1), T0[:3, 3] + [0.0, 0.2, -0.1])])
-    d_free, _ = _sweep(robot, avoid=False)
-    assert d_free < 0.0
-    d_avoid, error = _sweep(robot, avoid=True)
-    assert d_avoid >= 0.01 - 1e-4
-    assert error.max() < 0.03 and error[-1] < 0.005  # the hand goes over the box and reaches the target
+def test_panda_hand_past_a_box_collides_without_avoidance_and_keeps_clear_with_it(example, tmp_path):
+    """The example's 500 Hz sweep: 0.4 m in 2 s past a 10 cm box 0.1 m below the hand, then 1 s hold."""
+    robot, T0 = example.scene()
+    free = example.sweep(robot, T0, avoid=False)
+    assert free.min_distance.min() < 0.0  # the fingers go through the box
+    avoided = example.sweep(robot, T0, avoid=True)
+    assert avoided.min_distance.min() >= 0.01 - 1e-4
+    assert avoided.error.max() < 0.03 and avoided.error[-1] < 0.005  # over the box, then on target
+    assert abs(avoided.error[-1] - free.error[-1]) < 1e-4  # the same end point (the posture term's offset)
+    example.plot(free, avoided, str(tmp_path / "sweep.png"))
+    assert (tmp_path / "sweep.png").stat().st_size > 10_000
 
 
 def test_differential_ik_respects_a_constraint_row():
@@ -305,3 +307,25 @@ def test_collision_pairs_command_writes_an_srdf_the_robot_reads(tmp_path, capsys
         assert not any(h and checker.links[k] in free for k, h in enumerate(hit))
     with pytest.raises(SystemExit, match="2"):
         main(["collision-pairs", "abb_irb120", "--samples", "0"])
+
+
+@pytest.mark.skipif(importlib.util.find_spec("viser") is None, reason="needs the [view] extra (viser)")
+def test_viewer_shows_collision_shapes_and_colours_the_colliding_ones(panda):
+    q_free = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785, 0.02])
+    q_hit = panda.neutral()  # joint 4 at 0: link 5 folds into the hand (outside the limits, but allowed)
+    checker = panda.collision_checker()
+    with panda.view(q_free, port=0, frames=[]) as viewer:
+        assert viewer.show_collisions() == []
+        layer = viewer._collisions
+        assert len(layer.nodes) == panda.collision_geometry().ngeoms
+        viewer.update(q_hit)
+        expected = [checker.links[k] for k in np.flatnonzero(checker.colliding_pairs(q_hit))]
+        assert layer.colliding == expected and ("panda_link5", "panda_hand") in expected
+        _, gdata = checker.data()
+        shown = {i for i, (free, hit) in layer.nodes.items() if hit.visible}
+        assert shown == {
+            i for k in np.flatnonzero(checker.colliding_pairs(q_hit)) for i in checker.index_pairs[k]
+        }
+        for i, (_free, hit) in layer.nodes.items():
+            np.testing.assert_allclose(hit.position, gdata.oMg[i].translation, rtol=0, atol=1e-6)
+        assert viewer.show_collisions(False) == [] and viewer._collisions is None
