@@ -329,3 +329,19 @@ def test_viewer_shows_collision_shapes_and_colours_the_colliding_ones(panda):
         for i, (_free, hit) in layer.nodes.items():
             np.testing.assert_allclose(hit.position, gdata.oMg[i].translation, rtol=0, atol=1e-6)
         assert viewer.show_collisions(False) == [] and viewer._collisions is None
+
+
+def test_inverse_kinematics_avoid_collisions_repairs_a_colliding_solution():
+    arm = kinengine.load("panda_arm")
+    q_star = np.array([0.3, -0.4, 0.2, -2.0, 0.1, 1.8, 0.5])
+    T = arm.frame_pose(q_star, "panda_hand")
+    plain = arm.inverse_kinematics(T, "panda_hand", rng=1)
+    elbow = arm.frame_pose(plain.q, "panda_link4")[:3, 3]
+    scene = arm.with_obstacles([Sphere(0.06, elbow)])  # right where that solution puts its elbow
+    assert plain.success and scene.in_collision(plain.q)
+    assert scene.inverse_kinematics(T, "panda_hand", rng=1).q == pytest.approx(plain.q, abs=1e-12)
+    repaired = scene.inverse_kinematics(T, "panda_hand", rng=1, restarts=10, avoid_collisions=True)
+    assert repaired.success and not scene.in_collision(repaired.q)
+    np.testing.assert_allclose(scene.frame_pose(repaired.q, "panda_hand"), T, rtol=0, atol=1e-5)
+    batch = scene.inverse_kinematics(np.stack([T, T]), "panda_hand", avoid_collisions=True)
+    assert not (batch.success & scene.in_collision(batch.q)).any()  # colliding rows are not successes

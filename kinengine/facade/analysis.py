@@ -4,6 +4,7 @@ their inputs once and call the kinematics, analytic and control layers (see thos
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, cast
 
@@ -140,20 +141,23 @@ class AnalysisMethods:
         nullspace_target: ArrayLike | None = None,
         nullspace_gain: float = 0.1,
         min_damping: float = 1e-6,
+        avoid_collisions: bool = False,
     ) -> IKResult | IKBatchResult:
         """Differential IK (damped least squares) to a 4x4 pose, a batch of poses (N, 4, 4) (an IKBatchResult
         of N results, solved vectorized), a parameter target χ, or a mapping {frame: T_IF (4, 4)} solved for
         every frame at once (``frame`` None; ``rows``/``weights`` one spec or {frame: spec}; a MultiIKResult
         whose errors are the maxima over the frames, ``frame_errors`` per frame). See
-        :func:`kinengine.control.ik.inverse_kinematics` for the options."""
+        :func:`kinengine.control.ik.inverse_kinematics` for the options. ``avoid_collisions``: a solution in
+        collision (:meth:`in_collision`) is solved again from random collision-free starts, ``restarts``
+        times, else returned with success False; a batch's colliding rows get success False."""
         from ..control import ik as _ik  # here: inverse kinematics is imported by its first call
 
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
-        return _ik.inverse_kinematics(
+        solve = functools.partial(
+            _ik.inverse_kinematics,
             robot,
             target,
             frame,
-            q0,
             position=position,
             rotation=rotation,
             rows=rows,
@@ -167,3 +171,9 @@ class AnalysisMethods:
             nullspace_gain=nullspace_gain,
             min_damping=min_damping,
         )
+        result = solve(q0)
+        if avoid_collisions:  # the collision hook (kinengine.facade.collisions)
+            from .collisions import collision_free
+
+            result = collision_free(robot, result, solve, restarts, rng)
+        return result

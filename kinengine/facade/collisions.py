@@ -3,10 +3,11 @@ obstacles (see :mod:`kinengine.collision`). coal's shapes and the geometry are b
 
 from __future__ import annotations
 
+import dataclasses
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -122,3 +123,25 @@ class CollisionMethods:
         if not self._obstacles and not self._disabled_pairs:
             return None
         return {"_obstacles": self._obstacles, "_disabled_pairs": self._disabled_pairs}
+
+
+def collision_free(
+    robot: Robot, result: Any, solve: Callable[[np.ndarray], Any], attempts: int, rng: object
+) -> Any:
+    """``inverse_kinematics(..., avoid_collisions=True)``: a solution in collision is repaired by solving
+    again from random collision-free starts (up to ``attempts`` times) and rejected (success False) if every
+    one collides. A batch's colliding rows are rejected (success False), not re-solved."""
+    if isinstance(result.success, np.ndarray):  # IKBatchResult
+        hit = robot.in_collision(result.q)
+        return dataclasses.replace(result, success=result.success & ~hit)
+    if not robot.in_collision(result.q):
+        return result
+    generator = np.random.default_rng(rng if isinstance(rng, (int, np.random.Generator)) else None)
+    for _ in range(max(attempts, 1)):
+        q0 = robot.random_configuration(rng=generator)
+        if robot.in_collision(q0):
+            continue
+        again = solve(q0)
+        if again.success and not robot.in_collision(again.q):
+            return again
+    return dataclasses.replace(result, success=False)
