@@ -6,13 +6,12 @@ from __future__ import annotations
 
 import importlib.util
 import pickle
-import sys
-from pathlib import Path
 
 import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+from example_modules import example_module
 
 import kinengine
 from kinengine import Box, Capsule, DifferentialIK, PoseTarget, Sphere
@@ -199,15 +198,7 @@ def test_10000_panda_configurations_classified_like_raw_pinocchio_and_coal(panda
 @pytest.fixture(scope="module")
 def example():
     """examples/collision_avoidance.py, whose sweep the test below runs."""
-    path = Path(__file__).resolve().parents[1] / "examples" / "collision_avoidance.py"
-    spec = importlib.util.spec_from_file_location("collision_avoidance", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up while the file executes
-    try:
-        spec.loader.exec_module(module)
-        yield module
-    finally:
-        del sys.modules[spec.name]
+    yield from example_module("collision_avoidance")
 
 
 def test_panda_hand_past_a_box_collides_without_avoidance_and_keeps_clear_with_it(example, tmp_path):
