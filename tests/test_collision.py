@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import importlib.util
 import pickle
+from pathlib import Path
 
 import coal
 import numpy as np
@@ -14,7 +15,7 @@ import pytest
 from example_modules import example_module
 
 import kinengine
-from kinengine import Box, Capsule, DifferentialIK, PoseTarget, Sphere
+from kinengine import Box, Capsule, DifferentialIK, Mesh, PoseTarget, Sphere
 from kinengine.errors import OptionError, URDFError
 
 R_BALL = 0.05
@@ -336,3 +337,17 @@ def test_inverse_kinematics_avoid_collisions_repairs_a_colliding_solution():
     np.testing.assert_allclose(scene.frame_pose(repaired.q, "panda_hand"), T, rtol=0, atol=1e-5)
     batch = scene.inverse_kinematics(np.stack([T, T]), "panda_hand", avoid_collisions=True)
     assert not (batch.success & scene.in_collision(batch.q)).any()  # colliding rows are not successes
+
+
+def test_a_mesh_obstacle_is_its_convex_hull(arm):
+    stl = Path(kinengine.load("abb_irb120").source).parent / "meshes" / "collision" / "link_1.stl"
+    far = arm.with_obstacles([Mesh(stl, [2.0, 0.0, 0.0])])
+    near = arm.with_obstacles([Mesh(stl, ball_centre(arm, np.zeros(2)) - [0.0, 0.0, 0.2])])
+    hull = far.collision_geometry().geometryObjects[-1].geometry
+    assert isinstance(hull, coal.ConvexBase)
+    points = np.asarray(hull.points()) + [2.0, 0.0, 0.0]
+    centre = ball_centre(far, np.zeros(2))
+    expected = np.linalg.norm(points - centre, axis=1).min() - R_BALL  # a vertex is closest, seen from afar
+    assert far.distances(np.zeros(2)).distance[-1] == pytest.approx(expected, abs=2e-3)
+    assert far.distances(np.zeros(2)).distance[-1] <= expected + 1e-9  # a face or edge may be closer
+    assert near.in_collision(np.zeros(2))

@@ -19,7 +19,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 import pinocchio as pin
 
-from ..errors import URDFError
+from ..errors import OptionError, URDFError
 from ..urdf.safe_xml import parse_xml
 
 LinkPair = tuple[str, str]
@@ -79,13 +79,19 @@ def default_pairs(
 def read_disabled_pairs(srdf: str | os.PathLike[str]) -> set[frozenset[str]]:
     """The link pairs of an SRDF's ``<disable_collisions link1= link2=>`` elements; ``srdf`` is a file or
     the SRDF text itself. URDFError for unreadable XML or an element without both links."""
+    if not isinstance(srdf, (str, os.PathLike)):
+        raise OptionError(f"srdf is a file name or the SRDF text, got {type(srdf).__name__}")
     text = os.fspath(srdf)
     source = "<string>"
-    if not text.lstrip().startswith("<"):
-        path = Path(text).expanduser()
-        if not path.is_file():
-            raise URDFError(f"SRDF file {str(path)!r} does not exist (pass a path or the SRDF text)")
-        source, text = str(path), path.read_text(encoding="utf-8")
+    if not isinstance(text, str) or not text.lstrip().startswith("<"):
+        try:
+            path = Path(os.fsdecode(text)).expanduser()
+            found = path.is_file()
+        except (ValueError, OSError):  # a NUL byte, a name too long for the system
+            found = False
+        if not found:
+            raise URDFError(f"SRDF file {os.fsdecode(text)[:200]!r} not found (pass a path or the SRDF text)")
+        source, text = str(path), path.read_text(encoding="utf-8", errors="replace")
     root = parse_xml(text, source=source)
     out = set()
     for element in root.iter("disable_collisions"):

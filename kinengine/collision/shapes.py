@@ -45,7 +45,10 @@ def _pose(pose: npt.ArrayLike | None) -> tuple[tuple[float, ...], ...]:
 
 
 def _positive(what: str, value: object) -> float:
-    v = float(value)  # type: ignore[arg-type]
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise OptionError(f"{what} must be a finite number > 0 [m], got {value!r}") from None
     if not (math.isfinite(v) and v > 0.0):
         raise OptionError(f"{what} must be a finite number > 0 [m], got {value!r}")
     return v
@@ -94,7 +97,10 @@ class Box(Obstacle):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        s = np.asarray(self.size, dtype=float).reshape(-1)
+        try:
+            s = np.asarray(self.size, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            s = np.zeros(0)
         if s.shape != (3,):
             raise OptionError(f"Box size is three edge lengths (x, y, z) [m], got {self.size!r}")
         object.__setattr__(self, "size", tuple(_positive("Box size", v) for v in s))
@@ -150,11 +156,16 @@ class Mesh(Obstacle):
 
     def __post_init__(self) -> None:
         super().__post_init__()
+        if not isinstance(self.path, (str, os.PathLike)):
+            raise OptionError(f"Mesh path is a file name, got {self.path!r}")
         path = os.path.abspath(os.path.expanduser(os.fspath(self.path)))
         if not Path(path).is_file():
             raise URDFError(f"Mesh obstacle file {path!r} does not exist")
         object.__setattr__(self, "path", path)
-        s = np.broadcast_to(np.asarray(self.scale, dtype=float), (3,))
+        try:
+            s = np.broadcast_to(np.asarray(self.scale, dtype=float), (3,))
+        except (TypeError, ValueError):
+            raise OptionError(f"Mesh scale is one number or three, got {self.scale!r}") from None
         object.__setattr__(self, "scale", tuple(_positive("Mesh scale", v) for v in s))
 
     def shape(self) -> coal.CollisionGeometry:

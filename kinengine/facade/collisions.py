@@ -38,6 +38,14 @@ class CollisionMethods:
         from ..collision import collision_checker  # coal's shapes and the lxml edit only when asked for
 
         robot = cast("Robot", self)  # a method group of Robot, mixed into it alone
+        if packages is not None and not (
+            isinstance(packages, Mapping)
+            and all(isinstance(k, str) and isinstance(v, (str, os.PathLike)) for k, v in packages.items())
+        ):
+            raise OptionError(
+                f"packages maps ROS package names to folders, e.g. {{'my_pkg': '/path/to/my_pkg'}}, got "
+                f"{type(packages).__name__}"
+            )
         chosen = robot.packages if packages is None else MappingProxyType(dict(packages))
         cached = self.__dict__.get("_collision")
         if cached is None or (packages is not None and cached[0] != chosen):
@@ -91,7 +99,12 @@ class CollisionMethods:
         in the root link frame) added to this one's, checked against every moving link."""
         from ..collision import Obstacle
 
-        items = tuple(obstacles)
+        try:
+            items = tuple(obstacles)
+        except TypeError:
+            raise OptionError(
+                f"obstacles is a list of Box, Sphere, Capsule or Mesh, got {obstacles!r}"
+            ) from None
         for item in items:
             if not isinstance(item, Obstacle):
                 raise OptionError(f"obstacles are Box, Sphere, Capsule or Mesh objects, got {item!r}")
