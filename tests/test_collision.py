@@ -351,3 +351,18 @@ def test_a_mesh_obstacle_is_its_convex_hull(arm):
     assert far.distances(np.zeros(2)).distance[-1] == pytest.approx(expected, abs=2e-3)
     assert far.distances(np.zeros(2)).distance[-1] <= expected + 1e-9  # a face or edge may be closer
     assert near.in_collision(np.zeros(2))
+
+
+def test_edited_robots_keep_their_obstacles_and_lock_through_the_geometry(panda):
+    scene = panda.with_obstacles([Sphere(0.05, [0.4, 0.0, 0.4], name="ball")])
+    arm = scene.locked({"panda_finger_joint1": 0.02})
+    assert ("panda_hand", "ball") in arm.collision_pairs()
+    q = np.array([0.1, -0.6, 0.1, -2.2, 0.1, 1.7, 0.7])
+    # the locked robot's shapes sit where the full robot's do at the locked value; its fingers are now rigid
+    # with the hand, so the pairs among them are gone
+    locked, full = arm.distances(q), scene.distances(np.append(q, 0.02))
+    by_name = dict(zip(full.pairs, full.distance, strict=True))
+    assert len(locked.pairs) < len(full.pairs) and set(locked.pairs) <= set(full.pairs)
+    assert ("panda_leftfinger_0", "panda_rightfinger_0") in set(full.pairs) - set(locked.pairs)
+    for name, d in zip(locked.pairs, locked.distance, strict=True):
+        assert d == pytest.approx(by_name[name], abs=1e-9), name

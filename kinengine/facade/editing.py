@@ -40,13 +40,16 @@ class EditingMethods:
 
 
 def _edited(robot: Robot, description: RobotDescription) -> Robot:
-    """The Robot of an edited description: same name, end effector and packages; URDF text edited alike."""
+    """The Robot of an edited description: same name, end effector, packages, obstacles and disabled collision
+    pairs; URDF text edited alike."""
     from ..model.editing import edited_urdf_text
 
-    return type(robot)(
+    edited = type(robot)(
         description,
         edited_urdf_text(robot.urdf_text, description),
         name=robot.name,
         end_effector=robot.end_effector,
         packages=robot.packages,
     )
+    edited.__dict__.update(robot._collision_state() or {})  # obstacles and SRDF pairs stay with the robot
+    return edited
