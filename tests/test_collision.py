@@ -366,3 +366,12 @@ def test_edited_robots_keep_their_obstacles_and_lock_through_the_geometry(panda)
     assert ("panda_leftfinger_0", "panda_rightfinger_0") in set(full.pairs) - set(locked.pairs)
     for name, d in zip(locked.pairs, locked.distance, strict=True):
         assert d == pytest.approx(by_name[name], abs=1e-9), name
+
+
+def test_edited_robots_keep_their_srdf_pairs(arm, tmp_path):
+    srdf = '<robot name="ball_arm"><disable_collisions link1="link_1" link2="ball" reason="x"/></robot>'
+    robot = arm.with_obstacles([Sphere(0.05, [0.5, 0.5, 0.5], name="ball")]).with_srdf(srdf)
+    tooled = robot.with_frame("tip", "link_2", ([0.35, 0.0, 0.1], [0.0, 0.0, 0.0]))
+    assert tooled.obstacles == robot.obstacles
+    assert tooled.disabled_collision_pairs == robot.disabled_collision_pairs == {frozenset(("link_1", "ball"))}
+    assert tooled.collision_pairs() == robot.collision_pairs() == [("link_2", "ball")]

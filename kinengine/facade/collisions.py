@@ -30,6 +30,16 @@ class CollisionMethods:
     _disabled_pairs: frozenset[frozenset[str]] = frozenset()
 
     # -- collisions --------------------------------------------------------------------------------
+    @property
+    def obstacles(self) -> tuple[Obstacle, ...]:
+        """The obstacles given to :meth:`with_obstacles` (poses in the root link frame)."""
+        return self._obstacles
+
+    @property
+    def disabled_collision_pairs(self) -> frozenset[frozenset[str]]:
+        """The link pairs an SRDF given to :meth:`with_srdf` disables."""
+        return self._disabled_pairs
+
     def collision_geometry(self, packages: Mapping[str, str] | None = None) -> pin.GeometryModel:
         """Pinocchio's GeometryModel of the URDF's ``<collision>`` elements (meshes as convex hulls) and the
         obstacles, with the checked pairs set; built once per Robot (again if other ``packages`` are given:

@@ -51,5 +51,11 @@ def _edited(robot: Robot, description: RobotDescription) -> Robot:
         end_effector=robot.end_effector,
         packages=robot.packages,
     )
-    edited.__dict__.update(robot._collision_state() or {})  # obstacles and SRDF pairs stay with the robot
+    if robot.obstacles:  # obstacles and an SRDF's disabled pairs stay with the robot
+        edited = edited.with_obstacles(robot.obstacles)
+    if robot.disabled_collision_pairs:
+        from ..collision import write_srdf
+
+        pairs = [(tuple(sorted(pair)), "Disabled") for pair in robot.disabled_collision_pairs]
+        edited = edited.with_srdf(write_srdf(robot.name, pairs))  # type: ignore[arg-type]
     return edited
