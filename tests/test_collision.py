@@ -373,5 +373,7 @@ def test_edited_robots_keep_their_srdf_pairs(arm, tmp_path):
     robot = arm.with_obstacles([Sphere(0.05, [0.5, 0.5, 0.5], name="ball")]).with_srdf(srdf)
     tooled = robot.with_frame("tip", "link_2", ([0.35, 0.0, 0.1], [0.0, 0.0, 0.0]))
     assert tooled.obstacles == robot.obstacles
-    assert tooled.disabled_collision_pairs == robot.disabled_collision_pairs == {frozenset(("link_1", "ball"))}
+    assert (
+        tooled.disabled_collision_pairs == robot.disabled_collision_pairs == {frozenset(("link_1", "ball"))}
+    )
     assert tooled.collision_pairs() == robot.collision_pairs() == [("link_2", "ball")]
