@@ -41,6 +41,7 @@ Jacobians (2 configurations or more) on a C chain without scratch memory, equal 
 chain and to Pinocchio to rounding (1e-14)."""
 
 if TYPE_CHECKING:
+    from .collision import Box, Capsule, CollisionAvoidance, Distances, Mesh, Sphere
     from .control.damped import damped_solve
     from .control.frame_task import FrameTask
     from .control.ik import IKResult
@@ -58,6 +59,12 @@ __version__ = "0.1.0"
 # Public name -> the module (below kinengine) that defines it, imported on first access.
 _LAZY = {
     "DiffIKStatus": "control.qp",
+    "Box": "collision.shapes",
+    "Capsule": "collision.shapes",
+    "CollisionAvoidance": "collision.avoidance",
+    "Distances": "collision.checker",
+    "Mesh": "collision.shapes",
+    "Sphere": "collision.shapes",
     "DifferentialIK": "control.qp",
     "FrameTask": "control.frame_task",
     "IKBatchResult": "control.ik_batch",
@@ -80,9 +87,13 @@ _LAZY = {
 __all__ = [
     "ACCELERATED",
     "BasePlacements",
+    "Box",
+    "Capsule",
+    "CollisionAvoidance",
     "ConfigurationError",
     "DiffIKStatus",
     "DifferentialIK",
+    "Distances",
     "FrameHandle",
     "FrameNotFoundError",
     "FrameTask",
@@ -92,6 +103,7 @@ __all__ = [
     "KinematicSingularityError",
     "KinematicsError",
     "MJCFError",
+    "Mesh",
     "MultiIKResult",
     "OptionError",
     "ParameterizationError",
@@ -102,6 +114,7 @@ __all__ = [
     "ResourceLimitError",
     "Robot",
     "SingularityReport",
+    "Sphere",
     "StallWarning",
     "Task",
     "URDFError",

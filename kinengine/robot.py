@@ -18,11 +18,14 @@ Data, coordinate map) and to the analytic, control and presentation layers' func
 
 from __future__ import annotations
 
+import functools
+import os
 from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
 from typing import TYPE_CHECKING, overload
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from .analytic import analytic_batch, analytic_function, analytic_single
@@ -45,6 +48,7 @@ from .urdf import RobotDescription
 if TYPE_CHECKING:  # imported by the first call that needs them
     import matplotlib.axes
 
+    from .collision import CollisionChecker, Distances, Obstacle
     from .control.frame_task import FrameTask
     from .control.ik import IKResult
     from .control.ik_batch import IKBatchResult
@@ -87,6 +91,9 @@ class Robot:
         self._handles: dict[object, FrameHandle] = {}  # frame name (None: end effector) -> checked handle
         self._analytic_paths: dict[tuple, FastPath | None] = {}  # analytic_jacobian's options -> J_A(q)
         self._jdot_paths: dict[tuple[object, object], tuple] = {}  # (frame, reference) -> J̇'s inline path
+        self._obstacles: tuple[Obstacle, ...] = ()  # with_obstacles(); travel with pickles and edits
+        self._disabled_pairs: frozenset[frozenset[str]] = frozenset()  # with_srdf()
+        self._collision: tuple[Mapping[str, str], CollisionChecker] | None = None  # (packages, checker)
 
     # -- description ------------------------------------------------------------------------
     name = property(lambda self: self._name, doc="Robot name (catalog short name or the URDF's name).")
@@ -127,7 +134,7 @@ class Robot:
         """Pickle and deepcopy: rebuilt from its validated description, URDF text, name and end effector
         (a fresh Pinocchio model and Data in the receiving process; nothing per-thread is sent)."""
         state = (self._description, self._urdf_text, self._name, self._end_effector, dict(self._packages))
-        return _rebuild_robot, state
+        return _rebuild_robot, state, self._collision_state()
 
     # -- configurations ---------------------------------------------------------------------
     def neutral(self) -> FloatArray:
@@ -400,9 +407,9 @@ class Robot:
             and kin.dof > 1
             and (frame is None or type(frame) is str)
             and type(reference) is str
+            and len(self._jdot_paths) < 256
         ):
-            if len(self._jdot_paths) < 256:
-                self._jdot_paths[frame, reference] = (coords.ready, kin.model, kin.data, fid, ref)
+            self._jdot_paths[frame, reference] = (coords.ready, kin.model, kin.data, fid, ref)
         return _derivatives.jacobian_time_variation(kin, qc, vc, fid, ref)
 
     def kinematic_hessian(
@@ -469,20 +476,23 @@ class Robot:
         nullspace_gain: float = 0.1,
         min_damping: float = 1e-6,
         method: str = "auto",
+        avoid_collisions: bool = False,
     ) -> IKResult | IKBatchResult:
         """Differential IK (damped least squares) to a 4x4 pose, a batch of poses (N, 4, 4) (an IKBatchResult
         of N results, solved vectorized), a parameter target χ, or a mapping {frame: T_IF (4, 4)} solved for
         every frame at once (``frame`` None; ``rows``/``weights`` one spec or {frame: spec}; a MultiIKResult
         whose errors are the maxima over the frames, ``frame_errors`` per frame). See
         :func:`kinengine.control.ik.inverse_kinematics` for the options. ``method``: "auto" (the closed form
-        when the chain has one, see :meth:`ik_solutions`), "closed_form" or "numeric"."""
+        when the chain has one, see :meth:`ik_solutions`), "closed_form" or "numeric". ``avoid_collisions``:
+        a solution in collision (:meth:`in_collision`) is solved again from random collision-free starts,
+        ``restarts`` times, else returned with success False; a batch's colliding rows get success False."""
         from .control import ik as _ik  # here: inverse kinematics is imported by its first call
 
-        return _ik.inverse_kinematics(
+        solve = functools.partial(
+            _ik.inverse_kinematics,
             self,
             target,
             frame,
-            q0,
             position=position,
             rotation=rotation,
             rows=rows,
@@ -497,6 +507,12 @@ class Robot:
             min_damping=min_damping,
             method=method,
         )
+        result = solve(q0)
+        if avoid_collisions:
+            from .control.ik_repair import collision_free
+
+            result = collision_free(self, result, solve, restarts, rng)
+        return result
 
     # -- model editing (kinengine.model.editing, imported by the first edit) ----------------------
     def with_frame(self, name: str, parent: str, placement: ArrayLike) -> Robot:
@@ -518,14 +534,25 @@ class Robot:
         return self._edited(lock_joints(self._description, values))
 
     def _edited(self, description: RobotDescription) -> Robot:
-        """The Robot of an edited description: same name, end effector and packages; its URDF text edited
-        alike."""
+        """The Robot of an edited description: same name, end effector, packages, obstacles and an SRDF's
+        disabled pairs; its URDF text edited alike."""
         from .model.editing import edited_urdf_text
 
         text = edited_urdf_text(self._urdf_text, description)
-        return type(self)(
+        return self._rebuilt(description, text, self._obstacles, self._disabled_pairs)
+
+    def _rebuilt(
+        self,
+        description: RobotDescription,
+        text: str,
+        obstacles: tuple[Obstacle, ...],
+        disabled: frozenset[frozenset[str]],
+    ) -> Robot:
+        robot = type(self)(
             description, text, name=self._name, end_effector=self._end_effector, packages=self._packages
         )
+        robot._obstacles, robot._disabled_pairs = obstacles, disabled
+        return robot
 
     # -- presentation (matplotlib and viser imported only when asked for) ------------------------
     def plot(
@@ -779,6 +806,95 @@ class Robot:
         return _manipulability.manipulability_gradient(
             self, self._coords.check(q, allow_batch=False), frame, rows
         )
+
+    # -- collisions (kinengine.collision: coal's shapes and the geometry built by the first call) --------
+    @property
+    def obstacles(self) -> tuple[Obstacle, ...]:
+        """The obstacles given to :meth:`with_obstacles` (poses in the root link frame)."""
+        return self._obstacles
+
+    @property
+    def disabled_collision_pairs(self) -> frozenset[frozenset[str]]:
+        """The link pairs an SRDF given to :meth:`with_srdf` disables."""
+        return self._disabled_pairs
+
+    def collision_geometry(self, packages: Mapping[str, str] | None = None) -> pin.GeometryModel:
+        """Pinocchio's GeometryModel of the URDF's ``<collision>`` elements (meshes as convex hulls) and the
+        obstacles, with the checked pairs set; built once per Robot (again if other ``packages`` are given:
+        ROS package name -> folder for ``package://`` meshes, default :attr:`packages`), and then used by
+        the queries below. URDFError naming the missing mesh files (:mod:`kinengine.collision.geometry`)."""
+        from .collision import checked_packages, collision_checker
+
+        chosen = self._packages if packages is None else checked_packages(packages)
+        cached = self._collision
+        if cached is None or (packages is not None and cached[0] != chosen):
+            checker = collision_checker(
+                self._kin, self._urdf_text, self.source, chosen, self._obstacles, self._disabled_pairs
+            )
+            cached = self._collision = (chosen, checker)
+        return cached[1].geometry
+
+    def collision_checker(self) -> CollisionChecker:
+        """The collision model the queries below use (:class:`kinengine.collision.CollisionChecker`)."""
+        if self._collision is None:
+            self.collision_geometry()
+        assert self._collision is not None
+        return self._collision[1]
+
+    def collision_pairs(self, srdf: str | os.PathLike[str] | None = None) -> list[tuple[str, str]]:
+        """The link pairs checked for collision: adjacent links and rigidly joined ones left out, an SRDF's
+        ``<disable_collisions>`` (a file or its text; default: the one given to :meth:`with_srdf`) too, then
+        the moving links against each obstacle. See :mod:`kinengine.collision.pairs`."""
+        from .collision import collision_checker, read_disabled_pairs
+
+        if srdf is None:
+            links = self.collision_checker().links
+        else:
+            disabled = read_disabled_pairs(srdf)
+            checker = collision_checker(
+                self._kin, self._urdf_text, self.source, self._packages, self._obstacles, disabled
+            )
+            links = checker.links
+        return list(dict.fromkeys(links))
+
+    def distances(self, q: ArrayLike) -> Distances:
+        """Signed distances [m] and witness points (root link frame) of every checked shape pair at q (dof,):
+        a :class:`kinengine.Distances` (``pairs``, ``links``, ``distance``, ``p1``, ``p2``)."""
+        return self.collision_checker().distances(self._coords.check(q, allow_batch=False))
+
+    def min_distance(self, q: ArrayLike) -> float:
+        """The smallest signed distance [m] over the checked pairs at q (dof,); negative: penetration."""
+        return self.collision_checker().min_distance(self._coords.check(q, allow_batch=False))
+
+    def in_collision(self, q: ArrayLike) -> bool | npt.NDArray[np.bool_]:
+        """q (dof,): True if a checked pair touches or overlaps; Q (N, dof): (N,) bool."""
+        checked = self._coords.check(q)
+        checker = self.collision_checker()
+        return checker.in_collision_batch(checked) if checked.ndim == 2 else checker.in_collision(checked)
+
+    def with_obstacles(self, obstacles: Sequence[Obstacle]) -> Robot:
+        """A new Robot with these obstacles (:class:`kinengine.Box`, ``Sphere``, ``Capsule``, ``Mesh``; poses
+        in the root link frame) added to this one's, checked against every moving link."""
+        from .collision import checked_obstacles
+
+        added = checked_obstacles(obstacles)
+        return self._rebuilt(
+            self._description, self._urdf_text, self._obstacles + added, self._disabled_pairs
+        )
+
+    def with_srdf(self, srdf: str | os.PathLike[str]) -> Robot:
+        """A new Robot whose self-collision pairs leave out an SRDF's ``<disable_collisions>`` (a file or its
+        text), e.g. one written by ``kinengine collision-pairs``."""
+        from .collision import read_disabled_pairs
+
+        disabled = frozenset(read_disabled_pairs(srdf))
+        return self._rebuilt(self._description, self._urdf_text, self._obstacles, disabled)
+
+    def _collision_state(self) -> dict[str, object] | None:
+        """What pickling keeps of the collision setup (None: the defaults)."""
+        if not self._obstacles and not self._disabled_pairs:
+            return None
+        return {"_obstacles": self._obstacles, "_disabled_pairs": self._disabled_pairs}
 
 
 def _rebuild_robot(

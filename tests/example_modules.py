@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.util
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from types import ModuleType
 
@@ -15,6 +16,14 @@ def load_example(name: str) -> ModuleType:
     spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
+    sys.modules[name] = module  # dataclasses look their module up while the file executes
     spec.loader.exec_module(module)
     return module
+
+
+def example_module(name: str) -> Iterator[ModuleType]:
+    """Yield :func:`load_example` of ``name``, and unregister it afterwards (a fixture's body: ``yield from``)."""
+    try:
+        yield load_example(name)
+    finally:
+        sys.modules.pop(name, None)

@@ -2,28 +2,16 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
+from example_modules import example_module
 
 import kinengine
-
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "resolved_rate_circle.py"
 
 
 @pytest.fixture(scope="module")
 def example():
-    spec = importlib.util.spec_from_file_location("resolved_rate_circle", EXAMPLE)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up while the file executes
-    try:
-        spec.loader.exec_module(module)
-        yield module
-    finally:
-        del sys.modules[spec.name]
+    yield from example_module("resolved_rate_circle")
 
 
 def test_main_writes_a_png(example, tmp_path, capsys):

@@ -3,29 +3,17 @@ singularity of the ABB IRB 120 without an exception, writes its PNG and keeps th
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import matplotlib
 import numpy as np
 import pytest
+from example_modules import example_module
 
 matplotlib.use("Agg")
-
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "two_frame_tracking.py"
 
 
 @pytest.fixture(scope="module")
 def example():
-    spec = importlib.util.spec_from_file_location("two_frame_tracking", EXAMPLE)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up while the file executes
-    try:
-        spec.loader.exec_module(module)
-        yield module
-    finally:
-        del sys.modules[spec.name]
+    yield from example_module("two_frame_tracking")
 
 
 def test_tracks_through_both_singularities_and_writes_a_png(example, tmp_path, capsys):

@@ -226,6 +226,8 @@ def test_wheel_contents(wheel_names: list[str], tracked: list[str]) -> None:
         "kinengine/__init__.py",
         "kinengine/py.typed",
         "kinengine/robots/abb_irb120/abb_irb120.urdf",
+        "kinengine/robots/abb_irb120/meshes/collision/link_1.stl",  # the collision meshes and their license
+        "kinengine/robots/abb_irb120/meshes/collision/LICENSE",
         *(f"{module}.pyi" for module in ACCELERATORS),
     ):
         assert required in names

@@ -351,7 +351,7 @@ class _Wall:
     def __init__(self, robot, x_max):
         self.robot, self.x_max = robot, x_max
 
-    def inequalities(self, q, dt):
+    def inequalities(self, robot, q, dt):
         T, J = self.robot.kinematics(q, "tool0")
         return J[:1], np.array([(self.x_max - T[0, 3]) / dt])
 

@@ -1,5 +1,5 @@
-"""The kinengine command line: list, info, pose, ik, verify, bench, show, view, reach and place (one module
-per command).
+"""The kinengine command line: list, info, pose, ik, verify, bench, show, view, reach, place and
+collision-pairs (one module per command).
 
 Every sub-command handler takes the parsed arguments and returns an exit code. Every bad input
 ends in one line on stderr, ``kinengine: error: ...``, and exit status 2: argparse's own errors
@@ -22,7 +22,7 @@ import warnings
 from collections.abc import Sequence
 
 from .. import KinematicsError, __version__
-from . import bench, catalog, ik, info, pose, reach, show, verify, view
+from . import bench, catalog, collisions, ik, info, pose, reach, show, verify, view
 from .arguments import OneLineParser, defer_warning, drop_warnings, flush_warnings, one_line, summary
 
 
@@ -31,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"kinengine {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    for command in (catalog, info, pose, ik, verify, bench, show, view, reach):
+    for command in (catalog, info, pose, ik, verify, bench, show, view, reach, collisions):
         command.add_parser(sub)
     return parser
 

@@ -171,7 +171,8 @@ class DifferentialIK:
         """Plug in an extra block G q̇ ≤ h (:class:`VelocityConstraint`), evaluated at every solve."""
         if not callable(getattr(constraint, "inequalities", None)):
             raise OptionError(
-                f"a constraint needs a method inequalities(q, dt) -> (G, h) or None, got {constraint!r:.60}"
+                "a constraint needs a method inequalities(robot, q, dt) -> (G, h) or None, got "
+                f"{constraint!r:.60}"
             )
         self._constraints.append(constraint)
 
@@ -291,7 +292,7 @@ class DifferentialIK:
             return self._no_G, self._no_h
         blocks_G, blocks_h = [], []
         for constraint in self._constraints:
-            got = constraint.inequalities(q, dt)
+            got = constraint.inequalities(self.robot, q, dt)
             if got is None:
                 continue
             G, h = np.asarray(got[0], dtype=float), np.asarray(got[1], dtype=float).reshape(-1)

@@ -89,14 +89,15 @@ class VelocityConstraint(Protocol):
     (``constraints=[...]`` or :meth:`DifferentialIK.add_constraint`): a collision constraint, a workspace
     wall, a velocity damper.
 
-    ``inequalities(q, dt)`` is called once per :meth:`DifferentialIK.solve` at the checked q (dof,) and
-    returns (G (m, dof), h (m,)) meaning G q̇ ≤ h, q̇ in [rad/s | m/s] and h in G's row units per second
-    (e.g. [m/s] for a distance rate), or None when nothing constrains this step. Every priority level and
-    ``limits="scale"`` respect it; ``status.active_constraints`` says which rows bind.
+    ``inequalities(robot, q, dt)`` is called once per :meth:`DifferentialIK.solve` with the solver's robot
+    and the checked q (dof,), and returns (G (m, dof), h (m,)) meaning G q̇ ≤ h, q̇ in [rad/s | m/s] and h
+    in G's row units per second (e.g. [m/s] for a distance rate), or None when nothing constrains this
+    step. Every priority level and ``limits="scale"`` respect it; ``status.active_constraints`` says which
+    rows bind.
     """
 
     def inequalities(
-        self, q: npt.NDArray[np.float64], dt: float
+        self, robot: RobotLike, q: npt.NDArray[np.float64], dt: float
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]] | None: ...
 
 

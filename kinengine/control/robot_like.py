@@ -16,6 +16,7 @@ from ..kinematics.engine import Kinematics
 from ..urdf import RobotDescription
 
 if TYPE_CHECKING:  # manipulability types its own argument against RobotLike
+    from ..collision import CollisionChecker
     from ..kinematics.handle import FrameHandle
     from .ik import IKResult
     from .ik_batch import IKBatchResult
@@ -109,6 +110,10 @@ class RobotLike(Protocol):
     ) -> FloatArray: ...
 
     def frame(self, name: str | None = None, *, check_inputs: bool = True) -> FrameHandle: ...
+
+    def in_collision(self, q: npt.ArrayLike) -> bool | npt.NDArray[np.bool_]: ...
+
+    def collision_checker(self) -> CollisionChecker: ...
 
     def inverse_kinematics(
         self,

@@ -92,6 +92,7 @@ class Viewer:
         self.readout_frame = ellipsoid if ellipsoid is not None else robot.end_effector
         self.singularity_warning = float(singularity_warning)
         self._lock = threading.RLock()
+        self._collisions: Any = None  # the collision layer, built by show_collisions()
         self._links = tuple(link.name for link in robot.description.links)
         visuals = scene.read_visuals(
             robot.urdf_text,
@@ -233,6 +234,8 @@ class Viewer:
                 for slider, value in zip(self._sliders, q, strict=True):
                     slider.value = min(max(float(value), slider.min), slider.max)
             self._refresh_readout()
+            if self._collisions is not None:
+                self._collisions.update(q)
 
     def _refresh_readout(self) -> None:
         name = self._parameterization.value
@@ -249,6 +252,23 @@ class Viewer:
     def shown_pose(self, link: str) -> npt.NDArray[np.float64]:
         """T_IL (4, 4) [m] of ``link`` as sent to the browser (position and quaternion of its scene node)."""
         return nodes.node_pose(self._link_nodes[link])
+
+    def show_collisions(self, visible: bool = True) -> list[tuple[str, str]]:
+        """Show (or hide) the collision shapes and obstacles at the shown q, the shapes of colliding pairs in
+        red; they follow :meth:`update`. Returns the colliding link pairs (see
+        :mod:`.viewer_collisions`)."""
+        from .viewer_collisions import CollisionLayer
+
+        with self._lock:
+            if not visible:
+                if self._collisions is not None:
+                    self._collisions.remove()
+                self._collisions = None
+                return []
+            if self._collisions is None:
+                self._collisions = CollisionLayer(self._server, self.robot.collision_checker())
+            self._collisions.update(self.q)
+            return list(self._collisions.colliding)
 
     def show_robot(self, visible: bool = True) -> None:
         """Show or hide the robot (visuals and skeleton); frames and the ellipsoid stay."""
