@@ -21,7 +21,11 @@ README = (ROOT / "README.md").read_text(encoding="utf-8")
 DOCS = ROOT / "docs"
 
 # Pages whose examples need an optional extra: skipped, saying which, when it is not installed.
-PAGE_NEEDS = {"viewer.md": ("viser", "kinengine[view]"), "ik.md": ("eaik", "kinengine[ik]")}
+PAGE_NEEDS = {
+    "viewer.md": ("viser", "kinengine[view]"),
+    "ik.md": ("eaik", "kinengine[ik]"),
+    "workspace.md": ("distributed", "kinengine[scale]"),
+}
 
 
 def _python_blocks(text: str) -> list[str]:

@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -28,6 +28,9 @@ from .grid import VoxelGrid, reach_ball
 from .orientations import nearest_orientation, orientation_set
 from .solve import Chunk, closed_form_available, solve_chunk
 from .store import FORMAT, MemoryStore, ZarrStore, write_chunk, zarr_module
+
+if TYPE_CHECKING:
+    from distributed import Client
 
 POSES_PER_CHUNK = 20_000
 """A chunk holds about this many (voxel, orientation) poses: ~1 MB of targets, a few seconds of IK."""
@@ -203,8 +206,8 @@ def reachability_map(
     orientations: int | tuple[int, int] | npt.ArrayLike = 50,
     bounds: npt.ArrayLike | None = None,
     method: str = "auto",
-    store: object = None,
-    client: object = None,
+    store: str | os.PathLike[str] | None = None,
+    client: Client | None = None,
     progress: Progress = True,
 ) -> ReachabilityMap:
     """The reachability map of ``frame`` (default: the end effector).
