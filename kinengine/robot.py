@@ -776,16 +776,23 @@ class Robot:
         q_near: ArrayLike | None = None,
         within_limits: bool = True,
         all_turns: bool = False,
+        avoid_collisions: bool = False,
     ) -> IKSolutions:
         """Every joint solution of the pose T_IF (4, 4) of ``frame`` (default: end effector) in the root link
         frame [m], or of each pose of (N, 4, 4), in closed form (the ``ik`` extra: EAIK's subproblem
         decomposition of the 6 revolute joints that move ``frame``). Each angle within its joint's range
         (continuous joints in (−π, π]); ``all_turns``: every 2π shift within the limits too;
         ``within_limits=False``: solutions outside the limits too, flagged. Sorted by distance to
-        ``q_near`` (dof,) or (N, dof) when given. See :mod:`kinengine.control.closed_form`."""
+        ``q_near`` (dof,) or (N, dof) when given; ``avoid_collisions``: the solutions in collision
+        (:meth:`in_collision`, obstacles included) dropped. See :mod:`kinengine.control.closed_form`."""
         from .control.closed_form import ik_solutions
 
-        return ik_solutions(self, T, frame, q_near=q_near, within_limits=within_limits, all_turns=all_turns)
+        found = ik_solutions(self, T, frame, q_near=q_near, within_limits=within_limits, all_turns=all_turns)
+        if checked_flag(avoid_collisions, "avoid_collisions"):
+            from .control.ik_repair import without_collisions
+
+            found = without_collisions(self, found)
+        return found
 
     # -- controller: URDF rate limits, manipulability gradient ---
     @property

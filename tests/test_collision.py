@@ -377,3 +377,27 @@ def test_edited_robots_keep_their_srdf_pairs(arm, tmp_path):
         tooled.disabled_collision_pairs == robot.disabled_collision_pairs == {frozenset(("link_1", "ball"))}
     )
     assert tooled.collision_pairs() == robot.collision_pairs() == [("link_2", "ball")]
+
+
+def test_ik_solutions_avoid_collisions_drops_exactly_the_colliding_solutions():
+    pytest.importorskip("eaik", reason="the closed-form solver needs the ik extra")
+    abb = kinengine.load("abb_irb120")
+    # a wall beside the arm: some of a pose's elbow/shoulder branches pass through it, others do not
+    wall = abb.with_obstacles([Box((0.05, 1.0, 1.0), [-0.25, 0.0, 0.5])])
+    T = abb.frame_pose(abb.random_configuration(rng=3, size=60))
+    every = wall.ik_solutions(T)
+    free = wall.ik_solutions(T, avoid_collisions=True)
+    dropped = 0
+    for i in range(len(T)):
+        q_all = every.q[i][: every.count[i]]
+        hit = np.asarray(wall.in_collision(q_all)) if len(q_all) else np.zeros(0, bool)
+        expected = q_all[~hit]
+        assert free.count[i] == len(expected)
+        np.testing.assert_array_equal(free.q[i][: free.count[i]], expected)  # same order, colliding ones gone
+        assert np.all(np.isnan(free.q[i][free.count[i] :]))
+        dropped += int(hit.sum())
+    assert dropped > 0 and int(np.sum(free.count)) > 0
+    single = wall.ik_solutions(T[0], avoid_collisions=True)
+    np.testing.assert_array_equal(single.q, free.q[0][: free.count[0]])
+    with pytest.raises(OptionError, match="avoid_collisions"):
+        wall.ik_solutions(T[0], avoid_collisions="yes")
