@@ -280,3 +280,26 @@ def test_random_trees_with_mimic_shapes_match_the_reference_and_finite_differenc
         np.testing.assert_allclose(
             H_k @ qdot, robot.jacobian_time_variation(q, qdot, frame, reference), rtol=0, atol=1e-11
         )
+
+
+def test_a_mimic_joint_named_like_a_link_matches_the_reference():
+    """A joint and a link of one name (allowed by URDF) where Pinocchio cannot lock the mimic joint into a
+    reduced model (found by test_fuzz_urdf: a raw ValueError before): the general path answers."""
+    limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
+    urdf = f"""<robot name="same_names">
+      <link name="base"/><link name="a"/><link name="j2"/><link name="c"/>
+      <joint name="j1" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/>{limit}</joint>
+      <joint name="j2" type="revolute"><parent link="a"/><child link="j2"/><origin xyz="0.1 0 0"/>
+        <axis xyz="0 1 0"/>{limit}<mimic joint="j1" multiplier="2" offset="0.1"/></joint>
+      <joint name="j3" type="revolute"><parent link="j2"/><child link="c"/><origin xyz="0.1 0 0.05"/>
+        <axis xyz="0 1 0"/>{limit}</joint>
+    </robot>"""
+    robot = kinengine.load_urdf_string(urdf)
+    ref = ReferenceKinematics.from_urdf_string(urdf, joint_names=robot.joint_names)
+    for q in robot.random_configuration(rng=0, size=5):
+        for frame in robot.frame_names:
+            np.testing.assert_allclose(robot.frame_pose(q, frame), ref.frame_pose(q, frame), atol=1e-12)
+            for reference in REFERENCES:
+                np.testing.assert_allclose(
+                    robot.jacobian(q, frame, reference), ref.jacobian(q, frame, reference), atol=1e-12
+                )

@@ -181,8 +181,8 @@ class Kinematics:
         were not q's coordinates in q's order)."""
         model, names = self.model, set(self.coordinates.names)
         mimic_joints = [k for k in range(1, model.njoints) if model.names[k] not in names]
-        reduced = pin.buildReducedModel(model, mimic_joints, np.zeros(model.nq))
-        if tuple(reduced.names)[1:] != self.coordinates.names or reduced.nq != self.dof:
+        reduced = _reduced(model, mimic_joints)
+        if reduced is None or tuple(reduced.names)[1:] != self.coordinates.names or reduced.nq != self.dof:
             return None
         return reduced, self._data_of(reduced)
 
@@ -203,8 +203,8 @@ class Kinematics:
             if coords.leader[i] != k or coords.multiplier[i] != 1.0 or coords.offset[i] != 0.0:
                 return None
         others = [k for k in range(1, model.njoints) if k not in supports]  # their value moves no support
-        reduced = pin.buildReducedModel(model, others, np.zeros(model.nq))
-        if reduced.nq != self.dof:
+        reduced = _reduced(model, others)
+        if reduced is None or reduced.nq != self.dof:
             return None
         return reduced, self._data_of(reduced)
 
@@ -308,6 +308,16 @@ def _frame_ids(model: pin.Model) -> dict[str, int]:
             if (frame.type == pin.FrameType.BODY) == kind_first:
                 ids[frame.name] = fid
     return dict(sorted(ids.items(), key=lambda kv: kv[1]))
+
+
+def _reduced(model: pin.Model, locked: list[int]) -> pin.Model | None:
+    """Pinocchio's model with the joints ``locked`` held at 0, or None where Pinocchio cannot build it (a
+    locked joint's frame would take the name of an existing frame, e.g. a joint named like a link): the
+    callers then take the general path, which maps q to Pinocchio's q."""
+    try:
+        return pin.buildReducedModel(model, locked, np.zeros(model.nq))
+    except (ValueError, RuntimeError):
+        return None
 
 
 __all__ = ["REFERENCES", "FramePath", "Kinematics", "MimicMap", "resolve_reference"]
