@@ -267,10 +267,11 @@ def reachability_map(
     started = time.perf_counter()
     bar = _progress(progress, n_chunks, n_chunks - len(chunks), f"reach {robot.name}")
     try:
+        job = MapJob(robot, frame, grid.centers, rotations, method)
         if client is None:
-            _run_local(robot, frame, grid, rotations, method, chunks, target, bar)
+            _run_local(job, chunks, target, bar)
         else:
-            _run_cluster(client, robot, frame, grid, rotations, method, chunks, store, bar)
+            _run_cluster(client, job, chunks, store, bar)
     finally:
         bar.close()
     reached, manip = target.arrays()
@@ -300,57 +301,41 @@ def _resolve_method(robot: Robot, frame: str, method: str) -> str:
     return "numeric"
 
 
-def _run_local(
-    robot: Robot,
-    frame: str,
-    grid: VoxelGrid,
-    rotations: np.ndarray,
-    method: str,
-    chunks: Sequence[Chunk],
-    target: MemoryStore | ZarrStore,
-    bar: _Bar,
-) -> None:
-    """Chunks in this process: two at a time (the solvers release the GIL in their numpy and C parts)."""
+@dataclass(frozen=True)
+class MapJob:
+    """What every chunk of one map is solved with (a cluster task receives it by pickle)."""
 
-    def one(c: Chunk) -> tuple[Chunk, np.ndarray, np.ndarray]:
-        reached, manip = solve_chunk(
-            robot, frame, grid.centers[c.start : c.stop], rotations, method, chunk_seed(c.index)
+    robot: Robot
+    frame: str
+    centers: npt.NDArray[np.float64]
+    rotations: npt.NDArray[np.float64]
+    method: str
+
+    def solve(self, chunk: Chunk) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.float64]]:
+        """reached (rows, O) and manipulability (rows,) of the chunk's voxels."""
+        centers = self.centers[chunk.start : chunk.stop]
+        return solve_chunk(
+            self.robot, self.frame, centers, self.rotations, self.method, chunk_seed(chunk.index)
         )
-        return c, reached, manip
 
+
+def _run_local(job: MapJob, chunks: Sequence[Chunk], target: MemoryStore | ZarrStore, bar: _Bar) -> None:
+    """Chunks in this process: two at a time (the solvers release the GIL in their numpy and C parts)."""
     workers = max(1, min(2, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1))
     with ThreadPoolExecutor(workers) as pool:
-        for c, reached, manip in pool.map(one, chunks):
+        for c, (reached, manip) in zip(chunks, pool.map(job.solve, chunks), strict=True):
             target.write(c.index, c.start, reached, manip)
             bar.update(1)
 
 
-def _cluster_chunk(
-    robot: Robot,
-    frame: str,
-    centers: np.ndarray,
-    rotations: np.ndarray,
-    method: str,
-    chunk: Chunk,
-    store: object,
-) -> int:
+def _cluster_chunk(job: MapJob, chunk: Chunk, store: str) -> int:
     """A cluster task: solve one chunk and write it into the store."""
-    reached, manip = solve_chunk(robot, frame, centers, rotations, method, chunk_seed(chunk.index))
+    reached, manip = job.solve(chunk)
     write_chunk(store, chunk.index, chunk.start, reached, manip)
     return chunk.index
 
 
-def _run_cluster(
-    client: Any,
-    robot: Robot,
-    frame: str,
-    grid: VoxelGrid,
-    rotations: np.ndarray,
-    method: str,
-    chunks: Sequence[Chunk],
-    store: object,
-    bar: _Bar,
-) -> None:
+def _run_cluster(client: Client, job: MapJob, chunks: Sequence[Chunk], store: object, bar: _Bar) -> None:
     """Each chunk a task of the Dask cluster behind ``client``; a lost worker's tasks run again elsewhere."""
     try:
         from distributed import as_completed
@@ -358,22 +343,11 @@ def _run_cluster(
         raise OptionError("cluster runs need Dask: pip install 'kinengine[scale]'") from None
     if not isinstance(store, (str, os.PathLike)):
         raise OptionError("a cluster run needs `store` as a path or URL that every worker reaches")
-    store = os.fspath(store)
-    [robot_f] = client.scatter([robot], broadcast=True)
-    [rot_f] = client.scatter([rotations], broadcast=True)
+    location = os.fspath(store)
+    [job_f] = client.scatter([job], broadcast=True)
+    tag = hashlib.sha1(location.encode()).hexdigest()[:8]
     futures = [
-        client.submit(
-            _cluster_chunk,
-            robot_f,
-            frame,
-            grid.centers[c.start : c.stop],
-            rot_f,
-            method,
-            c,
-            store,
-            key=f"kinengine-reach-{c.index}-{hashlib.sha1(str(store).encode()).hexdigest()[:8]}",
-            pure=False,
-        )
+        client.submit(_cluster_chunk, job_f, c, location, key=f"kinengine-reach-{c.index}-{tag}", pure=False)
         for c in chunks
     ]
     for future in as_completed(futures):
