@@ -136,6 +136,7 @@ class DifferentialIK:
             self.acceleration_limits,
         )
         self._hierarchy = Hierarchy(solver)
+        self._stack, self._scale = len(self._levels) > 1, limits == "scale"
         self._lb, self._ub = np.zeros(n), np.zeros(n)
         self._no_G, self._no_h = np.zeros((0, n)), np.zeros(0)
         self._constraints: list[VelocityConstraint] = []
@@ -224,31 +225,36 @@ class DifferentialIK:
                 pin.computeJointJacobians(model, data, qp)
             else:  # Pinocchio's frame Jacobian crashes at nv = 0: the poses only
                 pin.forwardKinematics(model, data, qp)
-        # each level: (H, c, wsq, A rows) with the cost ½ΔqᵀHΔq + cᵀΔq (damping not included)
-        self._residual_sq, stack, offset, terms = 0.0, len(self._levels) > 1, 0, []
+        # each level: (H, c, A rows or None) with the cost ½ΔqᵀHΔq + cᵀΔq, its damping included
+        residual_sq, offset = 0.0, 0
+        terms: list[LevelTerms] = []
         for level in self._levels:
-            terms.append(self._level_terms(level, q, dt, offset, stack))
+            H, c, A, level_sq = self._level_terms(level, q, dt, offset)
+            terms.append((H, c, A))
+            residual_sq += level_sq
             offset += len(level.poses)
-        residual = math.sqrt(self._residual_sq)
         lb, ub = step_bounds(self._limits, q, dt, self._qdot, self._lb, self._ub)
         G, h = self._inequalities(q, dt)
         if n == 0:
-            step, status = np.zeros(0), "unconstrained"
-            scale = 1.0
+            step, status, scale = np.zeros(0), "unconstrained", 1.0
         else:
-            step, status, scale = self._hierarchy.solve(terms, lb, ub, G, h, self.limits == "scale")
+            step, status, scale = self._hierarchy.solve(terms, lb, ub, G, h, self._scale)
         qdot = np.asarray(step / dt, dtype=np.float64)
-        self._qdot = qdot.copy()
-        status_now = self._monitor.record(status, scale, step, lb, ub, G, h, residual)
-        return (qdot, status_now) if info else qdot
+        if self._limits.has_acceleration:  # the next step's acceleration bounds start from it
+            self._qdot = qdot.copy()
+        monitor = self._monitor
+        monitor.record(status, scale, step, lb, ub, G, h, math.sqrt(residual_sq))
+        return (qdot, monitor.status) if info else qdot
 
-    def _level_terms(self, level: Level, q: np.ndarray, dt: float, offset: int, stack: bool) -> LevelTerms:
-        """(H, c, A rows or None): the level's cost ½ΔqᵀHΔq + cᵀΔq, its damping included."""
-        n = self.dof
-        H, c, diag = level.H, level.c, level.diag
-        H.fill(0.0)
-        c.fill(0.0)
-        weighted_sq = 0.0
+    def _level_terms(
+        self, level: Level, q: np.ndarray, dt: float, offset: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, float]:
+        """(H, c, A rows or None, ‖e‖²): the level's cost ½ΔqᵀHΔq + cᵀΔq with its damping, its task rows
+        (None with a single level: no null space to take) and the squared residual of its pose rows."""
+        n, stack = self.dof, self._stack
+        H, c, diag, AtA = level.H, level.c, level.diag, level.AtA
+        fresh = True  # H and c hold the last step's values until the first term writes them
+        weighted_sq = residual_sq = 0.0
         rows: list[np.ndarray] = []
         for k, term in enumerate(level.poses):
             p, C, twist, gain, w = term.checked()
@@ -256,33 +262,55 @@ class DifferentialIK:
             self.last_error[6 * (offset + k) : 6 * (offset + k) + 6] = e
             if not term.all_rows:
                 A, e, ff = A[term.rows], e[term.rows], ff[term.rows]
-            self._residual_sq += float(e @ e)
-            e *= gain
+            e_sq = float(e @ e)
+            residual_sq += e_sq
+            weighted_sq += w * gain * gain * e_sq
+            if gain != 1.0:
+                e *= gain
             b = e + ff * dt if twist is not None else e
             if stack:
                 rows.append(A.copy())
-            if n:
-                if w != 1.0:
-                    H += w * (A.T @ A)
-                    c -= w * (A.T @ b)
+            if n:  # H (+)= w AᵀA, c (−)= w Aᵀb
+                if fresh:
+                    np.dot(A.T, A, out=H)
+                    np.dot(A.T, b, out=c)
+                    if w != 1.0:
+                        H *= w
+                    c *= -w
+                    fresh = False
                 else:
-                    H += A.T @ A
-                    c -= A.T @ b
-            weighted_sq += w * float(e @ e)
+                    np.dot(A.T, A, out=AtA)
+                    if w != 1.0:
+                        AtA *= w
+                    H += AtA
+                    c -= w * (A.T @ b)
+        if fresh:
+            H.fill(0.0)
+            c.fill(0.0)
         for posture in level.postures:
             mask = posture._mask
             assert mask is not None  # set by Level
             q_ref = self._coords.check(posture.q_ref, name="PostureTarget q_ref", allow_batch=False)
             w = number_option("PostureTarget weight", posture.weight)
             gain = number_option("PostureTarget gain", posture.gain, 0.0, 1.0, open_low=True)
-            e = gain * (q_ref - q) * mask
-            diag += w * mask
-            c -= w * e
+            e = q_ref - q
+            if gain != 1.0:
+                e *= gain
+            if posture._partial:
+                e *= mask
+                diag += w * mask
+            else:
+                diag += w
             weighted_sq += w * float(e @ e)
+            if w != 1.0:
+                c -= w * e
+            else:
+                c -= e
             if stack:
                 rows.append(np.eye(n)[mask > 0])
         diag += self.damping + self.lm_damping * weighted_sq
-        return H, c, (np.vstack(rows) if rows else np.zeros((0, n))) if stack else None
+        A_rows = (np.vstack(rows) if rows else np.zeros((0, n))) if stack else None
+        return H, c, A_rows, residual_sq
 
     def _inequalities(self, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """The extra blocks stacked, in step units: G Δq <= h·dt."""

@@ -79,6 +79,7 @@ class PostureTarget:
     joints: Sequence[str] | None = None
     _mask: np.ndarray | None = field(default=None, repr=False)
     cost: float | None = None
+    _partial: bool = field(default=False, init=False, repr=False)  # set by Level: some joints only
 
     def __post_init__(self) -> None:
         if self.cost is not None:
@@ -191,7 +192,7 @@ class PoseTerm:
         twist: np.ndarray | None,
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(A (6, dof), e (6,), V (6,)): rows [position; rotation] of :mod:`.qp`'s doc and feed-forward V,
-        at ``data`` (joint Jacobians computed)."""
+        at ``data`` (joint Jacobians computed); the term's buffers, overwritten at the next call."""
         n, term = self.A6.shape[1], self
         MA = pin.updateFramePlacement(model, data, term.fid)
         JA = fold(pin.getFrameJacobian(model, data, term.fid, _LWA).reshape(6, -1)) if n else np.zeros((6, 0))
@@ -218,7 +219,7 @@ class PoseTerm:
         if twist is not None:
             ff[:3] = twist[:3]
             ff[3:] = Jr @ (C_target.T @ twist[3:])
-        return A, e.copy(), ff
+        return A, e, ff
 
 
 class Level:
@@ -253,12 +254,13 @@ class Level:
                     if joints is None
                     else np.array([1.0 if name in set(joints) else 0.0 for name in robot.joint_names])
                 )
+                task._partial = joints is not None and not task._mask.all()
                 number_option("PostureTarget weight", task.weight)
                 number_option("PostureTarget gain", task.gain, 0.0, 1.0, open_low=True)
                 self.postures.append(task)
             else:
                 raise OptionError(f"tasks are PoseTarget or PostureTarget entries, got {task!r:.80}")
-        self.H, self.c = np.zeros((n, n)), np.zeros(n)
+        self.H, self.c, self.AtA = np.zeros((n, n)), np.zeros(n), np.zeros((n, n))
         self.diag = self.H.reshape(-1)[:: n + 1]  # a view of H's diagonal
 
 
