@@ -254,7 +254,7 @@ class DifferentialIK:
         n, stack = self.dof, self._stack
         H, c, diag, AtA = level.H, level.c, level.diag, level.AtA
         fresh = True  # H and c hold the last step's values until the first term writes them
-        weighted_sq = residual_sq = 0.0
+        weighted_sq = residual_sq = on_diagonal = 0.0
         rows: list[np.ndarray] = []
         for k, term in enumerate(level.poses):
             p, C, twist, gain, w = term.checked()
@@ -300,7 +300,7 @@ class DifferentialIK:
                 e *= mask
                 diag += w * mask
             else:
-                diag += w
+                on_diagonal += w
             weighted_sq += w * float(e @ e)
             if w != 1.0:
                 c -= w * e
@@ -308,7 +308,7 @@ class DifferentialIK:
                 c -= e
             if stack:
                 rows.append(np.eye(n)[mask > 0])
-        diag += self.damping + self.lm_damping * weighted_sq
+        diag += on_diagonal + self.damping + self.lm_damping * weighted_sq
         A_rows = (np.vstack(rows) if rows else np.zeros((0, n))) if stack else None
         return H, c, A_rows, residual_sq
 

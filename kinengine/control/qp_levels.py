@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 _BIG = 1e20  # stands for an infinite bound
+_max = np.maximum.reduce
 NULL_TOLERANCE = 1e-9
 """Singular values of the levels above at or below this times max(1, σ_max) span the lower levels' space."""
 
@@ -137,8 +138,8 @@ class Hierarchy:
         Z: np.ndarray | None,
         base: np.ndarray | None,
     ) -> tuple[np.ndarray, str]:
-        """argmin ½zᵀHz + cᵀz with lb <= base + Z z <= ub and G (base + Z z) <= h (Z None: z = Δq; base None:
-        zero)."""
+        """argmin ½zᵀHz + cᵀz with lb <= base + Z z <= ub and G (base + Z z) <= h (Z None: z = Δq, base
+        unused; base None: zero)."""
         # H is positive definite: when the unconstrained minimizer −H⁻¹c satisfies the bounds it is the
         # QP's solution (no bound active), found by one linear solve; otherwise the QP solver decides.
         try:
@@ -147,30 +148,33 @@ class Hierarchy:
             z = None
         if z is not None and math.isfinite(z @ z):  # finite (an overflow of z·z goes to the QP solver)
             x = z if Z is None else (Z @ z if base is None else base + Z @ z)
-            if (x >= lb).all() and (x <= ub).all() and (not len(h) or (G @ x <= h).all()):
+            # lb <= x <= ub (one reduction; NaN fails it), and G x <= h
+            if _max(np.maximum(lb - x, x - ub)) <= 0.0 and (not len(h) or (G @ x <= h).all()):
                 return z, "unconstrained"
         self.qp_calls += 1
         import qpsolvers  # only when a bound is active: keeps `import kinengine` light
 
-        lbc, ubc = (lb, ub) if base is None else (lb - base, ub - base)
-        lbc, ubc = _finite(lbc), _finite(ubc)
-        if base is None:
-            base = np.zeros(len(lb))
-        Gz, hz = (G, h) if Z is None else (G @ Z, h - G @ base)
-        if len(hz):
-            hz = _finite(hz)
-        if Z is None:
+        if Z is None:  # base None: z = Δq
+            hz = _finite(h) if len(h) else h
             z = qpsolvers.solve_qp(
-                H, c, G=Gz if len(hz) else None, h=hz if len(hz) else None, lb=lbc, ub=ubc, solver=self.solver
+                H,
+                c,
+                G=G if len(h) else None,
+                h=hz if len(h) else None,
+                lb=_finite(lb),
+                ub=_finite(ub),
+                solver=self.solver,
             )
-        else:
+        else:  # the bounds as rows of G: lb − base <= Z z <= ub − base
+            base = np.zeros(len(lb)) if base is None else base
+            lbc, ubc = _finite(lb - base), _finite(ub - base)
             finite = np.isfinite(lb - base) | np.isfinite(ub - base)
-            Gb = np.vstack([Z[finite], -Z[finite], Gz])
-            hb = np.concatenate([ubc[finite], -lbc[finite], hz])
+            Gb = np.vstack([Z[finite], -Z[finite], G @ Z])
+            hb = np.concatenate([ubc[finite], -lbc[finite], _finite(h - G @ base)])
             z = qpsolvers.solve_qp(
                 H, c, G=Gb if len(hb) else None, h=hb if len(hb) else None, solver=self.solver
             )
-        if z is None or not np.isfinite(z).all():  # no feasible step: the bounds' point nearest zero
+        if z is None or not math.isfinite(z @ z):  # no feasible step: the bounds' point nearest zero
             z = np.zeros(H.shape[0])
             if Z is None:
                 np.clip(z, lb, ub, out=z)
