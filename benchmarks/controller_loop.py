@@ -10,16 +10,17 @@
    no Levenberg-Marquardt term, joint position and URDF velocity limits. mink runs on the URDF loaded by
    MuJoCo (visual and collision elements removed). Steps per second count solve + integrate only; rounds
    interleave the three loops; the best round is reported. Tracking error: |p_d(t_k+1) − p(q_k+1)| after 1 s.
-3. With ``--versus CHECKOUT``: the cost of a plain single-level step (no twist, no acceleration limits,
-   ``limits="clip"``) against another kinengine checkout (e.g. ``git worktree add /tmp/old <commit>``; its C
-   extensions copied in or built). Two packages of one name cannot share a process, so subprocesses alternate
-   (this tree, then CHECKOUT, --rounds times), each running on the ABB IRB 120 (tool0) and the Panda
-   (panda_hand_tcp) a static PoseTarget plus a PostureTarget (weight 1e-3), DAQP, --steps steps from the
-   same start, three times; each process reports its best µs/step (solve only). Printed: the medians, the
-   spreads (min–max) and the per-round ratios, with the load average.
+3. With ``--versus CHECKOUT [CHECKOUT ...]``: the cost of a plain single-level step (no twist, no
+   acceleration limits, ``limits="clip"``) against other kinengine checkouts, as ratios to the first one
+   (e.g. ``git worktree add --detach /tmp/old <commit>``, its C extensions copied in or built). Two packages
+   of one name cannot share a process, so subprocesses alternate (this tree, then each CHECKOUT, --rounds
+   times), each running on the ABB IRB 120 (tool0) and the Panda (panda_hand_tcp) a static PoseTarget plus
+   a PostureTarget (weight 1e-3), DAQP, --steps steps from the same start, three times; each process reports
+   its best µs/step (solve only). Printed: the medians, the spreads (min–max), the per-round ratios and the
+   ratio of the minima, with the load average.
 
     python benchmarks/controller_loop.py --rounds 5
-    python benchmarks/controller_loop.py --versus /tmp/old --rounds 7 --steps 2000
+    python benchmarks/controller_loop.py --versus /tmp/old /tmp/older --rounds 9 --steps 2000
 """
 
 from __future__ import annotations
@@ -201,9 +202,9 @@ def plain_steps(steps: int, repeats: int = 3) -> dict[str, float]:
     return out
 
 
-def versus(checkout: str, rounds: int, steps: int) -> None:
+def versus(checkouts: list[str], rounds: int, steps: int) -> None:
     here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    trees = {"this tree": here, "checkout": os.path.abspath(checkout)}
+    trees = {"this tree": here} | {os.path.abspath(c): os.path.abspath(c) for c in checkouts}
     times: dict[str, dict[str, list[float]]] = {t: {n: [] for n, _ in VERSUS_CASES} for t in trees}
     print(f"load average before: {os.getloadavg()}")
     for _ in range(rounds):
@@ -223,14 +224,21 @@ def versus(checkout: str, rounds: int, steps: int) -> None:
             for name, _ in VERSUS_CASES:
                 times[tree][name].append(result["us"][name])
     print(f"load average after: {os.getloadavg()}")
+    base = os.path.abspath(checkouts[0])
     for name, _ in VERSUS_CASES:
-        a, b = np.array(times["this tree"][name]), np.array(times["checkout"][name])
-        ratios = a / b
-        print(
-            f"{name}: this tree {np.median(a):.1f} µs/step ({a.min():.1f}–{a.max():.1f}), checkout "
-            f"{np.median(b):.1f} ({b.min():.1f}–{b.max():.1f}); ratio median {np.median(ratios):.3f} "
-            f"(rounds: {', '.join(f'{r:.2f}' for r in ratios)})"
-        )
+        b = np.array(times[base][name])
+        for tree in trees:
+            a = np.array(times[tree][name])
+            ratios = a / b
+            print(
+                f"{name} {tree}: median {np.median(a):.1f} µs/step (min {a.min():.1f}, max {a.max():.1f})"
+                + (
+                    ""
+                    if tree == base
+                    else f"; / {base}: median of the rounds' ratios {np.median(ratios):.3f}, ratio of "
+                    f"the minima {a.min() / b.min():.3f} (rounds: {', '.join(f'{r:.2f}' for r in ratios)})"
+                )
+            )
 
 
 def main() -> int:
@@ -238,7 +246,9 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--calls", type=int, default=20000)
     parser.add_argument("--steps", type=int, default=3000)
-    parser.add_argument("--versus", metavar="CHECKOUT", help="time a plain step against another checkout")
+    parser.add_argument(
+        "--versus", nargs="+", metavar="CHECKOUT", help="time a plain step against other checkouts"
+    )
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
