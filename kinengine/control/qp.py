@@ -136,7 +136,7 @@ class DifferentialIK:
             self.acceleration_limits,
         )
         self._hierarchy = Hierarchy(solver)
-        self._stack, self._scale = len(self._levels) > 1, limits == "scale"
+        self._scale = limits == "scale"
         self._lb, self._ub = np.zeros(n), np.zeros(n)
         self._no_G, self._no_h = np.zeros((0, n)), np.zeros(0)
         self._constraints: list[VelocityConstraint] = []
@@ -229,7 +229,7 @@ class DifferentialIK:
         residual_sq, offset = 0.0, 0
         terms: list[LevelTerms] = []
         for level in self._levels:
-            H, c, A, level_sq = self._level_terms(level, q, dt, offset)
+            H, c, A, level_sq = self._level_terms(level, q, dt, offset, level is not self._levels[-1])
             terms.append((H, c, A))
             residual_sq += level_sq
             offset += len(level.poses)
@@ -247,11 +247,12 @@ class DifferentialIK:
         return (qdot, monitor.status) if info else qdot
 
     def _level_terms(
-        self, level: Level, q: np.ndarray, dt: float, offset: int
+        self, level: Level, q: np.ndarray, dt: float, offset: int, stack: bool
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, float]:
         """(H, c, A rows or None, ‖e‖²): the level's cost ½ΔqᵀHΔq + cᵀΔq with its damping, its task rows
-        (None with a single level: no null space to take) and the squared residual of its pose rows."""
-        n, stack = self.dof, self._stack
+        if ``stack`` (None for the last level: no lower level needs its null space) and the squared residual
+        of its pose rows."""
+        n = self.dof
         H, c, diag, AtA = level.H, level.c, level.diag, level.AtA
         fresh = True  # H and c hold the last step's values until the first term writes them
         weighted_sq = residual_sq = on_diagonal = 0.0

@@ -17,7 +17,7 @@ NULL_TOLERANCE = 1e-9
 """Singular values of the levels above at or below this times max(1, σ_max) span the lower levels' space."""
 
 LevelTerms = tuple[np.ndarray, np.ndarray, np.ndarray | None]
-"""(H (n, n), c (n,), A (r, n) or None): a level's cost and its task rows (None with a single level)."""
+"""(H (n, n), c (n,), A (r, n) or None): a level's cost and its task rows (None for the last level)."""
 
 
 @dataclass
@@ -108,7 +108,8 @@ class Hierarchy:
         Z: np.ndarray | None = None  # basis of the free directions (None: all of Rⁿ)
         above: list[np.ndarray] = []
         worst = "unconstrained"
-        for H, c, A in terms:
+        last = len(terms) - 1
+        for i, (H, c, A) in enumerate(terms):
             if Z is None:
                 step, status = self.box_qp(H, c, lb, ub, G, h, None, step)
             else:  # H holds the damping: ZᵀHZ has it on z (Z orthonormal); ‖Δq‖² regularized as a whole
@@ -116,7 +117,7 @@ class Hierarchy:
                 step = step + Z @ z
             if status != "unconstrained" and worst != "infeasible":
                 worst = status
-            if A is not None and len(terms) > 1:
+            if A is not None and i < last:  # the last level's null space is not needed
                 above.append(A)
                 stacked = np.vstack(above)
                 if stacked.shape[0]:
