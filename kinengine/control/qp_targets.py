@@ -174,7 +174,11 @@ class PoseTerm:
                 twist = np.asarray(target.twist, dtype=float)
             except (TypeError, ValueError):
                 twist = None
-            if twist is None or twist.shape != (6,) or not np.isfinite(twist).all():
+            if (
+                twist is None
+                or twist.shape != (6,)
+                or not (math.isfinite(twist @ twist) or np.isfinite(twist).all())  # the cheap test first
+            ):
                 raise OptionError(
                     f"{self.name}.twist must be None or finite [v; ω] of shape (6,) [m/s, rad/s], got "
                     f"{target.twist!r:.80}"
