@@ -49,8 +49,17 @@ import pinocchio as pin
 from ..errors import OptionError
 from ..kinematics.memory import create_data
 from .qp_levels import Hierarchy, LevelTerms, Limits, step_bounds
-from .qp_status import DiffIKStatus, StallWarning, StatusMonitor
-from .qp_targets import ROWS, Level, PoseTarget, PostureTarget, QPRobot, VelocityConstraint, number_option
+from .qp_status import DiffIKStatus, StallWarning, StatusMonitor, checked_window
+from .qp_targets import (
+    ROWS,
+    Level,
+    PoseTarget,
+    PostureTarget,
+    QPRobot,
+    VelocityConstraint,
+    number_option,
+    stacked_inequalities,
+)
 from .rate_limits import checked_rate_limits, urdf_velocity_limits
 
 SOLVERS = ("daqp", "proxqp")
@@ -101,13 +110,7 @@ class DifferentialIK:
             raise OptionError(f"limits must be one of {', '.join(LIMIT_MODES)}, got {limits!r}")
         self.damping = number_option("damping", damping)
         self.lm_damping = number_option("lm_damping", lm_damping)
-        if (
-            isinstance(stall_window, bool)
-            or not isinstance(stall_window, (int, np.integer))
-            or stall_window < 1
-        ):
-            raise OptionError(f"stall_window must be a whole number of steps >= 1, got {stall_window!r}")
-        self.stall_window = int(stall_window)
+        self.stall_window = checked_window(stall_window)
         self.stall_decrease = number_option("stall_decrease", stall_decrease, 0.0, 1.0)
         self.stall_residual = number_option("stall_residual", stall_residual)
         self.warn_on_stall, self.limits = bool(warn_on_stall), limits
@@ -234,7 +237,7 @@ class DifferentialIK:
             residual_sq += level_sq
             offset += len(level.poses)
         lb, ub = step_bounds(self._limits, q, dt, self._qdot, self._lb, self._ub)
-        G, h = self._inequalities(q, dt)
+        G, h = stacked_inequalities(self._constraints, q, dt, self._no_G, self._no_h)
         if n == 0:
             step, status, scale = np.zeros(0), "unconstrained", 1.0
         else:
@@ -303,42 +306,12 @@ class DifferentialIK:
             else:
                 on_diagonal += w
             weighted_sq += w * float(e @ e)
-            if w != 1.0:
-                c -= w * e
-            else:
-                c -= e
+            c -= w * e
             if stack:
                 rows.append(np.eye(n)[mask > 0])
         diag += on_diagonal + self.damping + self.lm_damping * weighted_sq
         A_rows = (np.vstack(rows) if rows else np.zeros((0, n))) if stack else None
         return H, c, A_rows, residual_sq
-
-    def _inequalities(self, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """The extra blocks stacked, in step units: G Δq <= h·dt."""
-        if not self._constraints:
-            return self._no_G, self._no_h
-        blocks_G, blocks_h = [], []
-        for constraint in self._constraints:
-            got = constraint.inequalities(q, dt)
-            if got is None:
-                continue
-            G, h = np.asarray(got[0], dtype=float), np.asarray(got[1], dtype=float).reshape(-1)
-            G = G.reshape(-1, self.dof) if G.size or not self.dof else G
-            if (
-                G.ndim != 2
-                or G.shape[1] != self.dof
-                or h.shape != (G.shape[0],)
-                or not (np.isfinite(G).all() and not np.isnan(h).any())
-            ):
-                raise OptionError(
-                    f"constraint {constraint!r:.60} returned G {G.shape}, h {h.shape}: need (m, {self.dof}) "
-                    "and (m,), finite (h may be +inf)"
-                )
-            blocks_G.append(G)
-            blocks_h.append(h * dt)
-        if not blocks_G:
-            return self._no_G, self._no_h
-        return np.vstack(blocks_G), np.concatenate(blocks_h)
 
 
 __all__ = [

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from ..errors import OptionError
+
 _ACTIVE_TOL = 1e-12  # [rad | m] a step this close to a bound has it active
 
 
@@ -42,6 +44,13 @@ class DiffIKStatus:
     @property
     def bounds_active(self) -> bool:
         return bool(self.active_lower.any() or self.active_upper.any() or self.active_constraints.any())
+
+
+def checked_window(value: object) -> int:
+    """The stall window, a whole number of steps >= 1, else OptionError."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise OptionError(f"stall_window must be a whole number of steps >= 1, got {value!r}")
+    return int(value)
 
 
 class StallWarning(RuntimeWarning):
@@ -133,4 +142,4 @@ class StatusMonitor:
             )
 
 
-__all__ = ["DiffIKStatus", "StallWarning", "StatusMonitor"]
+__all__ = ["DiffIKStatus", "StallWarning", "StatusMonitor", "checked_window"]

@@ -102,6 +102,42 @@ class VelocityConstraint(Protocol):
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]] | None: ...
 
 
+def stacked_inequalities(
+    constraints: Sequence[VelocityConstraint],
+    q: np.ndarray,
+    dt: float,
+    no_G: np.ndarray,
+    no_h: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The blocks of ``constraints`` at q stacked, in step units: G Δq <= h·dt (``no_G``, ``no_h``: the empty
+    (0, dof) and (0,) answer); OptionError for a block of the wrong shape or not finite."""
+    if not constraints:
+        return no_G, no_h
+    dof = no_G.shape[1]
+    blocks_G, blocks_h = [], []
+    for constraint in constraints:
+        got = constraint.inequalities(q, dt)
+        if got is None:
+            continue
+        G, h = np.asarray(got[0], dtype=float), np.asarray(got[1], dtype=float).reshape(-1)
+        G = G.reshape(-1, dof) if G.size or not dof else G
+        if (
+            G.ndim != 2
+            or G.shape[1] != dof
+            or h.shape != (G.shape[0],)
+            or not (np.isfinite(G).all() and not np.isnan(h).any())
+        ):
+            raise OptionError(
+                f"constraint {constraint!r:.60} returned G {G.shape}, h {h.shape}: need (m, {dof}) "
+                "and (m,), finite (h may be +inf)"
+            )
+        blocks_G.append(G)
+        blocks_h.append(h * dt)
+    if not blocks_G:
+        return no_G, no_h
+    return np.vstack(blocks_G), np.concatenate(blocks_h)
+
+
 class QPRobot(Protocol):
     """What DifferentialIK reads of the Robot passed in (public attributes of :class:`kinengine.Robot`)."""
 
@@ -277,4 +313,5 @@ __all__ = [
     "QPRobot",
     "VelocityConstraint",
     "number_option",
+    "stacked_inequalities",
 ]
