@@ -10,14 +10,27 @@
    no Levenberg-Marquardt term, joint position and URDF velocity limits. mink runs on the URDF loaded by
    MuJoCo (visual and collision elements removed). Steps per second count solve + integrate only; rounds
    interleave the three loops; the best round is reported. Tracking error: |p_d(t_k+1) − p(q_k+1)| after 1 s.
+3. With ``--versus CHECKOUT [CHECKOUT ...]``: the cost of a plain single-level step (no twist, no
+   acceleration limits, ``limits="clip"``) against other kinengine checkouts, as ratios to the first one
+   (e.g. ``git worktree add --detach /tmp/old <commit>``, its C extensions copied in or built). Two packages
+   of one name cannot share a process, so subprocesses alternate (this tree, then each CHECKOUT, --rounds
+   times), each running on the ABB IRB 120 (tool0) and the Panda (panda_hand_tcp) a static PoseTarget plus
+   a PostureTarget (weight 1e-3), DAQP, --steps steps from the same start, three times; each process reports
+   its best µs/step (solve only). Printed: the medians, the spreads (min–max), the per-round ratios and the
+   ratio of the minima, with the load average.
 
     python benchmarks/controller_loop.py --rounds 5
+    python benchmarks/controller_loop.py --versus /tmp/old /tmp/older --rounds 9 --steps 2000
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import re
+import subprocess
+import sys
 import time
 
 import numpy as np
@@ -163,12 +176,87 @@ def loops(rounds: int, steps: int) -> None:
         )
 
 
+VERSUS_CASES = (("abb_irb120", "tool0"), ("panda_arm", "panda_hand_tcp"))
+
+
+def plain_steps(steps: int, repeats: int = 3) -> dict[str, float]:
+    """{robot: best µs per solve}: a static PoseTarget plus a PostureTarget, one level, DAQP, clip."""
+    out = {}
+    for name, frame in VERSUS_CASES:
+        robot = kinengine.load(name)
+        q0 = np.clip(robot.neutral(), robot.lower_limits + 0.2, robot.upper_limits - 0.2)
+        T_goal = robot.frame_pose(np.clip(q0 + 0.3, robot.lower_limits, robot.upper_limits), frame)
+        best = np.inf
+        for _ in range(repeats):
+            ik = kinengine.DifferentialIK(
+                robot, [kinengine.PoseTarget(frame, T_goal), kinengine.PostureTarget(q0.copy(), weight=1e-3)]
+            )
+            q, elapsed, solve = q0.copy(), 0.0, ik.solve
+            for _ in range(steps):
+                t0 = time.perf_counter()
+                qdot = solve(q, DT)
+                elapsed += time.perf_counter() - t0
+                q = q + qdot * DT
+            best = min(best, elapsed / steps)
+        out[name] = best * 1e6
+    return out
+
+
+def versus(checkouts: list[str], rounds: int, steps: int) -> None:
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    trees = {"this tree": here} | {os.path.abspath(c): os.path.abspath(c) for c in checkouts}
+    times: dict[str, dict[str, list[float]]] = {t: {n: [] for n, _ in VERSUS_CASES} for t in trees}
+    print(f"load average before: {os.getloadavg()}")
+    for _ in range(rounds):
+        for tree, path in trees.items():
+            env = dict(os.environ, PYTHONPATH=path)
+            got = subprocess.run(
+                [sys.executable, os.path.abspath(__file__), "--worker", "--steps", str(steps)],
+                env=env,
+                cwd="/",
+                capture_output=True,
+                text=True,
+                check=True,
+            )
+            result = json.loads(got.stdout.strip().splitlines()[-1])
+            if not result["file"].startswith(path):
+                raise SystemExit(f"{tree}: imported kinengine from {result['file']}, not {path}")
+            for name, _ in VERSUS_CASES:
+                times[tree][name].append(result["us"][name])
+    print(f"load average after: {os.getloadavg()}")
+    base = os.path.abspath(checkouts[0])
+    for name, _ in VERSUS_CASES:
+        b = np.array(times[base][name])
+        for tree in trees:
+            a = np.array(times[tree][name])
+            ratios = a / b
+            print(
+                f"{name} {tree}: median {np.median(a):.1f} µs/step (min {a.min():.1f}, max {a.max():.1f})"
+                + (
+                    ""
+                    if tree == base
+                    else f"; / {base}: median of the rounds' ratios {np.median(ratios):.3f}, ratio of "
+                    f"the minima {a.min() / b.min():.3f} (rounds: {', '.join(f'{r:.2f}' for r in ratios)})"
+                )
+            )
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--calls", type=int, default=20000)
     parser.add_argument("--steps", type=int, default=3000)
+    parser.add_argument(
+        "--versus", nargs="+", metavar="CHECKOUT", help="time a plain step against other checkouts"
+    )
+    parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.worker:
+        print(json.dumps({"file": kinengine.__file__, "us": plain_steps(args.steps)}))
+        return 0
+    if args.versus:
+        versus(args.versus, args.rounds, args.steps)
+        return 0
     jdot_ratios(args.rounds, args.calls)
     loops(args.rounds, args.steps)
     return 0

@@ -372,6 +372,29 @@ def test_a_plugged_in_constraint_holds_at_every_step(abb, limits):
     assert abb.frame_pose(q, "tool0")[0, 3] == pytest.approx(wall.x_max, abs=1e-4)
 
 
+def test_a_free_steps_status_is_built_from_that_step_when_read(abb):
+    """A step with no bound active records numbers and ``ik.status`` builds the DiffIKStatus from them:
+    the residual is ‖e‖ of the selected rows of ``last_error``, the step count is that step's, nothing is
+    active (a far wall's row included), and the next step replaces it."""
+    T = abb.frame_pose(REGULAR + 0.01, "tool0")
+    ik = DifferentialIK(
+        abb, [PoseTarget("tool0", T, rows=("x", "y", "z", "rx", "ry"))], constraints=[_Wall(abb, 10.0)]
+    )
+    q, residuals = REGULAR.copy(), []
+    for k in range(1, 4):
+        qdot, status = ik.solve(q, 0.01, info=True)
+        residuals.append(status.residual)
+        assert status is ik.status and status.step == k and status.qp_status == "unconstrained"
+        assert status.residual == pytest.approx(np.linalg.norm(ik.last_error[:5]), rel=1e-12, abs=1e-15)
+        assert status.active_lower.shape == status.active_upper.shape == (6,)
+        assert not (status.active_lower.any() or status.active_upper.any() or status.stalled)
+        assert status.active_constraints.tolist() == [False] and status.active_joints == ()
+        q = q + qdot * 0.01
+    assert residuals[0] > 1e-3 and residuals[2] < 1e-6  # full Newton steps (gain 1) converge
+    ik.solve(q, 0.01)
+    assert ik.status is not status and ik.status.step == 4
+
+
 # -- papercuts -------------------------------------------------------------------------------------
 def test_velocity_and_effort_limits_come_from_the_urdf(panda):
     joints = {j.name: j for j in panda.description.joints}

@@ -49,8 +49,16 @@ import pinocchio as pin
 from ..errors import OptionError
 from ..kinematics.memory import create_data
 from .qp_levels import Hierarchy, LevelTerms, Limits, step_bounds
-from .qp_status import DiffIKStatus, StallWarning, StatusMonitor
-from .qp_targets import ROWS, Level, PoseTarget, PostureTarget, VelocityConstraint, number_option
+from .qp_status import DiffIKStatus, StallWarning, StatusMonitor, checked_window
+from .qp_targets import (
+    ROWS,
+    Level,
+    PoseTarget,
+    PostureTarget,
+    VelocityConstraint,
+    number_option,
+    stacked_inequalities,
+)
 from .rate_limits import checked_rate_limits, urdf_velocity_limits
 from .robot_like import RobotLike
 
@@ -102,13 +110,7 @@ class DifferentialIK:
             raise OptionError(f"limits must be one of {', '.join(LIMIT_MODES)}, got {limits!r}")
         self.damping = number_option("damping", damping)
         self.lm_damping = number_option("lm_damping", lm_damping)
-        if (
-            isinstance(stall_window, bool)
-            or not isinstance(stall_window, (int, np.integer))
-            or stall_window < 1
-        ):
-            raise OptionError(f"stall_window must be a whole number of steps >= 1, got {stall_window!r}")
-        self.stall_window = int(stall_window)
+        self.stall_window = checked_window(stall_window)
         self.stall_decrease = number_option("stall_decrease", stall_decrease, 0.0, 1.0)
         self.stall_residual = number_option("stall_residual", stall_residual)
         self.warn_on_stall, self.limits = bool(warn_on_stall), limits
@@ -137,6 +139,7 @@ class DifferentialIK:
             self.acceleration_limits,
         )
         self._hierarchy = Hierarchy(solver)
+        self._scale = limits == "scale"
         self._lb, self._ub = np.zeros(n), np.zeros(n)
         self._no_G, self._no_h = np.zeros((0, n)), np.zeros(0)
         self._constraints: list[VelocityConstraint] = []
@@ -226,31 +229,37 @@ class DifferentialIK:
                 pin.computeJointJacobians(model, data, qp)
             else:  # Pinocchio's frame Jacobian crashes at nv = 0: the poses only
                 pin.forwardKinematics(model, data, qp)
-        # each level: (H, c, wsq, A rows) with the cost ½ΔqᵀHΔq + cᵀΔq (damping not included)
-        self._residual_sq, stack, offset, terms = 0.0, len(self._levels) > 1, 0, []
+        # each level: (H, c, A rows or None) with the cost ½ΔqᵀHΔq + cᵀΔq, its damping included
+        residual_sq, offset = 0.0, 0
+        terms: list[LevelTerms] = []
         for level in self._levels:
-            terms.append(self._level_terms(level, q, dt, offset, stack))
+            H, c, A, level_sq = self._level_terms(level, q, dt, offset, level is not self._levels[-1])
+            terms.append((H, c, A))
+            residual_sq += level_sq
             offset += len(level.poses)
-        residual = math.sqrt(self._residual_sq)
         lb, ub = step_bounds(self._limits, q, dt, self._qdot, self._lb, self._ub)
-        G, h = self._inequalities(q, dt)
+        G, h = stacked_inequalities(self._constraints, self.robot, q, dt, self._no_G, self._no_h)
         if n == 0:
-            step, status = np.zeros(0), "unconstrained"
-            scale = 1.0
+            step, status, scale = np.zeros(0), "unconstrained", 1.0
         else:
-            step, status, scale = self._hierarchy.solve(terms, lb, ub, G, h, self.limits == "scale")
+            step, status, scale = self._hierarchy.solve(terms, lb, ub, G, h, self._scale)
         qdot = np.asarray(step / dt, dtype=np.float64)
-        self._qdot = qdot.copy()
-        status_now = self._monitor.record(status, scale, step, lb, ub, G, h, residual)
-        return (qdot, status_now) if info else qdot
+        if self._limits.has_acceleration:  # the next step's acceleration bounds start from it
+            self._qdot = qdot.copy()
+        monitor = self._monitor
+        monitor.record(status, scale, step, lb, ub, G, h, math.sqrt(residual_sq))
+        return (qdot, monitor.status) if info else qdot
 
-    def _level_terms(self, level: Level, q: np.ndarray, dt: float, offset: int, stack: bool) -> LevelTerms:
-        """(H, c, A rows or None): the level's cost ½ΔqᵀHΔq + cᵀΔq, its damping included."""
+    def _level_terms(
+        self, level: Level, q: np.ndarray, dt: float, offset: int, stack: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, float]:
+        """(H, c, A rows or None, ‖e‖²): the level's cost ½ΔqᵀHΔq + cᵀΔq with its damping, its task rows
+        if ``stack`` (None for the last level: no lower level needs its null space) and the squared residual
+        of its pose rows."""
         n = self.dof
-        H, c, diag = level.H, level.c, level.diag
-        H.fill(0.0)
-        c.fill(0.0)
-        weighted_sq = 0.0
+        H, c, diag, AtA = level.H, level.c, level.diag, level.AtA
+        fresh = True  # H and c hold the last step's values until the first term writes them
+        weighted_sq = residual_sq = on_diagonal = 0.0
         rows: list[np.ndarray] = []
         for k, term in enumerate(level.poses):
             p, C, twist, gain, w = term.checked()
@@ -258,60 +267,52 @@ class DifferentialIK:
             self.last_error[6 * (offset + k) : 6 * (offset + k) + 6] = e
             if not term.all_rows:
                 A, e, ff = A[term.rows], e[term.rows], ff[term.rows]
-            self._residual_sq += float(e @ e)
-            e *= gain
+            e_sq = float(e @ e)
+            residual_sq += e_sq
+            weighted_sq += w * gain * gain * e_sq
+            if gain != 1.0:
+                e *= gain
             b = e + ff * dt if twist is not None else e
             if stack:
                 rows.append(A.copy())
-            if n:
-                if w != 1.0:
-                    H += w * (A.T @ A)
-                    c -= w * (A.T @ b)
+            if n:  # H (+)= w AᵀA, c (−)= w Aᵀb
+                if fresh:
+                    np.dot(A.T, A, out=H)
+                    np.dot(A.T, b, out=c)
+                    if w != 1.0:
+                        H *= w
+                    c *= -w
+                    fresh = False
                 else:
-                    H += A.T @ A
-                    c -= A.T @ b
-            weighted_sq += w * float(e @ e)
+                    np.dot(A.T, A, out=AtA)
+                    if w != 1.0:
+                        AtA *= w
+                    H += AtA
+                    c -= w * (A.T @ b)
+        if fresh:
+            H.fill(0.0)
+            c.fill(0.0)
         for posture in level.postures:
             mask = posture._mask
             assert mask is not None  # set by Level
             q_ref = self._coords.check(posture.q_ref, name="PostureTarget q_ref", allow_batch=False)
             w = number_option("PostureTarget weight", posture.weight)
             gain = number_option("PostureTarget gain", posture.gain, 0.0, 1.0, open_low=True)
-            e = gain * (q_ref - q) * mask
-            diag += w * mask
-            c -= w * e
+            e = q_ref - q
+            if gain != 1.0:
+                e *= gain
+            if posture._partial:
+                e *= mask
+                diag += w * mask
+            else:
+                on_diagonal += w
             weighted_sq += w * float(e @ e)
+            c -= w * e
             if stack:
                 rows.append(np.eye(n)[mask > 0])
-        diag += self.damping + self.lm_damping * weighted_sq
-        return H, c, (np.vstack(rows) if rows else np.zeros((0, n))) if stack else None
-
-    def _inequalities(self, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """The extra blocks stacked, in step units: G Δq <= h·dt."""
-        if not self._constraints:
-            return self._no_G, self._no_h
-        blocks_G, blocks_h = [], []
-        for constraint in self._constraints:
-            got = constraint.inequalities(self.robot, q, dt)
-            if got is None:
-                continue
-            G, h = np.asarray(got[0], dtype=float), np.asarray(got[1], dtype=float).reshape(-1)
-            G = G.reshape(-1, self.dof) if G.size or not self.dof else G
-            if (
-                G.ndim != 2
-                or G.shape[1] != self.dof
-                or h.shape != (G.shape[0],)
-                or not (np.isfinite(G).all() and not np.isnan(h).any())
-            ):
-                raise OptionError(
-                    f"constraint {constraint!r:.60} returned G {G.shape}, h {h.shape}: need (m, {self.dof}) "
-                    "and (m,), finite (h may be +inf)"
-                )
-            blocks_G.append(G)
-            blocks_h.append(h * dt)
-        if not blocks_G:
-            return self._no_G, self._no_h
-        return np.vstack(blocks_G), np.concatenate(blocks_h)
+        diag += on_diagonal + self.damping + self.lm_damping * weighted_sq
+        A_rows = (np.vstack(rows) if rows else np.zeros((0, n))) if stack else None
+        return H, c, A_rows, residual_sq
 
 
 __all__ = [

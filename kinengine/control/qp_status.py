@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from ..errors import OptionError
+
 _ACTIVE_TOL = 1e-12  # [rad | m] a step this close to a bound has it active
 
 
@@ -44,6 +46,13 @@ class DiffIKStatus:
         return bool(self.active_lower.any() or self.active_upper.any() or self.active_constraints.any())
 
 
+def checked_window(value: object) -> int:
+    """The stall window, a whole number of steps >= 1, else OptionError."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise OptionError(f"stall_window must be a whole number of steps >= 1, got {value!r}")
+    return int(value)
+
+
 class StallWarning(RuntimeWarning):
     """DifferentialIK's once-per-episode warning that the step stalled against its bounds."""
 
@@ -63,9 +72,29 @@ class StatusMonitor:
         self._no_active.flags.writeable = False
         self._no_rows = np.zeros(0, dtype=bool)
         self._no_rows.flags.writeable = False
-        self.status = DiffIKStatus(
+        self._status: DiffIKStatus | None = DiffIKStatus(
             "unconstrained", self._no_active, self._no_active, self._no_rows, math.nan, False
         )
+        # the last step's values, made a DiffIKStatus only when read: (qp status, scale, active lower,
+        # active upper, active rows (None: m rows, none active), m, residual, stalled)
+        self._last: tuple = ()
+
+    @property
+    def status(self) -> DiffIKStatus:
+        """The last step's :class:`DiffIKStatus`."""
+        if self._status is None:
+            status, scale, lower, upper, rows, m, residual, stalled = self._last
+            if rows is None:
+                rows = self._no_rows if not m else np.zeros(m, dtype=bool)
+            self._status = DiffIKStatus(
+                status, lower, upper, rows, residual, stalled, scale, self._steps, self._names(lower, upper)
+            )
+        return self._status
+
+    def _names(self, lower: np.ndarray, upper: np.ndarray) -> tuple[str, ...]:
+        if lower is self._no_active:
+            return ()
+        return tuple(name for name, on in zip(self.joint_names, lower | upper, strict=True) if on)
 
     def record(
         self,
@@ -77,36 +106,32 @@ class StatusMonitor:
         G: np.ndarray,
         h: np.ndarray,
         residual: float,
-    ) -> DiffIKStatus:
-        """The status of a step (Δq ``step`` within lb <= Δq <= ub, G Δq <= h), stall test and warning."""
-        if status == "unconstrained":
-            active_lower = active_upper = self._no_active
-            active_rows = self._no_rows if not len(h) else np.zeros(len(h), dtype=bool)
-        else:
-            active_lower = step <= lb + _ACTIVE_TOL
-            active_upper = step >= ub - _ACTIVE_TOL
-            active_rows = G @ step >= h - _ACTIVE_TOL if len(h) else self._no_rows
-        active = bool(active_lower.any() or active_upper.any() or active_rows.any())
-        self._active_run = self._active_run + 1 if active else 0
+    ) -> None:
+        """Record a step (Δq ``step`` within lb <= Δq <= ub, G Δq <= h): stall test and warning; the
+        :class:`DiffIKStatus` is built when :attr:`status` is read."""
+        self._steps += 1
+        self._status = None
         history = self._history
         history.append(residual)
+        if status == "unconstrained":  # no bound active: no stall, nothing to warn
+            self._active_run = 0
+            self._last = (status, scale, self._no_active, self._no_active, None, len(h), residual, False)
+            return
+        active_lower = step <= lb + _ACTIVE_TOL
+        active_upper = step >= ub - _ACTIVE_TOL
+        active_rows = G @ step >= h - _ACTIVE_TOL if len(h) else self._no_rows
+        active = bool(active_lower.any() or active_upper.any() or (len(h) and active_rows.any()))
+        self._active_run = self._active_run + 1 if active else 0
         stalled = (
             self._active_run >= self.stall_window
             and len(history) == self.stall_window + 1
             and residual > self.stall_residual
             and residual >= (1.0 - self.stall_decrease) * history[0]
         )
-        self._steps += 1
-        names = (
-            tuple(name for name, on in zip(self.joint_names, active_lower | active_upper, strict=True) if on)
-            if active
-            else ()
-        )
-        status_now = self.status = DiffIKStatus(
-            status, active_lower, active_upper, active_rows, residual, stalled, scale, self._steps, names
-        )
+        self._last = (status, scale, active_lower, active_upper, active_rows, len(h), residual, stalled)
         if stalled and self.warn_on_stall and not self._warned:
             self._warned = True
+            names = self._names(active_lower, active_upper)
             warnings.warn(
                 f"DifferentialIK stalled at step {self._steps}: the task residual {residual:.3g} has not "
                 f"decreased over {self.stall_window} steps while bounds were active "
@@ -115,7 +140,6 @@ class StatusMonitor:
                 StallWarning,
                 stacklevel=4,
             )
-        return status_now
 
 
-__all__ = ["DiffIKStatus", "StallWarning", "StatusMonitor"]
+__all__ = ["DiffIKStatus", "StallWarning", "StatusMonitor", "checked_window"]

@@ -78,6 +78,7 @@ class PostureTarget:
     joints: Sequence[str] | None = None
     _mask: np.ndarray | None = field(default=None, repr=False)
     cost: float | None = None
+    _partial: bool = field(default=False, init=False, repr=False)  # set by Level: some joints only
 
     def __post_init__(self) -> None:
         if self.cost is not None:
@@ -99,6 +100,44 @@ class VelocityConstraint(Protocol):
     def inequalities(
         self, robot: RobotLike, q: npt.NDArray[np.float64], dt: float
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]] | None: ...
+
+
+def stacked_inequalities(
+    constraints: Sequence[VelocityConstraint],
+    robot: RobotLike,
+    q: np.ndarray,
+    dt: float,
+    no_G: np.ndarray,
+    no_h: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The blocks of ``constraints`` of ``robot`` at q stacked, in step units: G Δq <= h·dt (``no_G``,
+    ``no_h``: the empty (0, dof) and (0,) answer); OptionError for a block of the wrong shape or not
+    finite."""
+    if not constraints:
+        return no_G, no_h
+    dof = no_G.shape[1]
+    blocks_G, blocks_h = [], []
+    for constraint in constraints:
+        got = constraint.inequalities(robot, q, dt)
+        if got is None:
+            continue
+        G, h = np.asarray(got[0], dtype=float), np.asarray(got[1], dtype=float).reshape(-1)
+        G = G.reshape(-1, dof) if G.size or not dof else G
+        if (
+            G.ndim != 2
+            or G.shape[1] != dof
+            or h.shape != (G.shape[0],)
+            or not (np.isfinite(G).all() and not np.isnan(h).any())
+        ):
+            raise OptionError(
+                f"constraint {constraint!r:.60} returned G {G.shape}, h {h.shape}: need (m, {dof}) "
+                "and (m,), finite (h may be +inf)"
+            )
+        blocks_G.append(G)
+        blocks_h.append(h * dt)
+    if not blocks_G:
+        return no_G, no_h
+    return np.vstack(blocks_G), np.concatenate(blocks_h)
 
 
 class PoseTerm:
@@ -149,7 +188,11 @@ class PoseTerm:
                 twist = np.asarray(target.twist, dtype=float)
             except (TypeError, ValueError):
                 twist = None
-            if twist is None or twist.shape != (6,) or not np.isfinite(twist).all():
+            if (
+                twist is None
+                or twist.shape != (6,)
+                or not (math.isfinite(twist @ twist) or np.isfinite(twist).all())  # the cheap test first
+            ):
                 raise OptionError(
                     f"{self.name}.twist must be None or finite [v; ω] of shape (6,) [m/s, rad/s], got "
                     f"{target.twist!r:.80}"
@@ -167,7 +210,7 @@ class PoseTerm:
         twist: np.ndarray | None,
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """(A (6, dof), e (6,), V (6,)): rows [position; rotation] of :mod:`.qp`'s doc and feed-forward V,
-        at ``data`` (joint Jacobians computed)."""
+        at ``data`` (joint Jacobians computed); the term's buffers, overwritten at the next call."""
         n, term = self.A6.shape[1], self
         MA = pin.updateFramePlacement(model, data, term.fid)
         JA = fold(pin.getFrameJacobian(model, data, term.fid, _LWA).reshape(6, -1)) if n else np.zeros((6, 0))
@@ -194,7 +237,7 @@ class PoseTerm:
         if twist is not None:
             ff[:3] = twist[:3]
             ff[3:] = Jr @ (C_target.T @ twist[3:])
-        return A, e.copy(), ff
+        return A, e, ff
 
 
 class Level:
@@ -229,12 +272,13 @@ class Level:
                     if joints is None
                     else np.array([1.0 if name in set(joints) else 0.0 for name in robot.joint_names])
                 )
+                task._partial = joints is not None and not task._mask.all()
                 number_option("PostureTarget weight", task.weight)
                 number_option("PostureTarget gain", task.gain, 0.0, 1.0, open_low=True)
                 self.postures.append(task)
             else:
                 raise OptionError(f"tasks are PoseTarget or PostureTarget entries, got {task!r:.80}")
-        self.H, self.c = np.zeros((n, n)), np.zeros(n)
+        self.H, self.c, self.AtA = np.zeros((n, n)), np.zeros(n), np.zeros((n, n))
         self.diag = self.H.reshape(-1)[:: n + 1]  # a view of H's diagonal
 
 
@@ -246,4 +290,5 @@ __all__ = [
     "PostureTarget",
     "VelocityConstraint",
     "number_option",
+    "stacked_inequalities",
 ]
