@@ -291,8 +291,8 @@ def test_prismatic_and_mimic_joints_are_refused_with_the_reason(mixed):
     [
         (np.eye(3), r"shape \(4, 4\) or a batch \(N, 4, 4\)"),
         (np.diag([1.0, 1.0, -1.0, 1.0]), "not a rotation matrix"),
-        (np.full((4, 4), np.nan), "finite pose"),
-        (np.full((2, 4, 4), np.nan), "finite batch"),
+        (np.full((4, 4), np.nan), "holds NaN or inf"),
+        (np.full((2, 4, 4), np.nan), r"`target`\[0\] holds NaN or inf \(2 of 2"),
         ("pose", "Expected `target` to be"),
     ],
 )
@@ -372,3 +372,16 @@ def test_a_large_batch_is_solved_in_chunks_with_the_same_answer(abb, monkeypatch
     np.testing.assert_array_equal(chunked.q, whole.q)  # NaN padding included
     for name in ("count", "reachable", "singular", "within_limits"):
         np.testing.assert_array_equal(getattr(chunked, name), getattr(whole, name))
+
+
+def test_closed_form_refuses_a_mapping_and_measures_the_errors_of_an_unreachable_pose(abb):
+    T = abb.frame_pose(abb.random_configuration(rng=5))
+    with pytest.raises(kinengine.OptionError, match="mapping"):
+        abb.inverse_kinematics({"tool0": T}, method="closed_form")
+    far = T.copy()
+    far[:3, 3] = [2.0, 0.0, 0.5]  # beyond the ABB's 0.65 m reach
+    result = abb.inverse_kinematics(far, method="closed_form")
+    assert not result.success
+    reached = abb.frame_pose(result.q)
+    assert result.position_error == pytest.approx(np.linalg.norm(reached[:3, 3] - far[:3, 3]), rel=1e-12)
+    assert np.isfinite(result.rotation_error)

@@ -299,10 +299,14 @@ def test_every_entry_of_a_pose_target_is_checked(abb):
             for bad in (np.nan, np.inf, -np.inf):
                 U = T.copy()
                 U[i, j] = bad
-                with pytest.raises(kinengine.ParameterizationError, match="finite pose"):
+                with pytest.raises(kinengine.ParameterizationError, match="holds NaN or inf"):
                     inverse_kinematics(abb, U)
     with pytest.raises(kinengine.ParameterizationError, match=r"got \(3, 4\)"):
         inverse_kinematics(abb, T[:3])
+    batch = np.stack([T, T, T])
+    batch[2, 0, 3] = np.nan
+    with pytest.raises(kinengine.ParameterizationError, match=r"`target`\[2\] holds NaN or inf \(1 of 3"):
+        inverse_kinematics(abb, batch)
     flipped = T.copy()
     flipped[:3, 2] *= -1.0  # orthonormal columns, det = -1: a reflection
     with pytest.raises(kinengine.ParameterizationError, match="not a rotation matrix"):

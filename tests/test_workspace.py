@@ -363,3 +363,29 @@ def test_cli_reach_and_place(tmp_path, capsys, abb):
     assert "IK-verified" in out and len(out.splitlines()) == 5
     assert main(["place", store, "--targets", str(tmp_path / "missing.npy")]) == 2
     assert "cannot read task poses" in capsys.readouterr().err
+
+
+def test_bad_maps_and_poses_are_clear_errors(abb_map, tmp_path):
+    with pytest.raises(OptionError, match="no reachability map at"):
+        ReachabilityMap.load(tmp_path / "missing.zarr")
+    (tmp_path / "junk.npz").write_bytes(b"not a zip file")
+    with pytest.raises(OptionError, match="no reachability map written by kinengine"):
+        ReachabilityMap.load(tmp_path / "junk.npz")
+    with pytest.raises(OptionError, match="must be a ReachabilityMap"):
+        base_placements(str(tmp_path / "m.zarr"), np.eye(4))
+    bad = np.eye(4)
+    bad[0, 3] = np.nan
+    with pytest.raises(OptionError, match="NaN"):
+        abb_map.reachable(bad)
+
+
+def test_cli_place_and_reach_name_what_is_wrong(tmp_path, capsys):
+    from kinengine.cli.main import main
+
+    np.save(tmp_path / "t.npy", np.eye(4)[None])
+    assert main(["place", str(tmp_path / "nope.zarr"), "--targets", str(tmp_path / "t.npy")]) == 2
+    assert "no reachability map at" in capsys.readouterr().err
+    pytest.importorskip("distributed")
+    out = str(tmp_path / "x.zarr")
+    assert main(["reach", "planar_3dof", "--voxel", "0.5", "-o", out, "--scheduler", "bogus"]) == 2
+    assert "cannot reach the Dask scheduler 'bogus'" in capsys.readouterr().err

@@ -22,7 +22,7 @@ def _run_reach(args: argparse.Namespace) -> int:
             raise OptionError("--scheduler needs Dask: pip install 'kinengine[scale]'") from None
         try:
             client = Client(args.scheduler, timeout="10s")
-        except OSError as exc:
+        except (OSError, ValueError, TypeError) as exc:  # unreachable, or no address (missing port, scheme)
             raise OptionError(f"cannot reach the Dask scheduler {args.scheduler!r}: {exc}") from None
     try:
         rmap = reachability_map(

@@ -104,6 +104,11 @@ def inverse_kinematics(
                 "a mapping {frame: pose} names its frames and takes poses (4, 4): leave `frame`, "
                 "`position` and `rotation` None (or pass one pose with frame=...)"
             )
+        if method == "closed_form":
+            raise OptionError(
+                "method='closed_form' solves pose targets (4, 4) or (N, 4, 4) of one frame; a mapping "
+                "{frame: pose} is solved by method='numeric' (or 'auto')"
+            )
         from .ik_multi import inverse_kinematics_frames
 
         return inverse_kinematics_frames(robot, target, q0, rows, weights, rng, options)

@@ -88,7 +88,7 @@ def nearest_result(
     """inverse_kinematics' closed-form answer: the solution nearest q0 (default: the middle of the joint
     ranges, zero where a range is unbounded) as an IKResult (pose (4, 4)) or IKBatchResult (N, 4, 4).
     Poses without a solution within the limits: ``numeric(T, q0)`` when ``fall_back``, else
-    success False at the reference q."""
+    success False at the reference q, with the errors of the reference q's pose."""
     from .ik_batch import IKBatchResult
     from .ik_solver import IKResult
 
@@ -113,8 +113,7 @@ def nearest_result(
     q = np.repeat(reference[None], len(batch), axis=0) if reference.ndim == 1 else reference.copy()
     if found.q.size:
         q[solved] = (found.q[None] if single else found.q)[solved, 0]
-    err_p, err_r = np.full(len(batch), np.inf), np.full(len(batch), np.inf)
-    err_p[solved], err_r[solved] = residuals(robot, found.frame, q[solved], batch[solved])
+    err_p, err_r = residuals(robot, found.frame, q, batch)  # unsolved rows: measured at the reference q
     zero = np.zeros(len(batch), dtype=np.intp)
     result = IKBatchResult(q, solved, zero, err_p, err_r, zero.copy())
     missing = np.flatnonzero(~solved)

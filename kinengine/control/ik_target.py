@@ -234,13 +234,15 @@ def single_target(
     """(p_d (3,) or None, C_d (3, 3) or None) from a pose (4, 4) or parameters χ."""
     value = _real(target, "a (4, 4) pose or parameters χ")
     if position is None and rotation is None:
-        flat = value.ravel().tolist() if value.shape == (4, 4) else [math.nan]
-        if not all(map(math.isfinite, flat)):
+        if value.shape != (4, 4):
             raise ParameterizationError(
                 f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got "
                 f"{value.shape}; "
                 "for parameters χ name their position= and/or rotation= parameterization"
             )
+        flat = value.ravel().tolist()
+        if not all(map(math.isfinite, flat)):
+            raise ParameterizationError("`target` holds NaN or inf: a pose T_IF (4, 4) has finite entries")
         a, b, c, x, d, e, f, y, g, h, i, z = flat[:12]
         if not _rotation_ok(a, b, c, d, e, f, g, h, i):
             raise ParameterizationError(
@@ -290,9 +292,15 @@ def single_target(
 def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
     """(p_d (N, 3), C_d (N, 3, 3)) from a batch of poses (N, 4, 4), every one checked."""
     value = _real(target, "a batch of poses (N, 4, 4)")
-    if value.ndim != 3 or value.shape[1:] != (4, 4) or not len(value) or not np.isfinite(value).all():
+    if value.ndim != 3 or value.shape[1:] != (4, 4) or not len(value):
         raise ParameterizationError(
             f"Expected `target` to be a finite batch of poses (N >= 1, 4, 4), got {value.shape}"
+        )
+    not_finite = np.flatnonzero(~np.isfinite(value).all(axis=(1, 2)))
+    if len(not_finite):
+        raise ParameterizationError(
+            f"`target`[{not_finite[0]}] holds NaN or inf ({len(not_finite)} of {len(value)} poses): a pose "
+            "T_IF (4, 4) has finite entries"
         )
     C = value[:, :3, :3]
     bad = np.flatnonzero(

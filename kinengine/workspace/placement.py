@@ -92,6 +92,11 @@ def base_placements(
     count of even steps over 2π (default 16) or angles [rad]; ``z``: the base height [m]; ``robot``: for
     the IK re-check of the ``top`` best (default: rebuilt from the map's URDF).
     """
+    if not isinstance(rmap, ReachabilityMap):
+        raise OptionError(
+            f"`rmap` must be a ReachabilityMap (kinengine.reachability_map or ReachabilityMap.load), got "
+            f"{type(rmap).__name__}"
+        )
     T_w = _targets(targets)
     yaw_set = _yaws(yaws)
     positions = _positions(rmap, T_w, xy)

@@ -78,6 +78,8 @@ class ReachabilityMap:
         T = T.reshape(-1, 4, 4) if T.shape[-2:] == (4, 4) else None  # type: ignore[assignment]
         if T is None:
             raise OptionError("`T` must be a pose (4, 4) or poses (N, 4, 4)")
+        if not np.all(np.isfinite(T)):
+            raise OptionError("`T` holds NaN or inf: a pose T_IF (4, 4) has finite entries")
         v = self.grid.lookup(T[:, :3, 3])
         k = nearest_orientation(self.orientations, T[:, :3, :3])
         out = (v >= 0) & self.reached[np.maximum(v, 0), k]
@@ -152,20 +154,30 @@ class ReachabilityMap:
     def load(cls, path: str | os.PathLike[str]) -> ReachabilityMap:
         """A map written by :meth:`save` or by :func:`reachability_map` into a store (complete runs only)."""
         path = os.fspath(path)
+        if "://" not in path and not os.path.exists(path):
+            raise OptionError(f"no reachability map at {path!r} (a .npz file or a Zarr store)")
         if path.endswith(".npz"):
             import json
 
-            with np.load(path, allow_pickle=False) as f:
-                return cls(
-                    f["centers"],
-                    f["reached"],
-                    f["manipulability"],
-                    f["orientations"],
-                    f["cells"],
-                    json.loads(str(f["metadata"])),
-                )
-        group = zarr_module().open_group(path, mode="r")
-        metadata = group.attrs.get("kinengine_map")
+            try:
+                with np.load(path, allow_pickle=False) as f:
+                    return cls(
+                        f["centers"],
+                        f["reached"],
+                        f["manipulability"],
+                        f["orientations"],
+                        f["cells"],
+                        json.loads(str(f["metadata"])),
+                    )
+            except (OSError, ValueError, KeyError) as exc:
+                raise OptionError(f"{path!r} is no reachability map written by kinengine: {exc}") from None
+        try:
+            group = zarr_module().open_group(path, mode="r")
+            metadata = group.attrs.get("kinengine_map")
+        except OptionError:
+            raise
+        except Exception as exc:  # zarr/fsspec raise many kinds (not a group, bad URL, no permission)
+            raise OptionError(f"cannot read a reachability map from {path!r}: {exc}") from None
         if metadata is None:
             raise OptionError(f"{path!r} holds no kinengine reachability map")
         if not np.all(group["done"][:]):
