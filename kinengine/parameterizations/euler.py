@@ -125,7 +125,7 @@ class EulerAngles(RotationParameterization):
             chi1 = (
                 xp.atan2(eps * C[tb], C[bb])
                 if xp is math
-                else np.where(locked, np.atan2(eps * C[tb], C[bb]), chi1)
+                else np.where(locked, np.arctan2(eps * C[tb], C[bb]), chi1)
             )
         # χ3 from row b of R_a(χ1)^T C = R_b(χ2) R_c(χ3), with the χ1 just chosen (as Eigen's eulerAngles):
         # near gimbal lock χ1 is ill-conditioned, but then χ3 compensates and χ -> C stays accurate.

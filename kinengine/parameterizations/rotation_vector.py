@@ -118,7 +118,7 @@ class RotationVector(RotationParameterization):
         else:
             small = s2 < _TINY_SIN2
             s = np.sqrt(np.where(small, 1.0, s2))
-            scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.atan2(s, w) / s)
+            scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.arctan2(s, w) / s)
         return scale * x, scale * y, scale * z
 
     def _fast_E(self, *C: float) -> tuple[float, Entries] | None:
