@@ -294,7 +294,9 @@ def test_installed_wheel_runs_the_accelerator_it_ships(
 
 def test_installed_version(venv: Path, elsewhere: Path) -> None:
     proc = _run([venv / "kinengine", "--version"], cwd=elsewhere, timeout=120)
-    assert proc.stdout.strip() == f"kinengine {kinengine.__version__}"
+    version, accelerator = proc.stdout.splitlines()
+    assert version == f"kinengine {kinengine.__version__}"
+    assert accelerator.startswith("accelerator: "), accelerator  # on, or off and why (test_accelerator_status)
 
 
 def test_installed_list(venv: Path, elsewhere: Path) -> None:

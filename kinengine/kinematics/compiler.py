@@ -22,19 +22,31 @@ REFERENCE_CODES = {pin.LOCAL_WORLD_ALIGNED: 0, pin.WORLD: 1, pin.LOCAL: 2}
 """The C chain's number for each Jacobian reference."""
 
 
-def _kernel_type() -> type | None:
-    """The C chain (kinengine/kinematics/chainkernel.c), or None: not built, or KINENGINE_PURE_PYTHON."""
+def _kernel_type() -> tuple[type | None, str | None]:
+    """The C chain (kinengine/kinematics/chainkernel.c), or None and why: not built, or
+    KINENGINE_PURE_PYTHON (then no reason: accelerator.status says it)."""
     if accelerator.SWITCHED_OFF:
-        return None
+        return None, None
     try:
         from .chainkernel import Kernel
-    except ImportError:
-        return None
-    return Kernel
+    except ImportError as exc:
+        return None, str(exc)
+    return Kernel, None
 
 
-KERNEL = _kernel_type()
-"""The C chain's type, or None: then every batch runs on numpy (tests set it to None to compare)."""
+KERNEL, KERNEL_ERROR = _kernel_type()
+"""The C chain's type, or None: then every batch runs on numpy (tests set it to None to compare); and the
+ImportError's text when it did not load."""
+
+
+def accelerator_status() -> str:
+    """:func:`kinengine.model.accelerator.status` for both C extensions of this process."""
+    missing: dict[str, str | None] = {}
+    if not accelerator.AVAILABLE:
+        missing["fastcall"] = accelerator.LOAD_ERROR
+    if KERNEL is None:
+        missing["chainkernel"] = KERNEL_ERROR
+    return accelerator.status(missing)
 
 
 def program(chain: Chain) -> bytes:
