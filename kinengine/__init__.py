@@ -25,6 +25,7 @@ from .errors import (
     URDFError,
 )
 from .kinematics import compiler as _compiler
+from .kinematics.compiler import accelerator_status
 from .kinematics.handle import FrameHandle
 from .loading import load, load_urdf_string
 from .model import accelerator as _accelerator
@@ -88,6 +89,7 @@ __all__ = [
     "Task",
     "URDFError",
     "__version__",
+    "accelerator_status",
     "available_robots",
     "load",
     "load_urdf_string",

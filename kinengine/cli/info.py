@@ -8,8 +8,7 @@ import platform
 import sys
 from importlib import metadata
 
-from .. import __version__
-from ..kinematics.compiler import accelerator_status
+from .. import __version__, accelerator_status
 from ..loading import extra_coordinates
 from .arguments import add_robot_arguments, load_robot, printable
 

@@ -19,8 +19,7 @@ import warnings
 from collections.abc import Sequence
 from typing import TextIO
 
-from .. import KinematicsError, __version__
-from ..kinematics.compiler import accelerator_status
+from .. import KinematicsError, __version__, accelerator_status
 from . import bench, catalog, info, pose, show, verify, view
 from .arguments import OneLineParser, one_line, summary
 

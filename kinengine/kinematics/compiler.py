@@ -40,7 +40,9 @@ ImportError's text when it did not load."""
 
 
 def accelerator_status() -> str:
-    """:func:`kinengine.model.accelerator.status` for both C extensions of this process."""
+    """One line: whether kinengine's C accelerator runs in this process and, if not, why (a source tree
+    without built extensions, not built at install, KINENGINE_PURE_PYTHON); what ``kinengine --version``
+    prints. The diagnosis is :func:`kinengine.model.accelerator.status`."""
     missing: dict[str, str | None] = {}
     if not accelerator.AVAILABLE:
         missing["fastcall"] = accelerator.LOAD_ERROR
