@@ -296,7 +296,8 @@ def test_installed_version(venv: Path, elsewhere: Path) -> None:
     proc = _run([venv / "kinengine", "--version"], cwd=elsewhere, timeout=120)
     version, accelerator = proc.stdout.splitlines()
     assert version == f"kinengine {kinengine.__version__}"
-    assert accelerator.startswith("accelerator: "), accelerator  # on, or off and why (test_accelerator_status)
+    # on, or off and why (tests/test_accelerator_status.py)
+    assert accelerator.startswith("accelerator: "), accelerator
 
 
 def test_installed_list(venv: Path, elsewhere: Path) -> None:
