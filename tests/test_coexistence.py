@@ -4,12 +4,11 @@ kinengine's frame poses (the same Pinocchio model for pink, the same URDF compil
 
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from fresh_venv import clean_env, run
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -61,33 +60,8 @@ print("kinengine", kinengine.__version__, "pink", pink.__version__, "mink ok; pi
 """
 
 
-def _env() -> dict[str, str]:
-    drop = (
-        "PYTHONPATH",
-        "PYTHONHOME",
-        "VIRTUAL_ENV",
-        "PYTHONUSERBASE",
-        "KINENGINE_PURE_PYTHON",
-        "PIP_CONSTRAINT",
-    )
-    env = {k: v for k, v in os.environ.items() if k not in drop}
-    return {**env, "PYTHONNOUSERSITE": "1", "PIP_DISABLE_PIP_VERSION_CHECK": "1", "MUJOCO_GL": "disable"}
-
-
 def _run(cmd: list[object], cwd: Path, timeout: float) -> str:
-    proc = subprocess.run(
-        [str(c) for c in cmd],
-        cwd=cwd,
-        env=_env(),
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        check=False,
-    )
-    assert proc.returncode == 0, (
-        f"{cmd} exited {proc.returncode}\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
-    )
-    return proc.stdout
+    return run(cmd, cwd=cwd, timeout=timeout, env=clean_env(MUJOCO_GL="disable")).stdout
 
 
 def test_kinengine_pink_and_mink_in_one_environment(tmp_path: Path) -> None:
