@@ -80,3 +80,37 @@ def test_floor_run_installed_every_floor() -> None:
     for name, floor, _ in _ranges():
         installed = metadata.version(name)
         assert release(installed) == release(floor), f"{name} {installed} installed, the floor is {floor}"
+
+
+@pytest.mark.parametrize(
+    "failure, named",
+    [
+        ("liburdfdom_sensor.so.4.0: cannot open shared object file: No such file or directory", True),
+        ("libtinyxml2.so.10: cannot open shared object file: No such file or directory", True),
+        ("libboost_python311.so.1.90.0: cannot open shared object file", False),
+    ],
+)
+def test_a_pin_3_wheel_beside_too_new_libraries_is_named(tmp_path: Path, failure: str, named: bool) -> None:
+    """`import kinengine` where `import pinocchio` fails as a pin 3.x wheel does beside cmeel-urdfdom 6 or
+    cmeel-tinyxml2 11 (a stand-in pinocchio package raising that ImportError): the error names the fix;
+    any other failure is Pinocchio's own, unchanged."""
+    fake = tmp_path / "pinocchio"
+    fake.mkdir()
+    (fake / "__init__.py").write_text(f"raise ImportError({failure!r})\n", encoding="utf-8")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    proc = subprocess.run(
+        [sys.executable, "-c", "import kinengine"],
+        env={**env, "PYTHONPATH": str(tmp_path)},
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    last = proc.stderr.strip().splitlines()[-1]
+    assert proc.returncode == 1
+    if named:
+        assert last.startswith("ImportError: Pinocchio does not load (" + failure), last
+        assert "pip install 'cmeel-urdfdom<5' 'cmeel-tinyxml2<11'" in last
+    else:
+        assert last == f"ImportError: {failure}", last
