@@ -186,4 +186,3 @@ def pinocchio_import_hint(exc: ImportError) -> str | None:
         f"Pinocchio does not load ({text}): a pin 3.x wheel beside too new C++ libraries; "
         "pip install 'cmeel-urdfdom<5' 'cmeel-tinyxml2<11' (or pin 4.x)"
     )
-
