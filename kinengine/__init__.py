@@ -24,8 +24,19 @@ from .errors import (
     RepresentationSingularityError,
     ResourceLimitError,
     URDFError,
+    pinocchio_import_hint,
 )
+
+try:  # Pinocchio before anything uses it, so that a broken install is named (errors.pinocchio_import_hint)
+    import pinocchio as _pinocchio  # noqa: F401
+except ImportError as _exc:
+    _hint = pinocchio_import_hint(_exc)
+    if _hint is None:
+        raise
+    raise ImportError(_hint) from _exc
+
 from .kinematics import compiler as _compiler
+from .kinematics.compiler import accelerator_status
 from .kinematics.handle import FrameHandle
 from .loading import load, load_urdf_string
 from .model import accelerator as _accelerator
@@ -119,6 +130,7 @@ __all__ = [
     "Task",
     "URDFError",
     "__version__",
+    "accelerator_status",
     "available_robots",
     "base_placements",
     "damped_solve",

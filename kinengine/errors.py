@@ -179,3 +179,16 @@ class KinematicSingularityError(KinematicsError, ValueError):
 class ResourceLimitError(KinematicsError, MemoryError):
     """kinengine would need more memory than the process may use (e.g. one more thread's Pinocchio Data
     of a large model under a memory cap); the message gives the size, the memory left and the fix."""
+
+
+def pinocchio_import_hint(exc: ImportError) -> str | None:
+    """What to do when ``import pinocchio`` fails for a missing C++ library, or None for any other failure.
+    pin 3.x wheels link liburdfdom*.so.4.0 and libtinyxml2.so.10 but let pip install newer ones
+    (docs/installing.md, Pinocchio 3.x)."""
+    text = str(exc)
+    if "liburdfdom" not in text and "libtinyxml2" not in text:
+        return None
+    return (
+        f"Pinocchio does not load ({text}): a pin 3.x wheel beside too new C++ libraries; "
+        "pip install 'cmeel-urdfdom<5' 'cmeel-tinyxml2<11' (or pin 4.x)"
+    )

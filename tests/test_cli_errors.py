@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from kinengine import KinematicsError
 from kinengine.cli import main
 from kinengine.cli.arguments import one_line, printable
 
@@ -166,3 +167,26 @@ def test_non_ascii_names_print_under_an_ascii_locale(tmp_path):
     failed = run_cli(["pose", str(path), "--frame", "épaul"], env={"PYTHONIOENCODING": "ascii"})
     assert failed.returncode == 2 and len(failed.stderr.splitlines()) == 1
     assert "\\xe9paule" in failed.stderr
+
+
+@pytest.mark.parametrize("argv", [["show", "scara"], ["bench", "abb_irb120", "--quick", "--plot", "b.png"]])
+def test_pictures_without_matplotlib_name_the_plot_extra(argv, capsys, monkeypatch, tmp_path):
+    """matplotlib is the optional `plot` extra: without it (import fails) one line names the extra, and the
+    benchmark says so before it runs."""
+    monkeypatch.chdir(tmp_path)
+    for name in [m for m in sys.modules if m == "matplotlib" or m.startswith("matplotlib.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # `import matplotlib` raises ImportError
+    assert_one_error_line(
+        *run_main(argv, capsys),
+        "pictures need matplotlib, which is not installed: pip install 'kinengine[plot]'",
+    )
+    assert not list(tmp_path.iterdir())
+
+
+def test_robot_plot_without_matplotlib_names_the_plot_extra(abb, monkeypatch):
+    for name in [m for m in sys.modules if m == "matplotlib" or m.startswith("matplotlib.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    with pytest.raises(KinematicsError, match=r"pip install 'kinengine\[plot\]'"):
+        abb.plot()

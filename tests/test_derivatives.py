@@ -112,6 +112,10 @@ def test_hessian_contracted_with_qdot_is_the_time_variation(name, frame):
 def test_pinocchio_frame_hessian_agrees_once_read_in_fortran_order(name, frame, reference):
     """getFrameKinematicHessian's (6, nv, nv) array must be re-read column-major to mean ∂J/∂q_k
     (and Pinocchio refuses mimic joints here: the Panda's fingers)."""
+    if not hasattr(
+        pin, "computeJointKinematicHessians"
+    ):  # pin 3.4, the floor: kinengine's own is tested by FD
+        pytest.skip(f"Pinocchio {pin.__version__} has no kinematic Hessians to compare with")
     robot = _load(name)
     frame = frame or robot.end_effector
     q = robot.random_configuration(14)

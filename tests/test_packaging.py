@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from fresh_venv import clean_env, run
 
 import kinengine
 
@@ -38,41 +39,8 @@ if importlib.util.find_spec("build") is None or importlib.util.find_spec("twine"
     pytest.skip("needs the packaging tools build and twine (test extra)", allow_module_level=True)
 
 
-def _clean_env() -> dict[str, str]:
-    """The environment without anything that would point Python at the checkout or another venv."""
-    env = dict(os.environ)
-    for name in (
-        "PYTHONPATH",
-        "PYTHONHOME",
-        "PYTHONSTARTUP",
-        "PYTHONSAFEPATH",
-        "VIRTUAL_ENV",
-        "__PYVENV_LAUNCHER__",
-        "PYTHONUSERBASE",
-        "KINENGINE_PURE_PYTHON",
-    ):
-        env.pop(name, None)
-    env["PYTHONNOUSERSITE"] = "1"
-    env["PIP_DISABLE_PIP_VERSION_CHECK"] = "1"
-    env["MPLBACKEND"] = "Agg"
-    return env
-
-
-def _run(cmd: list[str], *, cwd: Path, timeout: float) -> subprocess.CompletedProcess[str]:
-    proc = subprocess.run(
-        [str(c) for c in cmd],
-        cwd=cwd,
-        env=_clean_env(),
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        stdin=subprocess.DEVNULL,
-    )
-    assert proc.returncode == 0, (
-        f"{' '.join(map(str, cmd))} exited {proc.returncode}\n"
-        f"--- stdout ---\n{proc.stdout[-4000:]}\n--- stderr ---\n{proc.stderr[-4000:]}"
-    )
-    return proc
+def _run(cmd: list, *, cwd: Path, timeout: float) -> subprocess.CompletedProcess[str]:
+    return run(cmd, cwd=cwd, timeout=timeout, env=clean_env())
 
 
 def _tracked_files() -> list[str]:
@@ -298,7 +266,10 @@ def test_installed_wheel_runs_the_accelerator_it_ships(
 
 def test_installed_version(venv: Path, elsewhere: Path) -> None:
     proc = _run([venv / "kinengine", "--version"], cwd=elsewhere, timeout=120)
-    assert proc.stdout.strip() == f"kinengine {kinengine.__version__}"
+    version, accelerator = proc.stdout.splitlines()
+    assert version == f"kinengine {kinengine.__version__}"
+    # on, or off and why (tests/test_accelerator_status.py)
+    assert accelerator.startswith("accelerator: "), accelerator
 
 
 def test_installed_list(venv: Path, elsewhere: Path) -> None:

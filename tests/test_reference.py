@@ -251,7 +251,7 @@ def test_origin_is_translation_then_rz_ry_rx():
         xyz = rng.uniform(-1, 1, 3)
         text = _robot("a b", _joint("j", "fixed", "a", "b", f'<origin xyz="{_v(xyz)}" rpy="{_v(rpy)}"/>'))
         T = ReferenceKinematics.from_urdf_string(text).frame_pose(np.zeros(0), "b")
-        rz, ry, rx = (Rotation.from_euler(a, [v]).as_matrix() for a, v in zip("zyx", rpy[::-1], strict=False))
+        rz, ry, rx = (Rotation.from_euler(a, v).as_matrix() for a, v in zip("zyx", rpy[::-1], strict=False))
         np.testing.assert_allclose(T[:3, :3], rz @ ry @ rx, rtol=0, atol=1e-15)
         np.testing.assert_allclose(T[:3, 3], xyz, rtol=0, atol=0)
 

@@ -192,7 +192,12 @@ def test_odd_dynamics_numbers_load_and_never_reach_pinocchio():
 
 
 def test_an_error_from_pinocchio_names_the_joint_and_line(monkeypatch):
+    import pinocchio as pin
+
     import kinengine.model.pinocchio_model as pinocchio_model
+
+    if int(pin.__version__.split(".")[0]) < 4:
+        pytest.skip(f"Pinocchio {pin.__version__} builds a negative effort limit: no error to name")
 
     monkeypatch.setattr(pinocchio_model, "_nonnegative", lambda value: value)  # let effort -1 through
     with pytest.raises(URDFError, match="Pinocchio could not build it: .*effort") as info:

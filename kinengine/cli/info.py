@@ -1,15 +1,51 @@
-"""``kinengine info ROBOT``: joints (coordinate index, type, position, velocity and effort limits), mimic
-joints and frames."""
+"""``kinengine info [ROBOT]``: joints (coordinate index, type, position, velocity and effort limits), mimic
+joints and frames; without a robot, the installation: version, whether the C accelerator is on (and why
+not), dependency versions."""
 
 from __future__ import annotations
 
 import argparse
+import platform
+import sys
+from importlib import metadata
 
+from .. import __version__, accelerator_status
 from ..loading import extra_coordinates
 from .arguments import add_robot_arguments, load_robot, printable
 
+DEPENDENCIES = (
+    "pin",
+    "numpy",
+    "scipy",
+    "example-robot-data",
+    "yourdfpy",
+    "lxml",
+    "xacro",
+    "qpsolvers",
+    "daqp",
+)
+"""The distributions ``kinengine info`` reports the versions of (the core dependencies)."""
+
+
+def installation() -> list[str]:
+    """The lines ``kinengine info`` prints without a robot."""
+    lines = [
+        f"kinengine {__version__} (Python {platform.python_version()}, {sys.platform})",
+        accelerator_status(),
+    ]
+    for name in DEPENDENCIES:
+        try:
+            version = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            version = "not installed"
+        lines.append(f"{name} {version}")
+    return lines
+
 
 def _run(args: argparse.Namespace) -> int:
+    if args.robot is None:
+        print("\n".join(installation()))
+        return 0
     robot = load_robot(args)
     print(f"{printable(robot.name)}: {robot.dof} dof, source {printable(robot.source)}")
     print(f"end effector: {printable(robot.end_effector)}")
@@ -50,7 +86,9 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("info", help="joints, limits and frames of a robot")
-    p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
+    p = sub.add_parser(
+        "info", help="joints, limits and frames of a robot; without one: versions and the C accelerator"
+    )
+    p.add_argument("robot", nargs="?", help="robot name or path to a .urdf or .xacro file")
     add_robot_arguments(p)
     p.set_defaults(handler=_run)

@@ -21,19 +21,32 @@ import sys
 import warnings
 from collections.abc import Sequence
 
-from .. import KinematicsError, __version__
+from .. import KinematicsError, __version__, accelerator_status
 from . import bench, catalog, collisions, ik, info, pose, reach, show, verify, view
 from .arguments import OneLineParser, defer_warning, drop_warnings, flush_warnings, one_line, summary
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="kinengine", description=summary(__doc__))
-    parser.add_argument("--version", action="version", version=f"kinengine {__version__}")
+    parser.add_argument(
+        "--version",
+        action=_Version,
+        nargs=0,
+        help="the version and whether the C accelerator is on, then exit",
+    )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     for command in (catalog, info, pose, ik, verify, bench, show, view, reach, collisions):
         command.add_parser(sub)
     return parser
+
+
+class _Version(argparse.Action):
+    """--version: two lines as written (argparse's own version action would re-wrap them into one)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: object) -> None:
+        print(f"kinengine {__version__}\n{accelerator_status()}")
+        parser.exit()
 
 
 _VALUE_OPTIONS = ("--q", "--view", "--xyz", "--rpy", "--near")

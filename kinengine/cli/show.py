@@ -90,11 +90,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
 
 def handle(args: argparse.Namespace) -> int:
     """Write the PNG and print its path."""
-    import matplotlib
+    from ..presentation.plotting import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot(headless=True)
     if args.view is not None and len(args.view) != 2:
         raise KinematicsError(
             f"--view takes two angles ELEV,AZIM in degrees, e.g. --view 20,-75; got {args.view}"

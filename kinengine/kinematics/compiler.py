@@ -30,15 +30,16 @@ SIN_COS_TOLERANCE = 1e-15
 """Largest difference from the C library's sin and cos that the C chain's own sin_cos may show at import."""
 
 
-def _kernel_type() -> type | None:
-    """The C chain (kinengine/kinematics/chainkernel.c), or None: not built, KINENGINE_PURE_PYTHON, or its
-    sin and cos disagree with the C library's (then one RuntimeWarning says so)."""
+def _kernel_type() -> tuple[type | None, str | None]:
+    """The C chain (kinengine/kinematics/chainkernel.c), or None and why: not built (the ImportError), its
+    sin and cos disagree with the C library's (then one RuntimeWarning says so too), or
+    KINENGINE_PURE_PYTHON (then no reason: accelerator.status says it)."""
     if accelerator.SWITCHED_OFF:
-        return None
+        return None, None
     try:
         from . import chainkernel
-    except ImportError:
-        return None
+    except ImportError as exc:
+        return None, str(exc)
     error = sin_cos_error(chainkernel.sin_check)
     if not error <= SIN_COS_TOLERANCE:
         warnings.warn(
@@ -48,8 +49,8 @@ def _kernel_type() -> type | None:
             RuntimeWarning,
             stacklevel=2,
         )
-        return None
-    return chainkernel.Kernel
+        return None, f"its sin/cos differ from the C library's by up to {error:.3g} (built with -ffast-math?)"
+    return chainkernel.Kernel, None
 
 
 def sin_cos_error(sin_check: Callable[[bytes], bytes]) -> float:
@@ -64,8 +65,21 @@ def sin_cos_error(sin_check: Callable[[bytes], bytes]) -> float:
     return float(error) if error == error else math.inf
 
 
-KERNEL = _kernel_type()
-"""The C chain's type, or None: then every batch runs on numpy (tests set it to None to compare)."""
+KERNEL, KERNEL_ERROR = _kernel_type()
+"""The C chain's type, or None: then every batch runs on numpy (tests set it to None to compare); and the
+ImportError's text when it did not load."""
+
+
+def accelerator_status() -> str:
+    """One line: whether kinengine's C accelerator runs in this process and, if not, why (a source tree
+    without built extensions, not built at install, KINENGINE_PURE_PYTHON); what ``kinengine --version``
+    prints. The diagnosis is :func:`kinengine.model.accelerator.status`."""
+    missing: dict[str, str | None] = {}
+    if not accelerator.AVAILABLE:
+        missing["fastcall"] = accelerator.LOAD_ERROR
+    if KERNEL is None:
+        missing["chainkernel"] = KERNEL_ERROR
+    return accelerator.status(missing)
 
 
 def program(chain: Chain) -> bytes:

@@ -16,13 +16,16 @@ extension: without one the install goes on). It does three things the interprete
 
 ``AVAILABLE`` says whether the accelerator runs. It is off when the extension was not built or does not
 import (numpy's C API is checked by its import), or when the environment variable
-``KINENGINE_PURE_PYTHON`` is set to anything but "" or "0" (for comparisons).
+``KINENGINE_PURE_PYTHON`` is set to anything but "" or "0" (for comparisons). :func:`status` says
+which, in the one line ``kinengine --version`` and ``kinengine info`` print.
 """
 
 from __future__ import annotations
 
+import importlib.machinery
 import os
 from collections.abc import Callable
+from pathlib import Path
 from types import ModuleType
 from typing import Any
 
@@ -30,12 +33,21 @@ SWITCHED_OFF = os.environ.get("KINENGINE_PURE_PYTHON", "") not in ("", "0")
 """KINENGINE_PURE_PYTHON is set: no C module is used."""
 
 
+LOAD_ERROR: str | None = None
+"""Why the C module did not load (an ImportError's or the layout check's text), None when it did or when
+KINENGINE_PURE_PYTHON is set."""
+
+
 def _load() -> ModuleType | None:
+    global LOAD_ERROR
     if SWITCHED_OFF:
         return None
     try:
         from . import fastcall
-    except ImportError:  # not built (no C compiler at install time), or built against another numpy ABI
+    except (
+        ImportError
+    ) as exc:  # not built (no C compiler at install time), or built against another numpy ABI
+        LOAD_ERROR = str(exc)
         return None
     return fastcall
 
@@ -44,6 +56,51 @@ native: ModuleType | None = _load()
 """The C module, or None when kinengine runs in pure Python (tests set it to None to compare)."""
 
 AVAILABLE = native is not None
+
+PACKAGE = Path(__file__).resolve().parents[1]
+"""The folder of the kinengine package this process imported."""
+
+EXTENSIONS = {"fastcall": "kinengine/model", "chainkernel": "kinengine/kinematics"}
+"""The C extensions (module name: folder relative to the package's parent), all optional."""
+
+
+def _built(name: str, package: Path) -> bool:
+    """Whether the extension file for this Python (e.g. fastcall.cpython-311-x86_64-linux-gnu.so) exists."""
+    folder = package.parent / EXTENSIONS[name]
+    return any((folder / f"{name}{suffix}").is_file() for suffix in importlib.machinery.EXTENSION_SUFFIXES)
+
+
+def status(
+    missing: dict[str, str | None],
+    *,
+    switched_off: bool = SWITCHED_OFF,
+    package: Path = PACKAGE,
+) -> str:
+    """One line: whether the C accelerator is on and, if not, why. ``missing`` maps each C extension
+    that did not load (``fastcall``, ``chainkernel``) to its load error (None: not known); empty when
+    both loaded. ``package`` is the kinengine folder imported (a checkout when it sits beside a
+    pyproject.toml)."""
+    if switched_off:
+        return "accelerator: off (pure Python): disabled by KINENGINE_PURE_PYTHON (unset it, or set it to 0)"
+    if not missing:
+        return "accelerator: on (C extensions fastcall and chainkernel loaded)"
+    names = " and ".join(sorted(missing))
+    unbuilt = [name for name in missing if not _built(name, package)]
+    if unbuilt and (package.parent / "pyproject.toml").is_file():
+        why = (
+            f"kinengine is imported from the source tree {package.parent}, where the C extensions are not "
+            "built; `pip install -e .` there builds them in place (a C compiler is needed), or run from "
+            "another folder to import the installed kinengine"
+        )
+    elif unbuilt:
+        why = (
+            "the C extensions were not built when kinengine was installed (no working C compiler then); "
+            "install a binary wheel, or a compiler and reinstall kinengine"
+        )
+    else:
+        errors = "; ".join(f"{name}: {error}" for name, error in sorted(missing.items()) if error)
+        why = f"the built extensions do not load ({errors or 'unknown error'})"
+    return f"accelerator: off (pure Python, {names} missing): {why}"
 
 
 def ready_check(dof: int, limit: float) -> Callable[[object], bool] | None:
@@ -62,4 +119,4 @@ def frame_calls(**bound: Any) -> tuple[Callable[..., Any], Callable[..., Any], C
     return calls.pose, calls.jacobian, calls.kinematics
 
 
-__all__ = ["AVAILABLE", "SWITCHED_OFF", "frame_calls", "native", "ready_check"]
+__all__ = ["AVAILABLE", "LOAD_ERROR", "SWITCHED_OFF", "frame_calls", "native", "ready_check", "status"]

@@ -132,7 +132,7 @@ class EulerAngles(RotationParameterization):
             chi1 = (
                 xp.atan2(eps * C[tb], C[bb])
                 if xp is math
-                else np.where(locked, np.atan2(eps * C[tb], C[bb]), chi1)
+                else np.where(locked, np.arctan2(eps * C[tb], C[bb]), chi1)
             )
         chi3 = self._third(xp, xp.cos(chi1), xp.sin(chi1), C)
         if xp is math:

@@ -110,7 +110,7 @@ def _log_by_quaternion(xp: Namespace, *C: Component) -> Entries:
     else:
         small = s2 < _TINY_SIN2
         s = np.sqrt(np.where(small, 1.0, s2))
-        scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.atan2(s, w) / s)
+        scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.arctan2(s, w) / s)
     return scale * x, scale * y, scale * z
 
 

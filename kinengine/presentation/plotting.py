@@ -18,6 +18,7 @@ import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from numbers import Real
+from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,6 +32,24 @@ if TYPE_CHECKING:
     from mpl_toolkits.mplot3d.axes3d import Axes3D  # no type information: Any to the checker
 
     from ..control.robot_like import RobotLike
+
+PLOT_EXTRA = "pip install 'kinengine[plot]'"
+"""What installs matplotlib for kinengine: the ``plot`` extra."""
+
+
+def pyplot(*, headless: bool = False) -> ModuleType:
+    """``matplotlib.pyplot``; with ``headless``, on the Agg backend (files, no window). matplotlib is an
+    optional dependency: without it, a KinematicsError naming the ``plot`` extra."""
+    try:
+        import matplotlib
+    except ImportError:
+        raise KinematicsError(f"pictures need matplotlib, which is not installed: {PLOT_EXTRA}") from None
+    if headless:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
 
 AXIS_FRACTION = 0.15
 """Default arrow and triad length as a fraction of the skeleton's largest extent."""
@@ -128,7 +147,7 @@ def plot_robot(
     the :class:`Drawing`. Never calls ``plt.show()``. Sets ``ax.computed_zorder = False`` (layers are
     drawn in a fixed order so that joint axes along a link stay visible).
     """
-    import matplotlib.pyplot as plt
+    plt = pyplot()
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
     if ax is not None and getattr(ax, "name", None) != "3d":

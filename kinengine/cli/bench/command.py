@@ -60,6 +60,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def handle(args: argparse.Namespace) -> int:
+    if args.plot is not None:  # say that matplotlib is missing before the run, not after it
+        from ...presentation.plotting import pyplot
+
+        pyplot(headless=True)
     report = run(
         [load_robot(args, name) for name in args.robots or DEFAULT_ROBOTS],
         QUICK if args.quick else FULL,
@@ -181,10 +185,9 @@ def _peer_cell(result: dict, ours: float | None) -> str:
 
 def plot(report: dict, path: Path) -> None:
     """Horizontal bars on log axes: per-call latency [µs] and batch throughput [configurations/s]."""
-    import matplotlib
+    from ...presentation.plotting import pyplot
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot(headless=True)
     from matplotlib.patches import Patch
 
     robots = [r["name"] for r in report["robots"]]
