@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 
 from ..loading import extra_coordinates
-from .arguments import add_robot_arguments, load_robot, printable
+from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, printable
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -51,6 +51,6 @@ def _run(args: argparse.Namespace) -> int:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("info", help="joints, limits and frames of a robot")
-    p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("robot", help=ROBOT_HELP)
     add_robot_arguments(p)
     p.set_defaults(handler=_run)
