@@ -24,6 +24,7 @@ mujoco = pytest.importorskip("mujoco")
 DATA = Path(__file__).parent / "data" / "mjcf"
 FEATURES = DATA / "features.xml"
 TWO_TREES = DATA / "two_trees.xml"
+KINEMATICS_ONLY = DATA / "kinematics_only.xml"
 
 
 def _load(path: Path, **kwargs: object) -> kinengine.Robot:
@@ -51,6 +52,41 @@ def test_every_body_and_site_pose_and_jacobian_equals_mujoco(path, root):
     assert check.position <= 1e-12 and check.rotation <= 1e-12 and check.jacobian <= 1e-12
     if path == FEATURES:  # every body (but the world) and every site is compared
         assert check.frames == model.nbody - 1 + model.nsite
+
+
+def test_a_kinematics_only_file_loads_and_its_poses_equal_mujocos():
+    """Bodies, joints and a site without any geom or inertial: MuJoCo refuses it as it stands (no mass),
+    kinengine compiles it with tiny mass bounds; poses are MuJoCo's mj_kinematics of that compiled model."""
+    with pytest.raises(ValueError, match="mass and inertia of moving bodies"):
+        mujoco.MjModel.from_xml_path(str(KINEMATICS_ONLY))
+    robot = _load(KINEMATICS_ONLY)
+    spec = mujoco.MjSpec.from_file(str(KINEMATICS_ONLY))
+    spec.compiler.boundmass = spec.compiler.boundinertia = 1e-12
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    assert robot.joint_names == ("j1", "j2", "j3", "j4") and model.nq == 4
+    for q in robot.random_configuration(7, size=10):
+        data.qpos[:] = q
+        mujoco.mj_kinematics(model, data)
+        for b in range(1, model.nbody):
+            T = robot.frame_pose(q, model.body(b).name)
+            np.testing.assert_allclose(T[:3, 3], data.xpos[b], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(T[:3, :3], data.xmat[b].reshape(3, 3), rtol=0, atol=1e-12)
+        T = robot.frame_pose(q, "tool")
+        np.testing.assert_allclose(T[:3, 3], data.site_xpos[0], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(T[:3, :3], data.site_xmat[0].reshape(3, 3), rtol=0, atol=1e-12)
+    report = verify(robot, samples=5)
+    assert report.passed, report.table()
+    assert main(["verify", str(KINEMATICS_ONLY), "--samples", "3"]) == 0
+
+
+def test_a_file_that_zeroes_the_mass_bounds_is_told_the_fix(tmp_path):
+    path = tmp_path / "zero.xml"
+    text = KINEMATICS_ONLY.read_text().replace('angle="radian"', 'angle="radian" boundmass="0"')
+    path.write_text(text)
+    with pytest.raises(MJCFError, match=r"mass and inertia .*sets <compiler> boundmass: remove it") as caught:
+        kinengine.load(path)
+    assert caught.value.source == str(path)
 
 
 def test_a_site_pose_and_jacobian_by_hand_at_one_configuration():
@@ -160,7 +196,7 @@ def test_the_check_script_reports_every_model_of_a_folder(capsys):
     spec.loader.exec_module(module)
     assert module.main([str(DATA), "--samples", "3"]) == 0
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and ".xml" in line]
-    assert [r.split(" | ")[0] for r in rows] == ["| features.xml", "| two_trees.xml"]
+    assert [r.split(" | ")[0] for r in rows] == ["| features.xml", "| kinematics_only.xml", "| two_trees.xml"]
 
 
 def test_reference_positions_are_mujocos_qpos():

@@ -161,6 +161,10 @@ def name_value(text: str) -> tuple[str, str]:
     return name.strip(), value
 
 
+ROBOT_HELP = "robot name or path to a .urdf, .xacro or MJCF .xml file"
+"""The help text of the robot argument of every robot-taking command."""
+
+
 def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of a robot given as a .xacro file, with package:// paths (repeatable) or as MJCF."""
     parser.add_argument(

@@ -9,7 +9,7 @@ import argparse
 import itertools
 
 from ..collision import sample_pairs, write_srdf
-from .arguments import add_robot_arguments, load_robot, positive_int, printable, whole_number
+from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, positive_int, printable, whole_number
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -44,7 +44,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("collision-pairs", help="self-collision pairs by sampling; write an SRDF")
-    p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("robot", help=ROBOT_HELP)
     p.add_argument(
         "--samples", type=positive_int, default=10000, help="random configurations (default 10000)"
     )

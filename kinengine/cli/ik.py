@@ -8,7 +8,7 @@ import json
 import numpy as np
 
 from ..parameterizations import get_rotation
-from .arguments import add_robot_arguments, load_robot, name_argument, parse_vector, printable
+from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, name_argument, parse_vector, printable
 
 
 def _triple(text: str) -> list[float]:
@@ -66,7 +66,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("ik", help="every closed-form inverse-kinematics solution of a pose (the ik extra)")
-    p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("robot", help=ROBOT_HELP)
     add_robot_arguments(p)
     p.add_argument("--xyz", type=_triple, required=True, help="position X,Y,Z [m] in the root link frame")
     p.add_argument(

@@ -11,7 +11,7 @@ from importlib import metadata
 
 from .. import __version__, accelerator_status
 from ..loading import extra_coordinates
-from .arguments import add_robot_arguments, load_robot, printable
+from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, printable
 
 DEPENDENCIES = (
     "pin",
@@ -89,6 +89,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "info", help="joints, limits and frames of a robot; without one: versions and the C accelerator"
     )
-    p.add_argument("robot", nargs="?", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("robot", nargs="?", help=ROBOT_HELP)
     add_robot_arguments(p)
     p.set_defaults(handler=_run)

@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from ..parameterizations import parameter_labels
-from .arguments import add_robot_arguments, load_robot, name_argument, parse_vector, printable
+from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, name_argument, parse_vector, printable
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -45,7 +45,7 @@ def _run(args: argparse.Namespace) -> int:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("pose", help="frame pose and geometric Jacobian at a configuration")
-    p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("robot", help=ROBOT_HELP)
     add_robot_arguments(p)
     p.add_argument(
         "--q",

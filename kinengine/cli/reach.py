@@ -9,7 +9,15 @@ import numpy as np
 
 from ..errors import OptionError
 from ..workspace import ReachabilityMap, base_placements, reachability_map
-from .arguments import add_robot_arguments, bounded_int, load_robot, name_argument, output_path, strict_float
+from .arguments import (
+    ROBOT_HELP,
+    add_robot_arguments,
+    bounded_int,
+    load_robot,
+    name_argument,
+    output_path,
+    strict_float,
+)
 
 
 def _run_reach(args: argparse.Namespace) -> int:
@@ -75,7 +83,7 @@ def _run_place(args: argparse.Namespace) -> int:
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("reach", help="reachability map of a frame (voxels × orientations, IK for each)")
-    p.add_argument("robot", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("robot", help=ROBOT_HELP)
     add_robot_arguments(p)
     p.add_argument("--frame", type=name_argument, default=None, help="frame to map (default: end effector)")
     p.add_argument("--voxel", type=strict_float, default=0.05, help="voxel edge [m] (default 0.05)")

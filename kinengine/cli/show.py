@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, cast
 from ..errors import KinematicsError
 from ..presentation.plotting import plot_robot
 from .arguments import (
+    ROBOT_HELP,
     add_robot_arguments,
     bounded_int,
     load_robot,
@@ -42,7 +43,7 @@ def _names(text: str) -> list[str]:
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``show`` on the kinengine command line."""
     p = subparsers.add_parser("show", help="draw the robot at q into a PNG", description=summary(__doc__))
-    p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     add_robot_arguments(p)
     p.add_argument(
         "--q",

@@ -6,13 +6,13 @@ import argparse
 import json
 
 from ..verify import MAX_SAMPLES, verify
-from .arguments import add_robot_arguments, bounded_int, load_robot, output_path
+from .arguments import ROBOT_HELP, add_robot_arguments, bounded_int, load_robot, output_path
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``verify TARGET [--samples N] [--seed S] [--json PATH]`` on the kinengine CLI."""
     p = subparsers.add_parser("verify", help="cross-check poses and Jacobians against independent references")
-    p.add_argument("target", metavar="TARGET", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("target", metavar="TARGET", help=ROBOT_HELP)
     add_robot_arguments(p)
     p.add_argument(
         "--samples",

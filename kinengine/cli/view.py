@@ -15,7 +15,7 @@ import logging
 import time
 
 from ..presentation.viewer import view
-from .arguments import add_robot_arguments, flush_warnings, load_robot, parse_vector, summary
+from .arguments import ROBOT_HELP, add_robot_arguments, flush_warnings, load_robot, parse_vector, summary
 
 
 def _names(text: str) -> list[str]:
@@ -28,7 +28,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     p = subparsers.add_parser(
         "view", help="show the robot in the browser (interactive 3D viewer)", description=summary(__doc__)
     )
-    p.add_argument("robot", metavar="ROBOT", help="robot name or path to a .urdf or .xacro file")
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     add_robot_arguments(p)
     p.add_argument(
         "--q",

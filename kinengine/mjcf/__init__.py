@@ -1,6 +1,6 @@
 """MJCF (MuJoCo XML) models through MuJoCo's own compiler, as kinengine's own description.
 
-:func:`read_mjcf_file` (:mod:`.reader`) compiles the file with ``mujoco.MjModel.from_xml_path`` after the
+:func:`read_mjcf_file` (:mod:`.reader`) compiles the file with ``mujoco.MjSpec`` (:mod:`.compiler`) after the
 safety and size checks of :mod:`.compiler`, and converts the compiled model (:mod:`.convert`) into a
 :class:`~kinengine.urdf.RobotDescription` and an equivalent kinematic URDF, which is what Pinocchio, the
 independent reference of ``kinengine verify`` and the viewer read. :func:`.crosscheck.cross_check`

@@ -4,7 +4,10 @@ Before MuJoCo sees anything, the file and every file it includes are read once e
 by kinengine's safe XML parser (:mod:`kinengine.urdf.safe_xml`: no DTD, no entity, bounded size, tags,
 depth and attributes by :class:`~kinengine.urdf.Limits`); the total size and tag count of all of them
 are bounded as one document's, and every asset file (mesh, texture, ...) must be a regular file within
-``Limits.max_bytes``. The compiled model is then bounded too (bodies, joints, coordinates).
+``Limits.max_bytes``. MuJoCo compiles it through ``mujoco.MjSpec`` with ``<compiler boundmass
+boundinertia>`` at :data:`KINEMATIC_BOUND` when the file leaves them unset, so a kinematics-only file
+(bodies without geoms or inertials) compiles. The compiled model is then bounded too (bodies, joints,
+coordinates).
 MuJoCo's compiler errors become an :class:`~kinengine.errors.MJCFError` naming the file. MuJoCo is an
 optional extra: ``pip install 'kinengine[mjcf]'``.
 """
@@ -26,6 +29,10 @@ _PROLOG = re.compile(rb"<\?.*?\?>|<!--.*?-->", re.DOTALL)
 _ROOT_TAG = re.compile(rb"<([A-Za-z_][\w.:-]*)")
 MAX_INCLUDES = 256
 """Files one model may ``<include>`` (directly or not)."""
+KINEMATIC_BOUND = 1e-12
+"""[kg, kg·m²] ``<compiler boundmass boundinertia>`` when the file leaves them unset: a body without
+geoms or ``<inertial>`` gets this mass and inertia, so kinematics-only files compile (poses do not
+depend on mass)."""
 
 
 def mujoco_module() -> Any:
@@ -70,19 +77,39 @@ def compile_mjcf(path: str | os.PathLike[str], *, limits: Limits = LIMITS) -> tu
     folder = Path(source).parent
     documents = _check_includes(root, folder, source, limits, len(data))
     dirs: dict[str, str] = {}
+    bounds: set[str] = set()
     for document in documents:
         for compiler in document.iter("compiler"):
             dirs.update({k: v for k in ("assetdir", "meshdir", "texturedir") if (v := compiler.get(k))})
+            bounds.update(k for k in ("boundmass", "boundinertia") if compiler.get(k) is not None)
     meshdir = dirs.get("meshdir", dirs.get("assetdir", ""))
     _check_asset_files(documents, folder, dirs, source, limits)
     mujoco = mujoco_module()
     try:
-        model = mujoco.MjModel.from_xml_path(source)
+        spec = mujoco.MjSpec.from_file(source)
+        for name in {"boundmass", "boundinertia"} - bounds:
+            setattr(spec.compiler, name, KINEMATIC_BOUND)
+        model = spec.compile()
     except Exception as exc:  # MuJoCo raises ValueError with the compiler's message (element, line)
         message = " ".join(str(exc).split())
-        raise MJCFError(f"MuJoCo's compiler refused the model: {message}", source=source) from None
+        raise MJCFError(
+            f"MuJoCo's compiler refused the model: {message}{_hint(message, bounds)}", source=source
+        ) from None
     _check_size(model, source, limits)
     return source, model, meshdir
+
+
+def _hint(message: str, bounds: set[str]) -> str:
+    """The fix for the compiler errors a kinematics-only file meets ("" for others)."""
+    if "mass and inertia" in message:
+        if bounds:
+            settings = " and ".join(sorted(bounds))
+            return (
+                f"; the file sets <compiler> {settings}: remove it (kinengine then bounds the mass and "
+                "inertia of bodies without geoms at 1e-12) or give each moving body an <inertial> or a <geom>"
+            )
+        return "; give each moving body an <inertial> or a <geom>"
+    return ""
 
 
 def _check_includes(root: Any, folder: Path, source: str, limits: Limits, size: int) -> list[Any]:
@@ -172,4 +199,4 @@ def _check_size(model: Any, source: str, limits: Limits) -> None:
             )
 
 
-__all__ = ["MAX_INCLUDES", "compile_mjcf", "is_mjcf", "mujoco_module"]
+__all__ = ["KINEMATIC_BOUND", "MAX_INCLUDES", "compile_mjcf", "is_mjcf", "mujoco_module"]
