@@ -836,7 +836,13 @@ class Robot:
         cached = self._collision
         if cached is None or (packages is not None and cached[0] != chosen):
             checker = collision_checker(
-                self._kin, self._urdf_text, self.source, chosen, self._obstacles, self._disabled_pairs
+                self._kin,
+                self._urdf_text,
+                self.source,
+                chosen,
+                self._obstacles,
+                self._disabled_pairs,
+                self.name,
             )
             cached = self._collision = (chosen, checker)
         return cached[1].geometry
@@ -858,8 +864,9 @@ class Robot:
             links = self.collision_checker().links
         else:
             disabled = read_disabled_pairs(srdf)
+            self._warn_unknown_links(disabled)
             checker = collision_checker(
-                self._kin, self._urdf_text, self.source, self._packages, self._obstacles, disabled
+                self._kin, self._urdf_text, self.source, self._packages, self._obstacles, disabled, self.name
             )
             links = checker.links
         return list(dict.fromkeys(links))
@@ -895,7 +902,17 @@ class Robot:
         from .collision import read_disabled_pairs
 
         disabled = frozenset(read_disabled_pairs(srdf))
+        self._warn_unknown_links(disabled)
         return self._rebuilt(self._description, self._urdf_text, self._obstacles, disabled)
+
+    def _warn_unknown_links(self, disabled: set[frozenset[str]] | frozenset[frozenset[str]]) -> None:
+        """A UserWarning naming an SRDF's links this robot (links and obstacles) does not have."""
+        from .collision import warn_unknown_links
+
+        known = [link.name for link in self._description.links] + [
+            o.name or f"obstacle_{k}" for k, o in enumerate(self._obstacles)
+        ]
+        warn_unknown_links(disabled, known)
 
     def _collision_state(self) -> dict[str, object] | None:
         """What pickling keeps of the collision setup (None: the defaults)."""

@@ -401,3 +401,101 @@ def test_ik_solutions_avoid_collisions_drops_exactly_the_colliding_solutions():
     np.testing.assert_array_equal(single.q, free.q[0][: free.count[0]])
     with pytest.raises(OptionError, match="avoid_collisions"):
         wall.ik_solutions(T[0], avoid_collisions="yes")
+
+
+# -- review fixes: robots without shapes, 1-DOF gradients, option checks, SRDF names, the command -----------
+ONE_DOF = f"""<robot name="one_arm">
+  <link name="base"/>
+  <link name="link_1"><collision><origin xyz="{BALL_AT[0]} {BALL_AT[1]} {BALL_AT[2]}"/><geometry><sphere radius="{R_BALL}"/></geometry></collision></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="link_1"/><axis xyz="0 0.6 0.8"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+def test_a_robot_without_collision_shapes_is_an_error_not_collision_free():
+    robot = kinengine.load("planar_3dof").with_obstacles([Sphere(5.0)])  # engulfs the whole arm
+    q = np.zeros(robot.dof)
+    for query in (
+        lambda: robot.in_collision(q),
+        lambda: robot.min_distance(q),
+        robot.collision_pairs,
+        robot.collision_geometry,
+    ):
+        with pytest.raises(
+            URDFError, match=r"robot 'planar_3dof' has no <collision> elements.*add <collision>"
+        ):
+            query()
+    target = PoseTarget(robot.end_effector, robot.frame_pose(q + 0.1))
+    ik = DifferentialIK(robot, [target], constraints=[kinengine.CollisionAvoidance()])
+    with pytest.raises(URDFError, match="MJCF robot's geoms are not used"):
+        ik.solve(q, 0.01)
+
+
+def test_distance_gradient_of_a_one_dof_arm_matches_finite_differences():
+    robot = kinengine.load_urdf_string(ONE_DOF).with_obstacles([Sphere(0.06, [0.1, 0.3, 0.2])])
+    checker = robot.collision_checker()
+    h, slopes = 1e-6, []
+    for q in random_q(robot, 20, seed=5):
+        rows, d, G = checker.gradients(q)
+        assert G.shape == (1, 1) and rows.tolist() == [0]
+        c1 = (robot.frame_pose(q, "link_1") @ np.append(BALL_AT, 1.0))[:3]
+        assert d[0] == pytest.approx(np.linalg.norm(c1 - [0.1, 0.3, 0.2]) - R_BALL - 0.06, abs=1e-9)
+        fd = (checker.min_distance(q + h) - checker.min_distance(q - h)) / (2 * h)
+        assert G[0, 0] == pytest.approx(fd, abs=1e-6)
+        slopes.append(abs(fd))
+    assert max(slopes) > 0.05  # the sample sees the distance change with q, not a flat zero
+    q = np.array([0.4])
+    T = robot.frame_pose(q + 0.2)
+    step = DifferentialIK(
+        robot,
+        [PoseTarget(robot.end_effector, T, rows=("x", "y", "z"))],
+        constraints=[kinengine.CollisionAvoidance()],
+    ).solve(q, 0.01)
+    assert step.shape == (1,) and np.isfinite(step).all()
+
+
+def test_collision_avoidance_options_are_checked():
+    with pytest.raises(OptionError, match="min_distance .*number >= 0, got str 'a'"):
+        kinengine.CollisionAvoidance(min_distance="a")
+    with pytest.raises(OptionError, match="min_distance .*>= 0, got -1"):
+        kinengine.CollisionAvoidance(min_distance=-1)
+    with pytest.raises(OptionError, match="influence_distance"):
+        kinengine.CollisionAvoidance(influence_distance=None)
+    with pytest.raises(OptionError, match=r"gain must be in \(0, 1\]"):
+        kinengine.CollisionAvoidance(gain=0)
+    zero = kinengine.CollisionAvoidance(min_distance=0)
+    assert zero.min_distance == 0.0 and type(zero.min_distance) is float
+
+
+def test_an_srdf_naming_unknown_links_warns_once(arm):
+    srdf = (
+        '<robot name="other"><disable_collisions link1="link_1" link2="elbow" reason="x"/>'
+        '<disable_collisions link1="wrist" link2="elbow" reason="x"/></robot>'
+    )
+    with pytest.warns(UserWarning, match=r"2 links this robot does not have: 'elbow', 'wrist'") as caught:
+        robot = arm.with_srdf(srdf)
+    assert len(caught) == 1 and caught[0].filename == __file__
+    assert robot.disabled_collision_pairs == {frozenset(("link_1", "elbow")), frozenset(("wrist", "elbow"))}
+    with pytest.warns(UserWarning, match="'elbow'"):
+        arm.collision_pairs(srdf=srdf)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # known names (links and obstacles): no warning
+        arm.with_obstacles([Sphere(0.05, [0.5, 0.5, 0.5], name="ball")]).with_srdf(
+            '<robot name="ball_arm"><disable_collisions link1="link_1" link2="ball" reason="x"/></robot>'
+        )
+
+
+def test_collision_pairs_command_fails_at_once_without_shapes_or_a_writable_srdf(
+    tmp_path, capsys, monkeypatch
+):
+    from kinengine.cli import main
+
+    sampled = []
+    monkeypatch.setattr("kinengine.cli.collisions.sample_pairs", lambda *a: sampled.append(a) or ([], []))
+    assert main(["collision-pairs", "planar_3dof"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "robot 'planar_3dof' has no <collision> elements" in err
+    with pytest.raises(SystemExit, match="2"):
+        main(["collision-pairs", "abb_irb120", "--write", str(tmp_path / "missing" / "abb.srdf")])
+    assert "folder" in capsys.readouterr().err and sampled == []

@@ -9,12 +9,20 @@ import argparse
 import itertools
 
 from ..collision import sample_pairs, write_srdf
-from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, positive_int, printable, whole_number
+from .arguments import (
+    ROBOT_HELP,
+    add_robot_arguments,
+    load_robot,
+    output_path,
+    positive_int,
+    printable,
+    whole_number,
+)
 
 
 def _run(args: argparse.Namespace) -> int:
     robot = load_robot(args)
-    checker = robot.collision_checker()
+    checker = robot.collision_checker()  # a robot without collision shapes: its URDFError, before sampling
     links = list(dict.fromkeys(checker.links))
     shaped = list(dict.fromkeys(name for pair in checker.links for name in pair))
     for obj in checker.geometry.geometryObjects:  # links with shapes that take part in no pair
@@ -38,7 +46,7 @@ def _run(args: argparse.Namespace) -> int:
         reasons += [(p, "Always") for p in always]
         with open(args.write, "w", encoding="utf-8") as f:
             f.write(write_srdf(robot.name, reasons))
-        print(f"wrote {len(reasons)} <disable_collisions> to {printable(args.write)}")
+        print(f"wrote {len(reasons)} <disable_collisions> to {printable(str(args.write))}")
     return 0
 
 
@@ -49,6 +57,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--samples", type=positive_int, default=10000, help="random configurations (default 10000)"
     )
     p.add_argument("--seed", type=lambda s: whole_number(s, 0, 2**63 - 1), default=0, help="random seed")
-    p.add_argument("--write", metavar="SRDF", help="write the disabled pairs to this SRDF file")
+    p.add_argument(
+        "--write", type=output_path, metavar="SRDF", help="write the disabled pairs to this SRDF file"
+    )
     add_robot_arguments(p)
     p.set_defaults(handler=_run)

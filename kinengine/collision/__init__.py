@@ -8,7 +8,14 @@ from .avoidance import CollisionAvoidance
 from .checker import CollisionChecker, Distances
 from .geometry import build_collision_geometry, checked_packages
 from .model import collision_checker
-from .pairs import adjacent_pairs, default_pairs, read_disabled_pairs, sample_pairs, write_srdf
+from .pairs import (
+    adjacent_pairs,
+    default_pairs,
+    read_disabled_pairs,
+    sample_pairs,
+    warn_unknown_links,
+    write_srdf,
+)
 from .shapes import Box, Capsule, Mesh, Obstacle, Sphere, checked_obstacles
 
 __all__ = [
@@ -28,5 +35,6 @@ __all__ = [
     "default_pairs",
     "read_disabled_pairs",
     "sample_pairs",
+    "warn_unknown_links",
     "write_srdf",
 ]

@@ -9,19 +9,20 @@ with ∇d = ∂d/∂q from the witness points and the point Jacobians (:meth:`Co
 Between polyhedra (convex hulls of meshes) d is not differentiable where the closest features switch
 (a flat face parallel to another: any tilt brings a corner closer, at a rate the one witness pair does
 not see), so the linearised step can end up to a few 1e-4 m below d_min there; keep a margin in d_min.
-``gain`` ∈ (0, 1] (1: the formula above; smaller approaches the boundary more slowly, a velocity damper).
+``min_distance`` ≥ 0 [m] (a negative one would allow penetration: refused). ``gain`` ∈ (0, 1] (1: the
+formula above; smaller approaches the boundary more slowly, a velocity damper).
 :class:`kinengine.DifferentialIK` takes it in ``constraints=[...]``.
 """
 
 from __future__ import annotations
 
-import math
 from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from ..errors import OptionError
+from ..kinematics.options import checked_nonnegative
 from .checker import CollisionChecker
 
 FloatArray = npt.NDArray[np.float64]
@@ -40,8 +41,9 @@ class CollisionAvoidance:
     def __init__(
         self, min_distance: float = 0.01, influence_distance: float = 0.05, *, gain: float = 1.0
     ) -> None:
-        if not (math.isfinite(min_distance) and math.isfinite(influence_distance)):
-            raise OptionError("min_distance and influence_distance must be finite [m]")
+        min_distance = checked_nonnegative(min_distance, "min_distance [m]")
+        influence_distance = checked_nonnegative(influence_distance, "influence_distance [m]")
+        gain = checked_nonnegative(gain, "gain")
         if not influence_distance > min_distance:
             raise OptionError(
                 f"influence_distance ({influence_distance!r}) must exceed min_distance ({min_distance!r}) [m]"

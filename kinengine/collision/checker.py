@@ -161,7 +161,7 @@ class CollisionChecker:
             ):
                 if joint == 0:
                     continue
-                J = pin.getJointJacobian(self.model, data, int(joint), _LWA)
+                J = pin.getJointJacobian(self.model, data, int(joint), _LWA).reshape(6, -1)  # (6,) if nv = 1
                 r_op = point - data.oMi[int(joint)].translation  # joint origin -> point, in I
                 Jv = J[:3] - np.cross(r_op[:, None], J[3:], axis=0)  # v_p = v_o + ω × r = v_o − r × ω
                 G[r] += side * (n @ Jv)

@@ -12,6 +12,7 @@ moves (not with the base, which stays where it is).
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -104,6 +105,22 @@ def read_disabled_pairs(srdf: str | os.PathLike[str]) -> set[frozenset[str]]:
     return out
 
 
+def warn_unknown_links(disabled: Iterable[frozenset[str]], known: Iterable[str]) -> None:
+    """One UserWarning naming the links of ``disabled`` pairs that are not in ``known`` (the robot's links
+    and obstacles), as MoveIt warns: such a pair disables nothing, often a sign of an SRDF for another
+    robot or a renamed link."""
+    names = set(known)
+    unknown = sorted({name for pair in disabled for name in pair} - names)
+    if unknown:
+        shown = ", ".join(repr(n) for n in unknown[:10]) + (", ..." if len(unknown) > 10 else "")
+        warnings.warn(
+            f"the SRDF's <disable_collisions> name {len(unknown)} link{'s' if len(unknown) > 1 else ''} "
+            f"this robot does not have: {shown}; those pairs disable nothing (an SRDF of another robot?)",
+            UserWarning,
+            stacklevel=4,  # the caller of Robot.with_srdf / collision_pairs
+        )
+
+
 def sample_pairs(
     collides: Callable[[np.ndarray], np.ndarray], Q: np.ndarray, names: Sequence[LinkPair]
 ) -> tuple[list[LinkPair], list[LinkPair]]:
@@ -138,5 +155,6 @@ __all__ = [
     "link_of",
     "read_disabled_pairs",
     "sample_pairs",
+    "warn_unknown_links",
     "write_srdf",
 ]
