@@ -28,6 +28,8 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from ..kinematics import batch
+
 if TYPE_CHECKING:
     from collections.abc import Callable
 
@@ -43,6 +45,8 @@ DEGENERATE = 1e-6
 """[m] a least-squares answer this close to the target's position met a degenerate subproblem (a line of
 aligned joint axes: the pose is singular), not an unreachable pose; its rotation is repaired numerically."""
 TWO_PI = 2.0 * np.pi
+TURN_TOL = TWO_PI * 1e-12
+"""[rad] a limit exceeded by at most this is met (the angle is put on it)."""
 FEW = 16
 """Up to this many candidates are checked one frame pose at a time."""
 
@@ -56,7 +60,8 @@ class Chain(Protocol):
     lower: np.ndarray  # their limits [rad]
     upper: np.ndarray
     continuous: np.ndarray  # True: no limits
-    narrow: np.ndarray  # True: the range spans less than 2π
+    one_turn: np.ndarray  # indices of the limited joints whose range lies within (−π, π]: one shift (0)
+    many_turns: np.ndarray  # indices of the other limited joints
     approximate: bool  # True: the solver solves an idealized chain; its answers are polished
     limits: tuple[list[float], list[float], list[bool], list[int]]  # lower, upper, continuous, columns
     pose: Callable[[np.ndarray], np.ndarray]  # T_IF of a q (dof,), unchecked
@@ -111,57 +116,68 @@ def candidates_to_solutions(
     within_limits: bool,
     all_turns: bool,
     single: bool,
+    workers: int | None = None,
 ) -> IKSolutions:
     """IKSolutions of poses (N, 4, 4) from the solver's raw answers, flat and sorted by pose: ``row`` (M,)
     the pose of each, ``q`` (M, n) the chain's angles [rad], ``ls`` (M,) its least-squares flags;
-    ``near`` (dof,) or (N, dof) the reference q (its other coordinates fill the result)."""
+    ``near`` (dof,) or (N, dof) the reference q (its other coordinates fill the result); ``workers``: the
+    forward kinematics' threads."""
     robot, columns, frame = chain.robot, chain.columns, chain.frame
     n_poses, dof = len(poses), robot.dof
     wrapped = _wrap_pi(q)
-    if within_limits:  # 0. what cannot be a solution within the limits is not checked
-        keep = _inside(chain, wrapped) | ls
-        row, wrapped, ls = row[keep], wrapped[keep], ls[keep]
+    ref = None
+    if has_near:  # (M, n) the reference's angles of each candidate's pose
+        ref = (
+            near[row][:, columns]
+            if near.ndim == 2
+            else np.broadcast_to(near[columns], (len(row), len(columns)))
+        )
+    # 0. into the joint ranges first (the shift nearest the reference); what cannot be a solution within
+    # the limits is not checked (a least-squares answer is: it may be repaired into them)
+    angles, inside, turns = _turns(chain, wrapped, ref, all_turns)
+    if within_limits:
+        keep = np.flatnonzero(inside | ls)
+        row, wrapped, angles, inside, ls = row[keep], wrapped[keep], angles[keep], inside[keep], ls[keep]
+        ref = None if ref is None else ref[keep]
+        turns = None if turns is None else (turns[0][keep], turns[1][keep], turns[2][keep])
     if chain.whole:  # the chain's joints are q's coordinates, in order
-        full = wrapped.copy()
+        full = angles
     else:
         full = near[row] if near.ndim == 2 else np.repeat(near[None], len(row), axis=0)
-        full[:, columns] = wrapped
+        full[:, columns] = angles
     # 1. the frame's pose at every candidate against its target; degenerate answers repaired, an
     # idealized chain's polished
-    err_p, err_r = residuals(robot, frame, full, poses, row)
+    err_p, err_r = residuals(robot, frame, full, poses, row, workers)
     exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
-    degenerate = ls & (err_p <= DEGENERATE)
     singular = np.zeros(n_poses, dtype=bool)
-    singular[row[degenerate]] = True
-    polish = (err_p <= POLISH) & (err_r <= POLISH) if chain.approximate else degenerate
-    fix = np.flatnonzero((degenerate | polish) & ~exact)
+    fix = np.zeros(0, dtype=np.intp)
+    if ls.any() or chain.approximate:
+        degenerate = ls & (err_p <= DEGENERATE)
+        singular[row[degenerate]] = True
+        polish = (err_p <= POLISH) & (err_r <= POLISH) if chain.approximate else degenerate
+        fix = np.flatnonzero((degenerate | polish) & ~exact)
     if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
-        full[np.ix_(fix, columns)] = _turns(chain, wrapped[fix], np.zeros_like(wrapped[fix]))[0]
-        full[fix] = _repaired(robot, frame, full[fix], poses[row[fix]])
-        err_p, err_r = residuals(robot, frame, full[fix], poses, row[fix])
+        start = full[fix]
+        start[:, columns] = _turns(chain, wrapped[fix], None, False)[0]
+        repaired = _repaired(robot, frame, start, poses[row[fix]])
+        err_p, err_r = residuals(robot, frame, repaired, poses, row[fix])
         exact[fix] = (err_p <= ACCEPT) & (err_r <= ACCEPT)
-        wrapped[fix] = _wrap_pi(full[fix][:, columns])
-    row, full, wrapped = row[exact], full[exact], wrapped[exact]
-    # 2. duplicates (modulo 2π) within a pose (rows sorted): each candidate against the earlier ones
-    rank = np.arange(len(row)) - np.searchsorted(row, row)
-    duplicate = np.zeros(len(row), dtype=bool)
-    for back in range(1, int(rank.max(initial=0)) + 1):
-        later = np.flatnonzero(rank >= back)
-        d = np.abs(wrapped[later] - wrapped[later - back])  # both in (−π, π]: |d| < 2π
-        duplicate[later[(np.minimum(d, TWO_PI - d) <= SAME).all(axis=1)]] = True
-    row, full, wrapped = row[~duplicate], full[~duplicate], wrapped[~duplicate]
-    # 3. into the joint ranges: the 2π shift nearest the reference (q_near, else 0)
-    ref = (near[row] if near.ndim == 2 else near[None])[:, columns] if has_near else np.zeros_like(wrapped)
-    angles, k_min, k_max, k_best, inside = _turns(chain, wrapped, ref)
+        wrapped[fix] = _wrap_pi(repaired[:, columns])
+        fixed = _turns(chain, wrapped[fix], None if ref is None else ref[fix], all_turns)
+        angles[fix], inside[fix] = fixed[0], fixed[1]
+        if turns is not None and fixed[2] is not None:
+            for k, k_fix in zip(turns, fixed[2], strict=True):
+                k[fix] = k_fix
+        if not chain.whole:
+            full[np.ix_(fix, columns)] = fixed[0]
+    # 2. duplicates (modulo 2π) among the exact candidates of a pose; 3. the limit filter: one selection
+    e = np.flatnonzero(exact)
+    keep = e[~_duplicates(row[e], wrapped[e])]
     if within_limits:
-        keep = inside
-        row, full, angles, inside = row[keep], full[keep], angles[keep], inside[keep]
-        k_min, k_max, k_best = k_min[keep], k_max[keep], k_best[keep]
-    if all_turns:
-        row, angles, inside, full = _all_turns(
-            row, angles, inside, full, k_min, k_max, k_best, chain.continuous
-        )
-    full[:, columns] = angles
+        keep = keep[inside[keep]]
+    row, full, inside = row[keep], full[keep], inside[keep]
+    if all_turns and turns is not None:
+        row, inside, full = _all_turns(chain, row, inside, full, *(k[keep] for k in turns))
     # 4. within the limits first, then by distance to q_near, within each pose; padded with NaN
     if has_near:
         distance = np.linalg.norm(full - (near[row] if near.ndim == 2 else near), axis=1)
@@ -247,6 +263,17 @@ def _same(a: list[float], b: list[float]) -> bool:
     return True
 
 
+def _duplicates(row: np.ndarray, wrapped: np.ndarray) -> np.ndarray:
+    """(M,) True for a candidate equal to an earlier one of its pose (rows sorted) to SAME modulo 2π."""
+    rank = np.arange(len(row)) - np.searchsorted(row, row)
+    duplicate = np.zeros(len(row), dtype=bool)
+    for back in range(1, int(rank.max(initial=0)) + 1):
+        later = np.flatnonzero(rank >= back)
+        d = np.abs(wrapped[later] - wrapped[later - back])  # both in (−π, π]: |d| < 2π
+        duplicate[later[(np.minimum(d, TWO_PI - d) <= SAME).all(axis=1)]] = True
+    return duplicate
+
+
 def _wrap_pi(a: np.ndarray) -> np.ndarray:
     """Angles into (−π, π] (the solver's are in [−π, π] already: then only −π moves)."""
     if len(a) and np.abs(a).max() <= np.pi:
@@ -254,48 +281,59 @@ def _wrap_pi(a: np.ndarray) -> np.ndarray:
     return np.pi - np.mod(np.pi - a, TWO_PI)
 
 
-def _inside(chain: Chain, wrapped: np.ndarray) -> np.ndarray:
-    """(M,) True where every angle has a 2π shift inside its joint's range (only joints spanning < 2π
-    can lack one)."""
-    narrow = chain.narrow
-    lower = chain.lower[narrow]
-    offset = np.mod(wrapped[:, narrow] - lower, TWO_PI)  # a − lower modulo 2π: inside if <= the span
-    return ((offset <= chain.upper[narrow] - lower + 1e-12) | (offset >= TWO_PI - 1e-12)).all(axis=1)
-
-
 def _turns(
-    chain: Chain, wrapped: np.ndarray, ref: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Angles (M, n) in (−π, π] shifted by 2π·k into the joint ranges: k nearest (ref − angle)/2π among
-    k_min..k_max (the shifts inside [lower, upper]); continuous joints unshifted; a joint no shift puts
-    inside keeps the shift nearest ref. Returns (angles, k_min, k_max, k_best, inside (M,))."""
-    lo, hi, cont = chain.lower, chain.upper, chain.continuous
-    k_min = np.ceil((lo - wrapped) / TWO_PI - 1e-12)
-    k_max = np.floor((hi - wrapped) / TWO_PI + 1e-12)
-    k_near = np.rint((ref - wrapped) / TWO_PI)
-    fits = k_min <= k_max
-    k_best = np.where(fits, np.minimum(np.maximum(k_near, k_min), k_max), k_near)
-    k_best[:, cont] = 0.0
-    inside = (fits | cont).all(axis=1)
-    angles = wrapped + TWO_PI * k_best
-    on = np.minimum(np.maximum(angles, lo), hi)  # a limit met to 1e-12 turns: on it
-    angles = np.where(fits & ~cont, on, angles)
-    return angles, k_min, k_max, k_best, inside
+    chain: Chain, wrapped: np.ndarray, ref: np.ndarray | None, shifts: bool
+) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
+    """Angles (M, n) in (−π, π] shifted by 2π·k into the joint ranges: k nearest (ref − angle)/2π (ref None:
+    0) among k_min..k_max (the shifts inside [lower, upper], a limit met to TURN_TOL: on it); continuous
+    joints unshifted; a joint no shift puts inside keeps the shift nearest ref. A range within (−π, π]
+    (``chain.one_turn``) has only k = 0. Returns (angles, inside (M,), and with ``shifts`` (k_min, k_max,
+    k_best) (M, n), 0 for continuous and one-turn joints)."""
+    angles = wrapped.copy()
+    inside = np.ones(len(wrapped), dtype=bool)
+    one, many = chain.one_turn, chain.many_turns
+    if len(one):
+        w, lo, hi = wrapped[:, one], chain.lower[one], chain.upper[one]
+        fits = (w >= lo - TURN_TOL) & (w <= hi + TURN_TOL)
+        inside &= fits.all(axis=1)
+        on = np.minimum(np.maximum(w, lo), hi)
+        if ref is not None:  # no shift fits: the one nearest the reference
+            w = w + TWO_PI * np.rint((ref[:, one] - w) / TWO_PI)
+        angles[:, one] = np.where(fits, on, w)
+    k = None
+    if len(many):
+        w, lo, hi = wrapped[:, many], chain.lower[many], chain.upper[many]
+        k_min = np.ceil((lo - w) / TWO_PI - 1e-12)
+        k_max = np.floor((hi - w) / TWO_PI + 1e-12)
+        k_near = np.zeros_like(w) if ref is None else np.rint((ref[:, many] - w) / TWO_PI)
+        fits = k_min <= k_max
+        inside &= fits.all(axis=1)
+        k_best = np.where(fits, np.minimum(np.maximum(k_near, k_min), k_max), k_near)
+        a = w + TWO_PI * k_best
+        angles[:, many] = np.where(fits, np.minimum(np.maximum(a, lo), hi), a)
+        k = (k_min, k_max, k_best)
+    if not shifts:
+        return angles, inside, None
+    full = tuple(np.zeros_like(wrapped) for _ in range(3))
+    if k is not None:
+        for f, part in zip(full, k, strict=True):
+            f[:, many] = part
+    return angles, inside, full  # type: ignore[return-value]
 
 
 def _all_turns(
+    chain: Chain,
     row: np.ndarray,
-    angles: np.ndarray,
     inside: np.ndarray,
     full: np.ndarray,
     k_min: np.ndarray,
     k_max: np.ndarray,
     k_best: np.ndarray,
-    cont: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Every 2π shift of each within-limits solution's limited joints that stays within the limits (the
-    chosen one first), joint by joint: each solution repeated once per shift of that joint."""
-    for j in np.flatnonzero(~cont):
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every 2π shift of each within-limits solution's joints whose range holds several (``many_turns``)
+    that stays within the limits (the chosen one first), joint by joint: each solution repeated once per
+    shift of that joint."""
+    for j in chain.many_turns:
         shifts = np.where(inside, np.maximum(k_max[:, j] - k_min[:, j] + 1, 1), 1).astype(np.intp)
         source = np.repeat(np.arange(len(row)), shifts)
         step = np.arange(len(source)) - np.repeat(np.cumsum(shifts) - shifts, shifts)
@@ -305,20 +343,35 @@ def _all_turns(
         source, k = source[order], k[order]
         row, inside, full = row[source], inside[source], full[source]
         k_min, k_max, k_best = k_min[source], k_max[source], k_best[source]
-        angles = angles[source].copy()
-        angles[:, j] += TWO_PI * (k - k_best[:, j])
-    return row, angles, inside, full
+        full[:, chain.columns[j]] += TWO_PI * (k - k_best[:, j])
+    return row, inside, full
 
 
 def residuals(
-    robot: Robot, frame: str, q: np.ndarray, poses: np.ndarray, row: np.ndarray | None = None
+    robot: Robot,
+    frame: str,
+    q: np.ndarray,
+    poses: np.ndarray,
+    row: np.ndarray | None = None,
+    workers: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Position [m] and rotation [rad, to first order: |C − C_d|_F / √2] errors of frame at q (M, dof)
-    against poses[row] (M, 4, 4) (row None: poses itself)."""
+    against poses[row] (M, 4, 4) (row None: poses itself); the batch chain on up to ``workers`` threads."""
+    T: np.ndarray
     if len(q) <= FEW:  # one pose at a time: a batch's set-up costs more
         T = np.array([robot.frame_pose(x, frame) for x in q]).reshape(-1, 4, 4)
     else:
-        T = robot.frame_pose(q, frame)
+        kin = robot.engine
+        T = np.empty((len(q), 4, 4))
+        batch.evaluate(
+            kin,
+            np.ascontiguousarray(q),
+            kin.frame_id(frame),
+            None,
+            jacobian=False,
+            out=(T, None),
+            workers=workers,
+        )
     target = poses[:, :3, :].reshape(len(poses), 12)
     D = T[:, :3, :].reshape(len(T), 12) - (target if row is None else target[row])
     D *= D
