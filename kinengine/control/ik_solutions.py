@@ -28,7 +28,8 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from ..kinematics import batch
+from ..kinematics import batch, compiler
+from ..kinematics.compiler import compiled_chain
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -47,8 +48,8 @@ aligned joint axes: the pose is singular), not an unreachable pose; its rotation
 TWO_PI = 2.0 * np.pi
 TURN_TOL = TWO_PI * 1e-12
 """[rad] a limit exceeded by at most this is met (the angle is put on it)."""
-FEW = 16
-"""Up to this many candidates are checked one frame pose at a time."""
+FEW = 64
+"""Up to this many candidates are checked by the C batch chain in the calling thread (no thread hand-over)."""
 
 
 class Chain(Protocol):
@@ -357,12 +358,13 @@ def residuals(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Position [m] and rotation [rad, to first order: |C − C_d|_F / √2] errors of frame at q (M, dof)
     against poses[row] (M, 4, 4) (row None: poses itself); the batch chain on up to ``workers`` threads."""
-    T: np.ndarray
-    if len(q) <= FEW:  # one pose at a time: a batch's set-up costs more
-        T = np.array([robot.frame_pose(x, frame) for x in q]).reshape(-1, 4, 4)
+    kin = robot.engine
+    fid = kin.frame_id(frame)
+    T = np.empty((len(q), 4, 4))
+    kernel = compiled_chain(kin, fid).kernel if len(q) <= FEW or workers == 1 else None
+    if kernel is not None and compiler.KERNEL is not None:  # the C chain, in this thread
+        kernel.run(np.ascontiguousarray(q, dtype=np.float64), T, None, 0)
     else:
-        kin = robot.engine
-        T = np.empty((len(q), 4, 4))
         batch.evaluate(
             kin,
             np.ascontiguousarray(q),
