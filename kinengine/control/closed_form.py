@@ -30,7 +30,15 @@ import pinocchio as pin
 
 from ..errors import KinematicsError, OptionError
 from ..kinematics.batch import WORKERS, in_shares
-from .ik_solutions import IKSolutions, candidates_to_solutions, joined, one_pose
+from .ik_solutions import (
+    CONTINUOUS,
+    MANY_TURNS,
+    ONE_TURN,
+    IKSolutions,
+    candidates_to_solutions,
+    joined,
+    one_pose,
+)
 from .ik_target import batch_targets, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -148,7 +156,12 @@ class ClosedFormChain:
         within = (self.lower > -np.pi + 1e-9) & (self.upper < np.pi - 1e-9)  # angle in (−π, π]: no shift
         self.one_turn = np.flatnonzero(~self.continuous & within)
         self.many_turns = np.flatnonzero(~self.continuous & ~within)
-        self.limits = (self.lower.tolist(), self.upper.tolist(), self.continuous.tolist(), g.columns.tolist())
+        kinds = np.full(n, MANY_TURNS)
+        kinds[self.one_turn], kinds[self.continuous] = ONE_TURN, CONTINUOUS
+        self.scalar_joints = [  # one_pose's: the one-turn joints first (the cheapest test drops most)
+            (int(j), int(g.columns[j]), int(kinds[j]), float(self.lower[j]), float(self.upper[j]))
+            for j in np.argsort(kinds != ONE_TURN, kind="stable")
+        ]
         self.robot = robot
         self.pose = robot.frame(frame, check_inputs=False).pose
         self.neutral = robot.neutral()

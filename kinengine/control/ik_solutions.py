@@ -46,6 +46,8 @@ DEGENERATE = 1e-6
 """[m] a least-squares answer this close to the target's position met a degenerate subproblem (a line of
 aligned joint axes: the pose is singular), not an unreachable pose; its rotation is repaired numerically."""
 TWO_PI = 2.0 * np.pi
+CONTINUOUS, ONE_TURN, MANY_TURNS = 0, 1, 2
+"""Kinds of joint range: none; within (−π, π] (one 2π shift fits: 0); reaching beyond it."""
 TURN_TOL = TWO_PI * 1e-12
 """[rad] a limit exceeded by at most this is met (the angle is put on it)."""
 FEW = 64
@@ -64,7 +66,7 @@ class Chain(Protocol):
     one_turn: np.ndarray  # indices of the limited joints whose range lies within (−π, π]: one shift (0)
     many_turns: np.ndarray  # indices of the other limited joints
     approximate: bool  # True: the solver solves an idealized chain; its answers are polished
-    limits: tuple[list[float], list[float], list[bool], list[int]]  # lower, upper, continuous, columns
+    scalar_joints: list[tuple[int, int, int, float, float]]  # (index, column, kind, lower, upper) per joint
     pose: Callable[[np.ndarray], np.ndarray]  # T_IF of a q (dof,), unchecked
     whole: bool  # the chain's joints are all of q's coordinates, in order
     robot: Robot
@@ -213,45 +215,44 @@ def joined(parts: list[IKSolutions]) -> IKSolutions:
 
 def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has_near: bool) -> IKSolutions:
     """:func:`candidates_to_solutions` of one pose's exact answers Q (k, n) with ``within_limits=True``
-    and ``all_turns=False``, written with scalars (a few candidates: numpy's per-call cost would dominate):
-    the same steps, order and tolerances (duplicates dropped among the candidates within the limits)."""
-    lo, hi, cont, columns = chain.limits
+    and ``all_turns=False``, the per-joint steps written with scalars (a few candidates: numpy's per-call
+    cost would dominate), a candidate dropped at its first joint outside the limits; the survivors checked
+    by one :func:`residuals` call. The same formulas, order and tolerances (duplicates dropped among the
+    candidates within the limits)."""
     base = near.tolist()
-    refs = [base[c] for c in columns] if has_near else None
-    pose, target = chain.pose, T_d[:3].ravel().tolist()
+    refs = near[chain.columns].tolist() if has_near else None
     seen: list[list[float]] = []
     rows: list[list[float]] = []
-    for answer in Q.tolist():
-        wrapped = [math.remainder(a, TWO_PI) for a in answer]  # [−π, π]
+    for wrapped in Q.tolist():
         q = base.copy()
-        for j, a in enumerate(wrapped):
-            if a == -math.pi:
-                a = wrapped[j] = math.pi
-            low, high = lo[j], hi[j]
-            near_a = refs is None or abs(refs[j] - a) <= math.pi  # a is the 2π shift nearest the reference
-            if not cont[j] and (not near_a or a < low or a > high):  # else: k = 0 is the shift to take
+        for j, column, kind, low, high in chain.scalar_joints:
+            a = wrapped[j]
+            if not -math.pi < a <= math.pi:  # into (−π, π] (the solver's are in [−π, π])
+                a = wrapped[j] = math.pi - (math.pi - a) % TWO_PI
+            if kind == ONE_TURN:  # the range lies within (−π, π]: k = 0, a limit met to TURN_TOL
+                if not low - TURN_TOL <= a <= high + TURN_TOL:
+                    break
+                a = min(max(a, low), high)
+            elif kind == MANY_TURNS:  # the 2π shift within the limits nearest the reference (else 0)
                 k_min = math.ceil((low - a) / TWO_PI - 1e-12)
                 k_max = math.floor((high - a) / TWO_PI + 1e-12)
                 if k_min > k_max:
                     break
                 k = min(max(round(((refs[j] if refs is not None else 0.0) - a) / TWO_PI), k_min), k_max)
                 a = min(max(a + TWO_PI * k, low), high)
-            q[columns[j]] = a
+            q[column] = a
         else:
             if any(_same(wrapped, w) for w in seen):
                 continue
             seen.append(wrapped)
-            d = [x - y for x, y in zip(pose(np.array(q))[:3].ravel().tolist(), target, strict=True)]
-            err_p, err_r = (
-                math.hypot(d[3], d[7], d[11]),
-                math.hypot(*d[0:3], *d[4:7], *d[8:11]) / math.sqrt(2),
-            )
-            if err_p <= ACCEPT and err_r <= ACCEPT:
-                rows.append(q)
+            rows.append(q)
     full = np.array(rows, dtype=np.float64).reshape(len(rows), len(base))
-    if has_near and len(rows) > 1:
+    if len(rows):  # the frame's pose at every survivor, in one call of the batch chain
+        err_p, err_r = residuals(chain.robot, chain.frame, full, T_d[None])
+        full = full[(err_p <= ACCEPT) & (err_r <= ACCEPT)]
+    if has_near and len(full) > 1:
         full = full[np.argsort(np.linalg.norm(full - near, axis=1), kind="stable")]
-    c = len(rows)
+    c = len(full)
     return IKSolutions(full, c, c > 0, False, np.ones(c, dtype=bool), chain.frame, chain.joints)
 
 
@@ -374,11 +375,15 @@ def residuals(
             out=(T, None),
             workers=workers,
         )
-    target = poses[:, :3, :].reshape(len(poses), 12)
-    D = T[:, :3, :].reshape(len(T), 12) - (target if row is None else target[row])
+    D = T[:, :3, :] - (poses[:, :3, :] if row is None else poses[row, :3, :])
     D *= D
-    err_p2 = D[:, 3] + D[:, 7] + D[:, 11]
-    return np.sqrt(err_p2), np.sqrt(np.maximum(D.sum(axis=1) - err_p2, 0.0) / 2.0)
+    errors = np.sqrt(D.reshape(len(D), 12) @ _SPLIT)  # (M, 2): one product sums both parts
+    return errors[:, 0], errors[:, 1]
+
+
+_SPLIT = np.zeros((12, 2))
+_SPLIT[3::4, 0] = 1.0  # the position entries of a row-major 3 × 4 block
+_SPLIT[[0, 1, 2, 4, 5, 6, 8, 9, 10], 1] = 0.5  # the rotation entries, halved: |C − C_d|_F² / 2
 
 
 def _repaired(robot: Robot, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:
