@@ -46,6 +46,8 @@ DEGENERATE = 1e-6
 """[m] a least-squares answer this close to the target's position met a degenerate subproblem (a line of
 aligned joint axes: the pose is singular), not an unreachable pose; its rotation is repaired numerically."""
 TWO_PI = 2.0 * np.pi
+ROTATION = ACCEPT * math.sqrt(2)
+"""|C − C_d|_F at a rotation error of ACCEPT (to first order): one_pose's scalar form of the test."""
 CONTINUOUS, ONE_TURN, MANY_TURNS = 0, 1, 2
 """Kinds of joint range: none; within (−π, π] (one 2π shift fits: 0); reaching beyond it."""
 TURN_TOL = TWO_PI * 1e-12
@@ -215,12 +217,13 @@ def joined(parts: list[IKSolutions]) -> IKSolutions:
 
 def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has_near: bool) -> IKSolutions:
     """:func:`candidates_to_solutions` of one pose's exact answers Q (k, n) with ``within_limits=True``
-    and ``all_turns=False``, the per-joint steps written with scalars (a few candidates: numpy's per-call
-    cost would dominate), a candidate dropped at its first joint outside the limits; the survivors checked
-    by one :func:`residuals` call. The same formulas, order and tolerances (duplicates dropped among the
-    candidates within the limits)."""
+    and ``all_turns=False``, written with scalars (a few candidates: numpy's per-call cost would dominate;
+    measured, this beats one batch-chain call for all of them): a candidate is dropped at its first joint
+    outside the limits (the one-turn joints come first), each survivor checked by the frame handle. The
+    same formulas, order and tolerances (duplicates dropped among the candidates within the limits)."""
     base = near.tolist()
     refs = near[chain.columns].tolist() if has_near else None
+    pose, target = chain.pose, T_d[:3].ravel().tolist()  # the frame handle: one pose, no checks
     seen: list[list[float]] = []
     rows: list[list[float]] = []
     for wrapped in Q.tolist():
@@ -229,11 +232,13 @@ def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has
             a = wrapped[j]
             if not -math.pi < a <= math.pi:  # into (−π, π] (the solver's are in [−π, π])
                 a = wrapped[j] = math.pi - (math.pi - a) % TWO_PI
-            if kind == ONE_TURN:  # the range lies within (−π, π]: k = 0, a limit met to TURN_TOL
+            if kind == CONTINUOUS or (low <= a <= high and (refs is None or abs(refs[j] - a) <= math.pi)):
+                pass  # k = 0 is the shift to take
+            elif kind == ONE_TURN:  # the range lies within (−π, π]: k = 0, a limit met to TURN_TOL
                 if not low - TURN_TOL <= a <= high + TURN_TOL:
                     break
                 a = min(max(a, low), high)
-            elif kind == MANY_TURNS:  # the 2π shift within the limits nearest the reference (else 0)
+            else:  # the 2π shift within the limits nearest the reference (else 0)
                 k_min = math.ceil((low - a) / TWO_PI - 1e-12)
                 k_max = math.floor((high - a) / TWO_PI + 1e-12)
                 if k_min > k_max:
@@ -242,14 +247,18 @@ def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has
                 a = min(max(a + TWO_PI * k, low), high)
             q[column] = a
         else:
-            if any(_same(wrapped, w) for w in seen):
-                continue
-            seen.append(wrapped)
-            rows.append(q)
+            for w in seen:
+                if _same(wrapped, w):
+                    break
+            else:
+                seen.append(wrapped)
+                d = [x - y for x, y in zip(pose(np.array(q))[:3].ravel().tolist(), target, strict=True)]
+                if (
+                    math.hypot(d[3], d[7], d[11]) <= ACCEPT
+                    and math.hypot(*d[0:3], *d[4:7], *d[8:11]) <= ROTATION
+                ):
+                    rows.append(q)
     full = np.array(rows, dtype=np.float64).reshape(len(rows), len(base))
-    if len(rows):  # the frame's pose at every survivor, in one call of the batch chain
-        err_p, err_r = residuals(chain.robot, chain.frame, full, T_d[None])
-        full = full[(err_p <= ACCEPT) & (err_r <= ACCEPT)]
     if has_near and len(full) > 1:
         full = full[np.argsort(np.linalg.norm(full - near, axis=1), kind="stable")]
     c = len(full)
