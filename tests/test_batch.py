@@ -590,4 +590,4 @@ def test_work_shared_again_from_a_pool_thread_runs_in_that_thread():
     assert not worker.is_alive(), "in_shares waited for itself"
     assert sorted(c[0] for c in calls) == [0, 1, 10, 11]
     pooled = [c for c in calls if c[2].startswith(batch.POOL_PREFIX)]
-    assert pooled and all(name == outer for _, name, outer in pooled)  # a pool thread's shares stayed there
+    assert pooled and all(name == parent for _, name, parent in pooled)  # a pool thread's shares stayed there
