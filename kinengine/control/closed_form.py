@@ -29,16 +29,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import KinematicsError, OptionError
-from ..kinematics.batch import WORKERS, in_shares
-from .ik_solutions import (
-    CONTINUOUS,
-    MANY_TURNS,
-    ONE_TURN,
-    IKSolutions,
-    candidates_to_solutions,
-    joined,
-    one_pose,
-)
+from .ik_candidates import candidates_to_solutions, shared_by_poses
+from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined, one_pose
 from .ik_target import batch_targets, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -55,8 +47,6 @@ SNAP_OFFSET = 1e-5
 robot's own chain (:mod:`.ik_solutions`)."""
 CHUNK_POSES = 16384
 """Larger batches are solved in chunks of this many poses (the candidates' arrays stay below ~100 MB)."""
-POSES_PER_WORKER = 1000
-"""A batch's post-processing is shared among threads only when each gets at least this many poses."""
 SMALL_BATCH = 64
 """Batches up to this many poses are solved one call at a time (EAIK's thread start-up costs more)."""
 
@@ -246,46 +236,26 @@ def ik_solutions(
         if not any(answer.is_LS):  # exact answers only: the scalar path
             return one_pose(chain, poses[0], answer.Q, reference, near is not None)
 
-    def post(
-        poses: np.ndarray,
-        row: np.ndarray,
-        Q: np.ndarray,
-        LS: np.ndarray,
-        ref: np.ndarray,
-        workers: int | None,
-    ) -> IKSolutions:
-        return candidates_to_solutions(
-            chain,
-            poses,
-            row,
-            Q,
-            LS,
-            ref,
-            near is not None,
-            within_limits=bool(within_limits),
-            all_turns=bool(all_turns),
-            single=single,
-            workers=workers,
-        )
-
     def solve(a: int, b: int) -> IKSolutions:
-        """Poses a..b: the solver's answers (its threads), then their post-processing in shares of the
-        poses on the batch pool's threads (numpy releases the GIL in its loops)."""
+        """Poses a..b: the solver's answers (its threads), then their post-processing."""
         row, Q, LS = chain.raw(poses[a:b])
-        shares = max(1, min(WORKERS, (b - a) // POSES_PER_WORKER))
-        if shares == 1:
-            return post(poses[a:b], row, Q, LS, reference[a:b] if reference.ndim == 2 else reference, None)
-        cuts = [a + (b - a) * i // shares for i in range(shares + 1)]
-        ends = np.searchsorted(row, np.array(cuts) - a).tolist()
-        parts: list[IKSolutions | None] = [None] * shares
 
-        def work(i: int, _: int) -> None:
-            i0, i1, c0, c1 = ends[i], ends[i + 1], cuts[i], cuts[i + 1]
-            ref = reference[c0:c1] if reference.ndim == 2 else reference
-            parts[i] = post(poses[c0:c1], row[i0:i1] - (c0 - a), Q[i0:i1], LS[i0:i1], ref, 1)
+        def post(c0: int, c1: int, i0: int, i1: int, workers: int | None) -> IKSolutions:
+            return candidates_to_solutions(
+                chain,
+                poses[a + c0 : a + c1],
+                row[i0:i1] - c0,
+                Q[i0:i1],
+                LS[i0:i1],
+                reference[a + c0 : a + c1] if reference.ndim == 2 else reference,
+                near is not None,
+                within_limits=bool(within_limits),
+                all_turns=bool(all_turns),
+                single=single,
+                workers=workers,
+            )
 
-        in_shares([(i, i + 1) for i in range(shares)], work, shares)
-        return joined([p for p in parts if p is not None])
+        return shared_by_poses(b - a, row, post)
 
     # bounded memory: the candidates' arrays of one chunk at a time
     done = [solve(a, min(a + CHUNK_POSES, len(poses))) for a in range(0, len(poses), CHUNK_POSES)]
