@@ -564,3 +564,30 @@ def test_joints_off_axis_by_a_truncated_pi_cost_one_product_each_and_match_pinoc
     kinova, abb = (_load(name) for name in ("kinova", "abb_irb120"))  # Kinova: 11-digit π/2 and π
     calls = [batch.compiled_chain(r.engine, r.frame_id(r.end_effector)).pose_calls for r in (kinova, abb)]
     assert calls[0] <= calls[1]
+
+
+def test_work_shared_again_from_a_pool_thread_runs_in_that_thread():
+    # closed-form IK shares its post-processing among the pool's threads, and each share's forward
+    # kinematics or numeric repair may share again: from a pool thread that must not wait for the pool
+    import threading
+
+    from kinengine.kinematics import batch
+
+    calls: list[tuple[int, str, str]] = []
+
+    def inner(a: int, b: int) -> None:
+        calls.append((a, threading.current_thread().name, outer_thread[a // 10]))
+
+    outer_thread = ["", ""]
+
+    def outer(a: int, b: int) -> None:
+        outer_thread[a] = threading.current_thread().name
+        batch.in_shares([(10 * a, 0), (10 * a + 1, 0)], inner, 2)
+
+    worker = threading.Thread(target=batch.in_shares, args=([(0, 1), (1, 2)], outer, 2), daemon=True)
+    worker.start()
+    worker.join(timeout=30)
+    assert not worker.is_alive(), "in_shares waited for itself"
+    assert sorted(c[0] for c in calls) == [0, 1, 10, 11]
+    pooled = [c for c in calls if c[2].startswith(batch.POOL_PREFIX)]
+    assert pooled and all(name == parent for _, name, parent in pooled)  # a pool thread's shares stayed there

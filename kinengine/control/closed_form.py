@@ -29,7 +29,8 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import KinematicsError, OptionError
-from .ik_solutions import IKSolutions, candidates_to_solutions, joined, one_pose
+from .ik_candidates import candidates_to_solutions, shared_by_poses
+from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined, one_pose
 from .ik_target import batch_targets, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -142,8 +143,15 @@ class ClosedFormChain:
         self.lower = coords.lower[g.columns]
         self.upper = coords.upper[g.columns]
         self.continuous = coords.continuous[g.columns] | ~np.isfinite(self.upper - self.lower)
-        self.narrow = ~self.continuous & (self.upper - self.lower < 2 * np.pi)
-        self.limits = (self.lower.tolist(), self.upper.tolist(), self.continuous.tolist(), g.columns.tolist())
+        within = (self.lower > -np.pi + 1e-9) & (self.upper < np.pi - 1e-9)  # angle in (−π, π]: no shift
+        self.one_turn = np.flatnonzero(~self.continuous & within)
+        self.many_turns = np.flatnonzero(~self.continuous & ~within)
+        kinds = np.full(n, MANY_TURNS)
+        kinds[self.one_turn], kinds[self.continuous] = ONE_TURN, CONTINUOUS
+        self.scalar_joints = [  # one_pose's: the one-turn joints first (the cheapest test drops most)
+            (int(j), int(g.columns[j]), int(kinds[j]), float(self.lower[j]), float(self.upper[j]))
+            for j in np.argsort(kinds != ONE_TURN, kind="stable")
+        ]
         self.robot = robot
         self.pose = robot.frame(frame, check_inputs=False).pose
         self.neutral = robot.neutral()
@@ -229,26 +237,30 @@ def ik_solutions(
         if not any(answer.is_LS):  # exact answers only: the scalar path
             return one_pose(chain, poses[0], answer.Q, reference, near is not None)
 
-    def solve(part: slice) -> IKSolutions:
-        ref = reference[part] if reference.ndim == 2 else reference
-        row, Q, LS = chain.raw(poses[part])
-        return candidates_to_solutions(
-            chain,
-            poses[part],
-            row,
-            Q,
-            LS,
-            ref,
-            near is not None,
-            within_limits=bool(within_limits),
-            all_turns=bool(all_turns),
-            single=single,
-        )
+    def solve(a: int, b: int) -> IKSolutions:
+        """Poses a..b: the solver's answers (its threads), then their post-processing."""
+        row, Q, LS = chain.raw(poses[a:b])
 
-    if len(poses) <= CHUNK_POSES:
-        return solve(slice(None))
+        def post(c0: int, c1: int, i0: int, i1: int, workers: int | None) -> IKSolutions:
+            return candidates_to_solutions(
+                chain,
+                poses[a + c0 : a + c1],
+                row[i0:i1] - c0,
+                Q[i0:i1],
+                LS[i0:i1],
+                reference[a + c0 : a + c1] if reference.ndim == 2 else reference,
+                near is not None,
+                within_limits=bool(within_limits),
+                all_turns=bool(all_turns),
+                single=single,
+                workers=workers,
+            )
+
+        return shared_by_poses(b - a, row, post)
+
     # bounded memory: the candidates' arrays of one chunk at a time
-    return joined([solve(slice(a, a + CHUNK_POSES)) for a in range(0, len(poses), CHUNK_POSES)])
+    done = [solve(a, min(a + CHUNK_POSES, len(poses))) for a in range(0, len(poses), CHUNK_POSES)]
+    return done[0] if len(done) == 1 else joined(done)
 
 
 def _checked_poses(T: object) -> np.ndarray:

@@ -16,7 +16,7 @@ import numpy.typing as npt
 
 from ..errors import KinematicsError, OptionError
 from .closed_form import METHODS, available, chain_of, ik_solutions
-from .ik_solutions import residuals
+from .ik_candidates import residuals
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .ik_batch import IKBatchResult

@@ -1,23 +1,6 @@
-"""The set of every IK solution of a pose, and the vectorized post-processing of a solver's raw answers.
-
-From raw joint angles (N, K, n) of the n chain joints to :class:`IKSolutions`, every step a numpy pass
-over all candidates of all poses at once (flat (M,) arrays, M = number of raw answers):
-
-1. check: the frame's pose at each candidate (the batch chain) against the target; a candidate further
-   than ``ACCEPT`` [m, rad] from it is dropped (the solver's least-squares answers of unreachable poses),
-   unless it is polished to it first (a degenerate answer, or one of an idealized chain: damped least
-   squares from it);
-2. deduplicate: candidates of one pose closer than ``SAME`` [rad] (angles compared modulo 2π) are one;
-3. wrap into the joint ranges: continuous joints (no limits) into (−π, π]; a limited joint takes the
-   2π shift inside [lower, upper] nearest the reference (``q_near``, else 0); ``all_turns`` adds every
-   other shift that stays inside; outside every shift: dropped, or kept and flagged (``within_limits=False``);
-4. sort each pose's solutions by distance |q − q_near| (within-limits first), and pad with NaN.
-
-``singular``: the solver met a degenerate subproblem (its least-squares answer meets the target's
-position): joint axes line up, and the solutions there form a continuum (e.g. a spherical wrist at
-q5 = 0, where only q4 + q6 is fixed) or coincide (a stretched elbow). A representative set is returned:
-the solver's answer, its rotation about the aligned axes completed by a few damped least-squares
-iterations when it is not exact.
+"""The set of every IK solution of a pose (:class:`IKSolutions`), one pose's answers turned into it with
+scalars (:func:`one_pose`), and the tolerances both paths share; the batch path is
+:mod:`.ik_candidates`.
 """
 
 from __future__ import annotations
@@ -43,8 +26,12 @@ DEGENERATE = 1e-6
 """[m] a least-squares answer this close to the target's position met a degenerate subproblem (a line of
 aligned joint axes: the pose is singular), not an unreachable pose; its rotation is repaired numerically."""
 TWO_PI = 2.0 * np.pi
-FEW = 16
-"""Up to this many candidates are checked one frame pose at a time."""
+ROTATION = ACCEPT * math.sqrt(2)
+"""|C − C_d|_F at a rotation error of ACCEPT (to first order): one_pose's scalar form of the test."""
+CONTINUOUS, ONE_TURN, MANY_TURNS = 0, 1, 2
+"""Kinds of joint range: none; within (−π, π] (one 2π shift fits: 0); reaching beyond it."""
+TURN_TOL = TWO_PI * 1e-12
+"""[rad] a limit exceeded by at most this is met (the angle is put on it)."""
 
 
 class Chain(Protocol):
@@ -56,9 +43,10 @@ class Chain(Protocol):
     lower: np.ndarray  # their limits [rad]
     upper: np.ndarray
     continuous: np.ndarray  # True: no limits
-    narrow: np.ndarray  # True: the range spans less than 2π
+    one_turn: np.ndarray  # indices of the limited joints whose range lies within (−π, π]: one shift (0)
+    many_turns: np.ndarray  # indices of the other limited joints
     approximate: bool  # True: the solver solves an idealized chain; its answers are polished
-    limits: tuple[list[float], list[float], list[bool], list[int]]  # lower, upper, continuous, columns
+    scalar_joints: list[tuple[int, int, int, float, float]]  # (index, column, kind, lower, upper) per joint
     pose: Callable[[np.ndarray], np.ndarray]  # T_IF of a q (dof,), unchecked
     whole: bool  # the chain's joints are all of q's coordinates, in order
     robot: RobotLike
@@ -99,90 +87,6 @@ class IKSolutions:
         )
 
 
-def candidates_to_solutions(
-    chain: Chain,
-    poses: np.ndarray,
-    row: np.ndarray,
-    q: np.ndarray,
-    ls: np.ndarray,
-    near: np.ndarray,
-    has_near: bool,
-    *,
-    within_limits: bool,
-    all_turns: bool,
-    single: bool,
-) -> IKSolutions:
-    """IKSolutions of poses (N, 4, 4) from the solver's raw answers, flat and sorted by pose: ``row`` (M,)
-    the pose of each, ``q`` (M, n) the chain's angles [rad], ``ls`` (M,) its least-squares flags;
-    ``near`` (dof,) or (N, dof) the reference q (its other coordinates fill the result)."""
-    robot, columns, frame = chain.robot, chain.columns, chain.frame
-    n_poses, dof = len(poses), robot.dof
-    wrapped = _wrap_pi(q)
-    if within_limits:  # 0. what cannot be a solution within the limits is not checked
-        keep = _inside(chain, wrapped) | ls
-        row, wrapped, ls = row[keep], wrapped[keep], ls[keep]
-    if chain.whole:  # the chain's joints are q's coordinates, in order
-        full = wrapped.copy()
-    else:
-        full = near[row] if near.ndim == 2 else np.repeat(near[None], len(row), axis=0)
-        full[:, columns] = wrapped
-    # 1. the frame's pose at every candidate against its target; degenerate answers repaired, an
-    # idealized chain's polished
-    err_p, err_r = residuals(robot, frame, full, poses, row)
-    exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
-    degenerate = ls & (err_p <= DEGENERATE)
-    singular = np.zeros(n_poses, dtype=bool)
-    singular[row[degenerate]] = True
-    polish = (err_p <= POLISH) & (err_r <= POLISH) if chain.approximate else degenerate
-    fix = np.flatnonzero((degenerate | polish) & ~exact)
-    if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
-        full[np.ix_(fix, columns)] = _turns(chain, wrapped[fix], np.zeros_like(wrapped[fix]))[0]
-        full[fix] = _repaired(robot, frame, full[fix], poses[row[fix]])
-        err_p, err_r = residuals(robot, frame, full[fix], poses, row[fix])
-        exact[fix] = (err_p <= ACCEPT) & (err_r <= ACCEPT)
-        wrapped[fix] = _wrap_pi(full[fix][:, columns])
-    row, full, wrapped = row[exact], full[exact], wrapped[exact]
-    # 2. duplicates (modulo 2π) within a pose (rows sorted): each candidate against the earlier ones
-    rank = np.arange(len(row)) - np.searchsorted(row, row)
-    duplicate = np.zeros(len(row), dtype=bool)
-    for back in range(1, int(rank.max(initial=0)) + 1):
-        later = np.flatnonzero(rank >= back)
-        d = np.abs(wrapped[later] - wrapped[later - back])  # both in (−π, π]: |d| < 2π
-        duplicate[later[(np.minimum(d, TWO_PI - d) <= SAME).all(axis=1)]] = True
-    row, full, wrapped = row[~duplicate], full[~duplicate], wrapped[~duplicate]
-    # 3. into the joint ranges: the 2π shift nearest the reference (q_near, else 0)
-    ref = (near[row] if near.ndim == 2 else near[None])[:, columns] if has_near else np.zeros_like(wrapped)
-    angles, k_min, k_max, k_best, inside = _turns(chain, wrapped, ref)
-    if within_limits:
-        keep = inside
-        row, full, angles, inside = row[keep], full[keep], angles[keep], inside[keep]
-        k_min, k_max, k_best = k_min[keep], k_max[keep], k_best[keep]
-    if all_turns:
-        row, angles, inside, full = _all_turns(
-            row, angles, inside, full, k_min, k_max, k_best, chain.continuous
-        )
-    full[:, columns] = angles
-    # 4. within the limits first, then by distance to q_near, within each pose; padded with NaN
-    if has_near:
-        distance = np.linalg.norm(full - (near[row] if near.ndim == 2 else near), axis=1)
-        order = np.lexsort((distance, ~inside, row))
-        row, full, inside = row[order], full[order], inside[order]
-    elif not within_limits:
-        order = np.lexsort((~inside, row))
-        row, full, inside = row[order], full[order], inside[order]
-    count = np.bincount(row, minlength=n_poses)
-    if single:
-        c = int(count[0])
-        return IKSolutions(full, c, c > 0, bool(singular[0]), inside, frame, chain.joints)
-    K = int(count.max(initial=0))
-    out = np.full((n_poses, K, dof), np.nan)
-    limits = np.zeros((n_poses, K), dtype=bool)
-    slot = np.arange(len(row)) - np.searchsorted(row, row)
-    out[row, slot] = full
-    limits[row, slot] = inside
-    return IKSolutions(out, count, count > 0, singular, limits, frame, chain.joints)
-
-
 def joined(parts: list[IKSolutions]) -> IKSolutions:
     """One batch's IKSolutions from those of consecutive chunks of its poses (padded to the widest)."""
     K = max(p.q.shape[1] for p in parts)
@@ -195,46 +99,53 @@ def joined(parts: list[IKSolutions]) -> IKSolutions:
 
 
 def one_pose(chain: Chain, T_d: np.ndarray, Q: np.ndarray, near: np.ndarray, has_near: bool) -> IKSolutions:
-    """:func:`candidates_to_solutions` of one pose's exact answers Q (k, n) with ``within_limits=True``
-    and ``all_turns=False``, written with scalars (a few candidates: numpy's per-call cost would dominate):
-    the same steps, order and tolerances (duplicates dropped among the candidates within the limits)."""
-    lo, hi, cont, columns = chain.limits
+    """:func:`.ik_candidates.candidates_to_solutions` of one pose's exact answers Q (k, n) with
+    ``within_limits=True`` and ``all_turns=False``, written with scalars (a few candidates: numpy's
+    per-call cost would dominate; measured, this beats one batch-chain call for all of them): a candidate
+    is dropped at its first joint outside the limits (the one-turn joints come first), each survivor
+    checked by the frame handle. The same formulas, order and tolerances (duplicates dropped among the
+    candidates within the limits)."""
     base = near.tolist()
-    refs = [base[c] for c in columns] if has_near else None
-    pose, target = chain.pose, T_d[:3].ravel().tolist()
+    refs = near[chain.columns].tolist() if has_near else None
+    pose, target = chain.pose, T_d[:3].ravel().tolist()  # the frame handle: one pose, no checks
     seen: list[list[float]] = []
     rows: list[list[float]] = []
-    for answer in Q.tolist():
-        wrapped = [math.remainder(a, TWO_PI) for a in answer]  # [−π, π]
+    for wrapped in Q.tolist():
         q = base.copy()
-        for j, a in enumerate(wrapped):
-            if a == -math.pi:
-                a = wrapped[j] = math.pi
-            low, high = lo[j], hi[j]
-            near_a = refs is None or abs(refs[j] - a) <= math.pi  # a is the 2π shift nearest the reference
-            if not cont[j] and (not near_a or a < low or a > high):  # else: k = 0 is the shift to take
+        for j, column, kind, low, high in chain.scalar_joints:
+            a = wrapped[j]
+            if not -math.pi < a <= math.pi:  # into (−π, π] (the solver's are in [−π, π])
+                a = wrapped[j] = math.pi - (math.pi - a) % TWO_PI
+            if kind == CONTINUOUS or (low <= a <= high and (refs is None or abs(refs[j] - a) <= math.pi)):
+                pass  # k = 0 is the shift to take
+            elif kind == ONE_TURN:  # the range lies within (−π, π]: k = 0, a limit met to TURN_TOL
+                if not low - TURN_TOL <= a <= high + TURN_TOL:
+                    break
+                a = min(max(a, low), high)
+            else:  # the 2π shift within the limits nearest the reference (else 0)
                 k_min = math.ceil((low - a) / TWO_PI - 1e-12)
                 k_max = math.floor((high - a) / TWO_PI + 1e-12)
                 if k_min > k_max:
                     break
                 k = min(max(round(((refs[j] if refs is not None else 0.0) - a) / TWO_PI), k_min), k_max)
                 a = min(max(a + TWO_PI * k, low), high)
-            q[columns[j]] = a
+            q[column] = a
         else:
-            if any(_same(wrapped, w) for w in seen):
-                continue
-            seen.append(wrapped)
-            d = [x - y for x, y in zip(pose(np.array(q))[:3].ravel().tolist(), target, strict=True)]
-            err_p, err_r = (
-                math.hypot(d[3], d[7], d[11]),
-                math.hypot(*d[0:3], *d[4:7], *d[8:11]) / math.sqrt(2),
-            )
-            if err_p <= ACCEPT and err_r <= ACCEPT:
-                rows.append(q)
+            for w in seen:
+                if _same(wrapped, w):
+                    break
+            else:
+                seen.append(wrapped)
+                d = [x - y for x, y in zip(pose(np.array(q))[:3].ravel().tolist(), target, strict=True)]
+                if (
+                    math.hypot(d[3], d[7], d[11]) <= ACCEPT
+                    and math.hypot(*d[0:3], *d[4:7], *d[8:11]) <= ROTATION
+                ):
+                    rows.append(q)
     full = np.array(rows, dtype=np.float64).reshape(len(rows), len(base))
-    if has_near and len(rows) > 1:
+    if has_near and len(full) > 1:
         full = full[np.argsort(np.linalg.norm(full - near, axis=1), kind="stable")]
-    c = len(rows)
+    c = len(full)
     return IKSolutions(full, c, c > 0, False, np.ones(c, dtype=bool), chain.frame, chain.joints)
 
 
@@ -247,92 +158,15 @@ def _same(a: list[float], b: list[float]) -> bool:
     return True
 
 
-def _wrap_pi(a: np.ndarray) -> np.ndarray:
-    """Angles into (−π, π] (the solver's are in [−π, π] already: then only −π moves)."""
-    if len(a) and np.abs(a).max() <= np.pi:
-        return np.where(a == -np.pi, np.pi, a)
-    return np.pi - np.mod(np.pi - a, TWO_PI)
-
-
-def _inside(chain: Chain, wrapped: np.ndarray) -> np.ndarray:
-    """(M,) True where every angle has a 2π shift inside its joint's range (only joints spanning < 2π
-    can lack one)."""
-    narrow = chain.narrow
-    lower = chain.lower[narrow]
-    offset = np.mod(wrapped[:, narrow] - lower, TWO_PI)  # a − lower modulo 2π: inside if <= the span
-    return ((offset <= chain.upper[narrow] - lower + 1e-12) | (offset >= TWO_PI - 1e-12)).all(axis=1)
-
-
-def _turns(
-    chain: Chain, wrapped: np.ndarray, ref: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Angles (M, n) in (−π, π] shifted by 2π·k into the joint ranges: k nearest (ref − angle)/2π among
-    k_min..k_max (the shifts inside [lower, upper]); continuous joints unshifted; a joint no shift puts
-    inside keeps the shift nearest ref. Returns (angles, k_min, k_max, k_best, inside (M,))."""
-    lo, hi, cont = chain.lower, chain.upper, chain.continuous
-    k_min = np.ceil((lo - wrapped) / TWO_PI - 1e-12)
-    k_max = np.floor((hi - wrapped) / TWO_PI + 1e-12)
-    k_near = np.rint((ref - wrapped) / TWO_PI)
-    fits = k_min <= k_max
-    k_best = np.where(fits, np.minimum(np.maximum(k_near, k_min), k_max), k_near)
-    k_best[:, cont] = 0.0
-    inside = (fits | cont).all(axis=1)
-    angles = wrapped + TWO_PI * k_best
-    on = np.minimum(np.maximum(angles, lo), hi)  # a limit met to 1e-12 turns: on it
-    angles = np.where(fits & ~cont, on, angles)
-    return angles, k_min, k_max, k_best, inside
-
-
-def _all_turns(
-    row: np.ndarray,
-    angles: np.ndarray,
-    inside: np.ndarray,
-    full: np.ndarray,
-    k_min: np.ndarray,
-    k_max: np.ndarray,
-    k_best: np.ndarray,
-    cont: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Every 2π shift of each within-limits solution's limited joints that stays within the limits (the
-    chosen one first), joint by joint: each solution repeated once per shift of that joint."""
-    for j in np.flatnonzero(~cont):
-        shifts = np.where(inside, np.maximum(k_max[:, j] - k_min[:, j] + 1, 1), 1).astype(np.intp)
-        source = np.repeat(np.arange(len(row)), shifts)
-        step = np.arange(len(source)) - np.repeat(np.cumsum(shifts) - shifts, shifts)
-        k = np.where(inside[source], k_min[source, j] + step, k_best[source, j])
-        chosen = k == k_best[source, j]
-        order = np.lexsort((~chosen, source))  # the chosen shift first within each solution
-        source, k = source[order], k[order]
-        row, inside, full = row[source], inside[source], full[source]
-        k_min, k_max, k_best = k_min[source], k_max[source], k_best[source]
-        angles = angles[source].copy()
-        angles[:, j] += TWO_PI * (k - k_best[:, j])
-    return row, angles, inside, full
-
-
-def residuals(
-    robot: RobotLike, frame: str, q: np.ndarray, poses: np.ndarray, row: np.ndarray | None = None
-) -> tuple[np.ndarray, np.ndarray]:
-    """Position [m] and rotation [rad, to first order: |C − C_d|_F / √2] errors of frame at q (M, dof)
-    against poses[row] (M, 4, 4) (row None: poses itself)."""
-    if len(q) <= FEW:  # one pose at a time: a batch's set-up costs more
-        T = np.array([robot.frame_pose(x, frame) for x in q]).reshape(-1, 4, 4)
-    else:
-        T = robot.frame_pose(q, frame)
-    target = poses[:, :3, :].reshape(len(poses), 12)
-    D = T[:, :3, :].reshape(len(T), 12) - (target if row is None else target[row])
-    D *= D
-    err_p2 = D[:, 3] + D[:, 7] + D[:, 11]
-    return np.sqrt(err_p2), np.sqrt(np.maximum(D.sum(axis=1) - err_p2, 0.0) / 2.0)
-
-
-def _repaired(robot: RobotLike, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:
-    """Degenerate answers (the position met, the rotation about a line of aligned joint axes not) and
-    an idealized chain's answers: a few damped least-squares iterations from each."""
-    result = robot.inverse_kinematics(
-        T_d, frame, q, tol_position=ACCEPT / 10, tol_rotation=ACCEPT / 10, restarts=0, method="numeric"
-    )
-    return np.asarray(result.q)
-
-
-__all__ = ["ACCEPT", "DEGENERATE", "SAME", "IKSolutions", "candidates_to_solutions", "joined", "residuals"]
+__all__ = [
+    "ACCEPT",
+    "DEGENERATE",
+    "POLISH",
+    "SAME",
+    "TURN_TOL",
+    "TWO_PI",
+    "Chain",
+    "IKSolutions",
+    "joined",
+    "one_pose",
+]

@@ -62,6 +62,7 @@ MIN_CALLS = 12
 _LOCK = threading.Lock()
 _POOL: ThreadPoolExecutor | None = None
 _POOL_SIZE = 0
+POOL_PREFIX = "kinengine-batch"
 
 
 def _pool(threads: int) -> ThreadPoolExecutor:
@@ -72,7 +73,7 @@ def _pool(threads: int) -> ThreadPoolExecutor:
     with _LOCK:
         if _POOL is None or threads > _POOL_SIZE:
             old, _POOL_SIZE = _POOL, max(threads, WORKERS - 1, 1)
-            _POOL = ThreadPoolExecutor(_POOL_SIZE, thread_name_prefix="kinengine-batch")
+            _POOL = ThreadPoolExecutor(_POOL_SIZE, thread_name_prefix=POOL_PREFIX)
             if old is not None:
                 old.shutdown(wait=False)
         return _POOL
@@ -113,7 +114,7 @@ def run_chain(
         def share(a: int, b: int) -> None:
             run(Q[a:b], None if T is None else T[a:b], None if J is None else J[a:b], code)
 
-        _share(list(itertools.pairwise(len(Q) * i // workers for i in range(workers + 1))), share, workers)
+        in_shares(list(itertools.pairwise(len(Q) * i // workers for i in range(workers + 1))), share, workers)
         for target, result in ((pose, T), (jac, J)):
             if target is not None and result is not target:
                 target[...] = result
@@ -134,17 +135,20 @@ def run_chain(
             None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]),
         )
 
-    _share(chunks, evaluate_rows, workers)
+    in_shares(chunks, evaluate_rows, workers)
 
 
-def _share(chunks: list[tuple[int, int]], work: Callable[[int, int], None], workers: int) -> None:
+def in_shares(chunks: list[tuple[int, int]], work: Callable[[int, int], None], workers: int) -> None:
     """work(a, b) for every chunk, in ``workers`` equal shares of consecutive chunks: the calling thread
-    takes the first, the pool the others."""
+    takes the first, the pool the others. Called from a pool thread (work that shares its own work), all
+    in that thread: waiting there for the pool could wait for itself."""
 
     def part(shares: list[tuple[int, int]]) -> None:
         for a, b in shares:
             work(a, b)
 
+    if workers > 1 and threading.current_thread().name.startswith(POOL_PREFIX):
+        workers = 1
     per = len(chunks) // workers
     futures = []
     for i in range(per, len(chunks), per):
@@ -293,6 +297,7 @@ __all__ = [
     "chunk_rows",
     "compiled_chain",
     "evaluate",
+    "in_shares",
     "numpy_chain",
     "run_chain",
 ]
