@@ -178,6 +178,17 @@ def test_numeric_map_of_the_panda_agrees_with_more_restarts():
     assert np.mean(~np.asarray(res.success)) >= 0.99
 
 
+def test_a_numeric_chunk_that_reaches_nothing_is_all_unreached():
+    """Voxels inside the Panda's reach ball (radius 1.02 m about the shoulder) but beyond its arm (0.95 m):
+    the position check reaches none of them, and the chunk is solved without a pose."""
+    panda = kinengine.load("panda_arm")
+    rmap = reachability_map(
+        panda, voxel=0.02, orientations=3, bounds=[[0.98, -0.02, 0.32], [1.0, 0.02, 0.35]], progress=False
+    )
+    assert rmap.metadata["method"] == "numeric" and len(rmap.centers) > 0
+    assert not rmap.reached.any() and np.all(rmap.manipulability == 0.0)
+
+
 def test_reachable_looks_up_the_cells(abb_map):
     from kinengine.workspace.solve import poses
 

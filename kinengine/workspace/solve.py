@@ -85,18 +85,20 @@ def solve_chunk(
             rng=np.random.default_rng(position_seed),
         )
         candidates = np.flatnonzero(np.repeat(np.asarray(centre.success, dtype=bool), n_rot))
-        result = robot.inverse_kinematics(
-            T[candidates],
-            frame,
-            method="numeric",
-            restarts=NUMERIC_RESTARTS,
-            rng=np.random.default_rng(pose_seed),
-        )
-        success = np.asarray(result.success, dtype=bool)
-        Q = np.asarray(result.q)[success]
-        inside = np.all((robot.lower_limits <= Q) & (robot.upper_limits >= Q), axis=1)
-        pose_of = candidates[success][inside]
-        Q = Q[inside]
+        pose_of, Q = candidates[:0], np.zeros((0, robot.dof))
+        if len(candidates):  # else no voxel of the chunk is reachable even in position
+            result = robot.inverse_kinematics(
+                T[candidates],
+                frame,
+                method="numeric",
+                restarts=NUMERIC_RESTARTS,
+                rng=np.random.default_rng(pose_seed),
+            )
+            success = np.asarray(result.success, dtype=bool)
+            Q = np.asarray(result.q)[success]
+            inside = np.all((robot.lower_limits <= Q) & (robot.upper_limits >= Q), axis=1)
+            pose_of = candidates[success][inside]
+            Q = Q[inside]
         reached = np.zeros(V * n_rot, dtype=bool)
         reached[pose_of] = True
     manip = np.zeros(V)
