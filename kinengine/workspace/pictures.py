@@ -8,20 +8,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ..errors import OptionError
-
-
-def pyplot() -> Any:
-    """matplotlib.pyplot (Agg backend when no display is set up), or a one-line error naming the extra."""
-    try:
-        import matplotlib
-    except ImportError:
-        raise OptionError("pictures need matplotlib: pip install 'kinengine[plot]'") from None
-    if not os.environ.get("DISPLAY") and not os.environ.get("MPLBACKEND"):
-        matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+from ..presentation.plotting import pyplot
 
 
 def reachability_slice(
@@ -33,7 +20,7 @@ def reachability_slice(
     path: str | os.PathLike[str] | None,
 ) -> Any:
     """One layer of a reachability map seen from above: a square per voxel, coloured by index [0, 1]."""
-    plt = pyplot()
+    plt = pyplot(headless=path is not None)
     fig, ax = plt.subplots(figsize=(6, 5.2))
     shown = index > 0
     if np.any(shown):

@@ -52,9 +52,9 @@ class BasePlacements:
     def plot(self, path: str | os.PathLike[str] | None = None) -> Any:
         """Best score over the yaws at each candidate position (seen from above), the task positions and
         the best base pose; written to ``path`` (PNG) when given. Returns the figure."""
-        from .pictures import pyplot
+        from ..presentation.plotting import pyplot
 
-        plt = pyplot()
+        plt = pyplot(headless=path is not None)
         fig, ax = plt.subplots(figsize=(6, 5.2))
         keys, inverse = np.unique(self.xy.round(9), axis=0, return_inverse=True)
         best = np.zeros(len(keys))
