@@ -356,6 +356,33 @@ def test_trusted_expression_that_does_not_finish_is_stopped_by_the_time_bound():
     assert "the trusted xacro expansion takes more than Limits.max_xacro_seconds = 1 s" in done.stdout
 
 
+def test_trusted_expansion_is_bounded_in_memory():
+    """xacro's own eval of 'x' * 2**30 asks for 1 GiB; the child's address space is bounded by
+    Limits.max_xacro_memory (RLIMIT_AS) and the expansion is refused, not run."""
+    pytest.importorskip("resource")
+    done = run_python(
+        f"""
+        import kinengine
+        from kinengine.urdf import Limits
+        try:
+            kinengine.load({str(HOSTILE / "huge_string.xacro")!r}, trust_xacro=True,
+                           limits=Limits(max_xacro_memory=2**29))
+        except kinengine.errors.ResourceLimitError as exc:
+            print(exc)
+        """,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "needs more than Limits.max_xacro_memory = 536870912 bytes" in done.stdout
+
+
+def test_max_xacro_memory_is_checked():
+    with pytest.raises(OptionError, match="Limits.max_xacro_memory must be a whole number"):
+        Limits(max_xacro_memory=1.5)
+    with pytest.raises(OptionError, match="Limits.max_xacro_memory must be a whole number in"):
+        Limits(max_xacro_memory=1024)
+
+
 def test_trusted_expansion_reports_the_childs_errors_and_warnings(tmp_path):
     with pytest.raises(URDFError, match="missing xacro argument 'ur_type'"):
         expand_xacro(DATA / "errors" / "needs_arg.xacro", trust_xacro=True)

@@ -45,9 +45,13 @@ class Limits:
       xacros that load is 117, franka's multi_arm; a macro that calls the next twice makes 2^depth).
     - ``max_xacro_seconds`` [s]: wall time of one xacro expansion (vendor robot xacros take well under
       a second each); both refused with :class:`~kinengine.errors.ResourceLimitError`.
+    - ``max_xacro_memory`` [bytes]: address space of the child process that runs a trusted expansion
+      (``trust_xacro=True``; the child starts at ~250 MB with Python, numpy and xacro); more is refused
+      with ResourceLimitError. Enforced through ``RLIMIT_AS`` on Linux; macOS does not enforce it and
+      Windows lacks it (there only the time bound holds).
 
-    Each field is checked when a Limits is made (OptionError): a whole number (a finite real for the last
-    two) between 1 (0 for ``max_movable_joints``) and the bound in :data:`BOUNDS`.
+    Each field is checked when a Limits is made (OptionError): a whole number (a finite real for
+    ``max_offset``, ``max_multiplier`` and ``max_xacro_seconds``) within its bounds in :data:`BOUNDS`.
     """
 
     max_bytes: int = 32 * 1024 * 1024
@@ -63,6 +67,7 @@ class Limits:
     max_multiplier: float = 1e6
     max_macro_calls: int = 5_000
     max_xacro_seconds: float = 60.0
+    max_xacro_memory: int = 4 * 1024**3
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -93,6 +98,7 @@ BOUNDS: dict[str, tuple[float, float]] = {
     "max_multiplier": (1e-9, 1e100),
     "max_macro_calls": (1, 10**9),
     "max_xacro_seconds": (1e-3, 1e6),
+    "max_xacro_memory": (2**28, 2**48),
 }
 """(smallest, largest) value of each Limits field."""
 

@@ -35,7 +35,7 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from types import ModuleType
 
-from ..errors import KinematicsError, OptionError, URDFError
+from ..errors import KinematicsError, OptionError, ResourceLimitError, URDFError
 from .limits import LIMITS, Limits
 from .packages import resolve_package
 from .safe_xml import parse_xml
@@ -136,8 +136,23 @@ def expand_in_process(
                 "xacro error: macros nested too deeply (a macro that calls itself?)", source=source
             ) from None
         except Exception as exc:  # xacro raises XacroException, and lets anything from eval() through
+            if _caused_by_memory_error(exc):  # wrapped by xacro; a trusted child reports it against its bound
+                if trusted:
+                    raise MemoryError from None
+                raise ResourceLimitError(
+                    f"{failing_file(source)}: the xacro expansion ran out of memory"
+                ) from None
             raise _translate(exc, source) from None
     return text, messages
+
+
+def _caused_by_memory_error(exc: BaseException) -> bool:
+    seen: BaseException | None = exc
+    for _ in range(64):
+        if seen is None or isinstance(seen, MemoryError):
+            return seen is not None
+        seen = getattr(seen, "exc", None) or seen.__cause__ or seen.__context__
+    return False
 
 
 def _arguments(args: object, source: str) -> dict[str, str]:

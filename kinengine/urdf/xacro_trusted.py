@@ -4,12 +4,14 @@ xacro's own evaluation is Python's ``eval``: one expression such as ``9**9**9`` 
 no check between evaluations can stop it. So :func:`run_trusted` expands the file in
 a child Python process (request and answer as JSON on stdin and stdout) and stops
 that process after ``Limits.max_xacro_seconds`` plus :data:`MARGIN_SECONDS` (its start-up):
-:class:`~kinengine.errors.ResourceLimitError`. The child applies every other bound itself and sends its
-kinengine error back, raised here with the same class and message.
+:class:`~kinengine.errors.ResourceLimitError`. The child bounds its own address space to
+``Limits.max_xacro_memory`` (``RLIMIT_AS``, where the OS has it), applies every other bound itself and
+sends its kinengine error back, raised here with the same class and message.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
@@ -90,17 +92,31 @@ def serve(expand: Callable[..., tuple[str, list[str]]]) -> None:
     JSON line on stdout."""
     request = json.load(sys.stdin)
     os.chdir(request["cwd"])
+    limits = Limits(**request["limits"])
+    try:
+        import resource
+    except ImportError:  # Windows: no RLIMIT_AS; the time bound still holds
+        pass
+    else:
+        hard = resource.getrlimit(resource.RLIMIT_AS)[1]
+        bound = (
+            limits.max_xacro_memory if hard == resource.RLIM_INFINITY else min(hard, limits.max_xacro_memory)
+        )
+        with contextlib.suppress(ValueError, OSError):  # a system that refuses the bound: time still holds
+            resource.setrlimit(resource.RLIMIT_AS, (bound, bound))
     try:
         import xacro
 
-        text, messages = expand(
-            xacro, request["source"], request["args"], request["packages"], Limits(**request["limits"]), True
-        )
+        text, messages = expand(xacro, request["source"], request["args"], request["packages"], limits, True)
         reply: dict[str, object] = {"text": text, "messages": messages}
     except KinematicsError as exc:
         reply = {"error": type(exc).__name__, "message": str(exc)}
-    except MemoryError:
-        message = f"{request['source']}: the trusted xacro expansion ran out of memory"
+    except MemoryError:  # within the RLIMIT_AS bound: the bound is what ran out
+        message = (
+            f"{request['source']}: the trusted xacro expansion needs more than Limits.max_xacro_memory = "
+            f"{limits.max_xacro_memory} bytes; pass kinengine.load(..., limits=Limits(max_xacro_memory=...)) "
+            "if the file is meant to be that large"
+        )
         reply = {"error": "ResourceLimitError", "message": message}
     sys.stdout.write("\n" + json.dumps(reply) + "\n")
 
