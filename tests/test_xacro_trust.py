@@ -140,11 +140,17 @@ def test_expressions_outside_the_allow_list_are_refused(tmp_path, expression, re
 
 
 @pytest.mark.parametrize("expression", ["__import__('os')", "type(0)", "(1).real", "9**9**9"])
-def test_eval_substitutions_are_restricted_too(tmp_path, expression):
-    path = write_xacro(tmp_path, f'  <link name="$(eval {expression})"/>')
+@pytest.mark.parametrize("spaces", ["", "  "])
+def test_eval_substitutions_are_restricted_too(tmp_path, expression, spaces):
+    """Refused like ${...}, naming file and line however the expression is spaced in the file."""
+    path = write_xacro(tmp_path, f'  <link name="l"/>\n  <link name="$(eval {spaces}{expression}{spaces})"/>')
     with pytest.raises(URDFError) as exc:
         expand_xacro(path)
-    assert "$(eval " in str(exc.value) and OPT_IN in str(exc.value)
+    assert (
+        f"{path}:5: xacro expression " in str(exc.value)
+        and "$(eval " in str(exc.value)
+        and OPT_IN in str(exc.value)
+    )
 
 
 def test_properties_of_an_included_namespace_do_not_reach_xacros_globals(tmp_path):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import errno
 import os
+import re
 import time
 from types import ModuleType
 from typing import Any
@@ -68,9 +69,10 @@ class Budget:
         text = self.texts.get(file, "")
         escaped = quoteattr(expression)[1:-1]
         for written in (expression, escaped, escaped.replace("&quot;", '"')):  # as written in the XML
-            found = text.find(written)
-            if found >= 0:
-                return file, text.count("\n", 0, found) + 1
+            spaced = r"\s*".join(map(re.escape, "".join(written.split())))  # spaces as the file has them
+            found = re.search(spaced, text)
+            if found:
+                return file, text.count("\n", 0, found.start()) + 1
         return file, None
 
 
