@@ -426,7 +426,7 @@ def test_a_robot_without_collision_shapes_is_an_error_not_collision_free():
             query()
     target = PoseTarget(robot.end_effector, robot.frame_pose(q + 0.1))
     ik = DifferentialIK(robot, [target], constraints=[kinengine.CollisionAvoidance()])
-    with pytest.raises(URDFError, match="MJCF robot's geoms are not used"):
+    with pytest.raises(URDFError, match="to an MJCF file: geoms with contype or conaffinity"):
         ik.solve(q, 0.01)
 
 

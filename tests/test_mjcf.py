@@ -196,7 +196,12 @@ def test_the_check_script_reports_every_model_of_a_folder(capsys):
     spec.loader.exec_module(module)
     assert module.main([str(DATA), "--samples", "3"]) == 0
     rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and ".xml" in line]
-    assert [r.split(" | ")[0] for r in rows] == ["| features.xml", "| kinematics_only.xml", "| two_trees.xml"]
+    assert [r.split(" | ")[0] for r in rows] == [
+        "| collision_arm.xml",
+        "| features.xml",
+        "| kinematics_only.xml",
+        "| two_trees.xml",
+    ]
 
 
 def test_reference_positions_are_mujocos_qpos():

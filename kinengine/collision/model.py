@@ -29,7 +29,7 @@ def collision_checker(
     if n_robot == 0:
         raise URDFError(
             f"robot {name!r} has no <collision> elements, so collisions cannot be checked; add <collision> "
-            "geometry to its URDF links (an MJCF robot's geoms are not used as collision shapes yet)",
+            "geometry to its URDF links (to an MJCF file: geoms with contype or conaffinity non-zero)",
             source=source,
         )
     return CollisionChecker(kin, geometry, default_pairs(kin.model, geometry, n_robot, disabled))

@@ -1,7 +1,8 @@
 """The MJCF entry point: a file in, kinengine's description and an equivalent kinematic URDF out.
 
-The URDF is :meth:`RobotDescription.to_xml` of the description with the visible geoms of each body as
-``<visual>`` elements of its link (:mod:`.visuals`), which the viewer draws; kinematics readers ignore them.
+The URDF is :meth:`RobotDescription.to_xml` of the description with each body's geoms as ``<visual>``
+(drawn by the viewer) and ``<collision>`` (checked by the collision queries) elements of its link
+(:mod:`.geoms`); kinematics readers ignore them.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from ..urdf.description import RobotDescription
 from ..urdf.limits import LIMITS, Limits
 from .compiler import compile_mjcf
 from .convert import MJCFNames, describe
-from .visuals import visual_elements
+from .geoms import geom_elements
 
 
 def read_mjcf_file(
@@ -29,11 +30,11 @@ def read_mjcf_file(
     names = MJCFNames(model, source, limits)
     links = {link.name for link in description.links}
     bodies = {b: names.body[b] for b in range(model.nbody) if names.body[b] in links}
-    visuals = visual_elements(model, bodies, Path(source).parent, meshdir)
+    geoms = geom_elements(model, bodies, Path(source).parent, meshdir, source)
     document = etree.fromstring(description.to_xml())
     for element in document.iter("link"):
-        for visual in visuals.get(element.get("name", ""), ()):
-            element.append(etree.fromstring(visual))
+        for geom in geoms.get(element.get("name", ""), ()):
+            element.append(etree.fromstring(geom))
     return description, etree.tostring(document, encoding="unicode") + "\n"
 
 

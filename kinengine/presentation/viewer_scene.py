@@ -72,9 +72,11 @@ def read_visuals(
     :func:`kinengine.urdf.packages.resolve_uri`). ``meshes=False`` skips mesh files (primitives only)."""
     import yourdfpy
 
+    from ..reference.tree import plain_urdf
+
     try:
-        urdf = yourdfpy.URDF.load(
-            io.BytesIO(urdf_text.encode("utf-8")),
+        urdf = yourdfpy.URDF.load(  # no <collision>: drawn from coal shapes; yourdfpy refuses <capsule>
+            io.BytesIO(plain_urdf(urdf_text, source=source, leave_out=("collision",))),
             build_scene_graph=False,
             load_meshes=False,
             build_collision_scene_graph=False,

@@ -28,10 +28,12 @@ def read_urdf(text: str | bytes, *, source: str = "<string>", scene_graph: bool 
     ``yourdfpy.URDF.load`` silently re-parses malformed XML in lxml's recover
     mode (dropping what it cannot read), and it knows no namespace-free reading. So the
     text is first read strictly as urdfdom's TinyXML reads it (:func:`plain_urdf`) and
-    yourdfpy gets that clean document, whose parse never needs recovering. Meshes are
-    never loaded; ``scene_graph=True`` builds yourdfpy's own forward kinematics.
+    yourdfpy gets that clean document, whose parse never needs recovering, without its
+    ``<collision>`` elements (kinematics needs none, and yourdfpy refuses the ``<capsule>`` that
+    kinengine's collision reader takes). Meshes are never loaded; ``scene_graph=True`` builds
+    yourdfpy's own forward kinematics.
     """
-    data = plain_urdf(text, source=source)
+    data = plain_urdf(text, source=source, leave_out=("collision",))
     try:
         return yourdfpy.URDF.load(
             io.BytesIO(data),
@@ -44,14 +46,15 @@ def read_urdf(text: str | bytes, *, source: str = "<string>", scene_graph: bool 
         raise URDFError(f"yourdfpy could not read it: {type(exc).__name__}: {exc}", source=source) from None
 
 
-def plain_urdf(text: str | bytes, *, source: str = "<string>") -> bytes:
+def plain_urdf(text: str | bytes, *, source: str = "<string>", leave_out: tuple[str, ...] = ()) -> bytes:
     """The document as urdfdom (TinyXML, which knows no namespaces) reads it, re-serialized as plain XML.
 
     Read by expat without namespace processing, so a name is just its text: an element or attribute
     whose name has a prefix (``<sensor:camera>`` in a ``<gazebo>`` block, declared or not) is no URDF and
     is left out with its contents, as are ``xmlns`` declarations (so ``<robot xmlns="...">`` is
     ``<robot>``), comments and processing instructions. A DOCTYPE (and so any entity declaration) and
-    malformed XML are refused with a URDFError; the root must be ``<robot>``.
+    malformed XML are refused with a URDFError; the root must be ``<robot>``. Elements named in
+    ``leave_out`` are left out with their contents too.
     """
     data = text.encode("utf-8") if isinstance(text, str) else bytes(text)
     if isinstance(text, str):  # the bytes are UTF-8 whatever the declaration says
@@ -59,7 +62,7 @@ def plain_urdf(text: str | bytes, *, source: str = "<string>") -> bytes:
     builder, skipping = etree.TreeBuilder(), [0]  # depth inside a left-out element
 
     def start(name: str, attributes: dict[str, str]) -> None:
-        if skipping[0] or ":" in name:
+        if skipping[0] or ":" in name or name in leave_out:
             skipping[0] += 1
         else:
             builder.start(name, {k: v for k, v in attributes.items() if ":" not in k and k != "xmlns"})
