@@ -204,8 +204,8 @@ class Robot:
         parameterization's rows there; None: χ everywhere (a warning is issued at gimbal lock).
         """
         mode = "raise" if on_singularity is None else on_singularity  # None: χ alone, unchecked
-        given = AnalyticOptions(position, rotation, rows, singularity_threshold, mode)
-        options, fa, fb, qc = self._analytic_inputs(q, frame, given, check_limits, relative_to)
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold, mode).checked()
+        fa, fb, qc = self._checked(q, frame, relative_to, check_limits=check_limits)
         kin, pmap = self._kin, options.pose_map()
         T = self.frame_pose(qc, frame) if fb is None else _relative.relative_pose(kin, qc, fa, fb)
         if on_singularity is None:
@@ -258,8 +258,8 @@ class Robot:
                 ready, evaluate = path
                 if ready(q):  # a float64 (dof,) array within the bounds: checked
                     return evaluate(q)  # type: ignore[arg-type]
-        given = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity)
-        options, fid, fb, qc = self._analytic_inputs(q, frame, given, check_limits, relative_to)
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity).checked()
+        fid, fb, qc = self._checked(q, frame, relative_to, check_limits=check_limits)
         kin, pmap, threshold, nan = self._kin, options.pose_map(), options.singularity_threshold, options.nan
         if fb is not None:
             return analytic_relative(kin, qc, fid, fb, pmap, threshold, nan)
@@ -277,21 +277,6 @@ class Robot:
         evaluate = analytic_function(self._kin, fid, options.pose_map(), options.singularity_threshold)
         return self._coords.ready, evaluate
 
-    def _analytic_inputs(
-        self,
-        q: ArrayLike,
-        frame: str | None,
-        options: AnalyticOptions,
-        check_limits: bool = False,
-        relative_to: str | None = None,
-        allow_batch: bool = True,
-    ) -> tuple[AnalyticOptions, int, int | None, FloatArray]:
-        """The inputs of an analytic method checked, in this order: (the options checked, the frame id of
-        ``frame`` (None: end effector), that of ``relative_to`` (None if not given), q (dof,) or (N, dof))."""
-        options, fa = options.checked(), self._frame_id(frame)
-        fb = None if relative_to is None else self._kin.frame_id(relative_to)
-        return options, fa, fb, self._coords.check(q, check_limits=check_limits, allow_batch=allow_batch)
-
     def analytic_hessian(
         self,
         q: ArrayLike,
@@ -303,8 +288,8 @@ class Robot:
         singularity_threshold: float = DEFAULTS.singularity_threshold,
     ) -> FloatArray:
         """∂J_A/∂q, (m, dof, dof) with [:, :, k] = ∂J_A/∂q_k. See :mod:`kinengine.analytic.hessian`."""
-        given = AnalyticOptions(position, rotation, rows, singularity_threshold)
-        options, fid, _, qc = self._analytic_inputs(q, frame, given, allow_batch=False)
+        options = AnalyticOptions(position, rotation, rows, singularity_threshold).checked()
+        fid, _, qc = self._checked(q, frame, allow_batch=False)
         return _analytic_hessian(self._kin, qc, fid, options.pose_map(), options.singularity_threshold)
 
     def task(
@@ -400,8 +385,7 @@ class Robot:
             pass
         kin, coords = self._kin, self._coords
         ref = resolve_reference(reference)
-        fid = self._frame_id(frame)
-        qc: FloatArray = coords.check(q, allow_batch=False)
+        fid, _, qc = self._checked(q, frame, allow_batch=False)
         vc: FloatArray = coords.check(qdot, name="qdot", allow_batch=False)
         # not at dof 1: eigenpy gives a (6, 1) result the shape (6,)
         if (
@@ -419,8 +403,9 @@ class Robot:
     ) -> FloatArray:
         """∂J/∂q, (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, in ``reference``. See
         :mod:`kinengine.kinematics.derivatives`."""
-        ref, fid = resolve_reference(reference), self._frame_id(frame)
-        return _derivatives.kinematic_hessian(self._kin, self._coords.check(q, allow_batch=False), fid, ref)
+        ref = resolve_reference(reference)
+        fid, _, qc = self._checked(q, frame, allow_batch=False)
+        return _derivatives.kinematic_hessian(self._kin, qc, fid, ref)
 
     # -- singularities ------------------------------------------------------------------------------
     def singularity_report(
@@ -608,6 +593,21 @@ class Robot:
     def _frame_id(self, frame: str | None) -> int:
         """:meth:`frame_id` of ``frame``, None: the end effector."""
         return self._kin.frame_id(self._end_effector if frame is None else frame)
+
+    def _checked(
+        self,
+        q: ArrayLike,
+        frame: str | None,
+        relative_to: str | None = None,
+        *,
+        check_limits: bool = False,
+        allow_batch: bool = True,
+    ) -> tuple[int, int | None, FloatArray]:
+        """A method's inputs checked, names before values: (the frame id of ``frame`` (None: the end
+        effector), that of ``relative_to`` (None if not given), q as float64 (dof,) or (N, dof))."""
+        fa = self._frame_id(frame)
+        fb = None if relative_to is None else self._kin.frame_id(relative_to)
+        return fa, fb, self._coords.check(q, check_limits=check_limits, allow_batch=allow_batch)
 
     def frame(self, name: str | None = None, *, check_inputs: bool = True) -> FrameHandle:
         """A handle on one frame (default: end_effector) for hot loops: ``fk.pose(q)``,
