@@ -203,20 +203,13 @@ class Robot:
         of the singular set (where χ is not unique, e.g. ZYX angles at gimbal lock); "nan": NaN in that
         parameterization's rows there; None: χ everywhere (a warning is issued at gimbal lock).
         """
-        unchecked = on_singularity is None  # the angles alone (the default before "raise")
-        mode = "raise" if on_singularity is None else on_singularity
+        mode = "raise" if on_singularity is None else on_singularity  # None: χ alone, unchecked
         options = AnalyticOptions(position, rotation, rows, singularity_threshold, mode).checked()
-        pmap = options.pose_map()
-        if relative_to is None:
-            T = self.frame_pose(q, frame, check_limits=check_limits)
-        else:
-            T = self.relative_pose(q, frame, relative_to=relative_to, check_limits=check_limits)
-        if unchecked:
+        fa, fb, qc = self._checked(q, frame, relative_to, check_limits=check_limits)
+        kin, pmap = self._kin, options.pose_map()
+        T = self.frame_pose(qc, frame) if fb is None else _relative.relative_pose(kin, qc, fa, fb)
+        if on_singularity is None:
             return pmap.parameters(T)
-        kin = self._kin
-        qc = self._coords.check(q)
-        fa = kin.frame_id(self._end_effector if frame is None else frame)
-        fb = None if relative_to is None else kin.frame_id(relative_to)
 
         def J(row: int | None) -> FloatArray:
             qr = qc if row is None else qc[row]
@@ -265,13 +258,11 @@ class Robot:
                 ready, evaluate = path
                 if ready(q):  # a float64 (dof,) array within the bounds: checked
                     return evaluate(q)  # type: ignore[arg-type]
-        kin = self._kin
         options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity).checked()
-        pmap, threshold, nan = options.pose_map(), options.singularity_threshold, options.nan
-        fid = kin.frame_id(self._end_effector if frame is None else frame)
-        qc: FloatArray = self._coords.check(q, check_limits=check_limits)
-        if relative_to is not None:
-            return analytic_relative(kin, qc, fid, kin.frame_id(relative_to), pmap, threshold, nan)
+        fid, fb, qc = self._checked(q, frame, relative_to, check_limits=check_limits)
+        kin, pmap, threshold, nan = self._kin, options.pose_map(), options.singularity_threshold, options.nan
+        if fb is not None:
+            return analytic_relative(kin, qc, fid, fb, pmap, threshold, nan)
         if qc.ndim == 2:
             return analytic_batch(kin, qc, fid, pmap, threshold, nan)
         return analytic_single(kin, qc, fid, pmap, threshold, nan)
@@ -280,8 +271,7 @@ class Robot:
         """(ready, J_A) for these options (each checked here: an error is raised, not kept): J_A(q) answers a
         float64 (dof,) array q that ``ready`` passed (any other q takes the general path, which checks it);
         None where the general path is needed (on_singularity "nan")."""
-        options = options.checked()
-        fid = self._kin.frame_id(self._end_effector if frame is None else frame)
+        options, fid = options.checked(), self._frame_id(frame)
         if options.nan:
             return None
         evaluate = analytic_function(self._kin, fid, options.pose_map(), options.singularity_threshold)
@@ -299,8 +289,7 @@ class Robot:
     ) -> FloatArray:
         """∂J_A/∂q, (m, dof, dof) with [:, :, k] = ∂J_A/∂q_k. See :mod:`kinengine.analytic.hessian`."""
         options = AnalyticOptions(position, rotation, rows, singularity_threshold).checked()
-        fid = self._kin.frame_id(self._end_effector if frame is None else frame)
-        qc = self._coords.check(q, allow_batch=False)
+        fid, _, qc = self._checked(q, frame, allow_batch=False)
         return _analytic_hessian(self._kin, qc, fid, options.pose_map(), options.singularity_threshold)
 
     def task(
@@ -353,8 +342,7 @@ class Robot:
     ) -> FloatArray:
         """T_BA = T_IB⁻¹ T_IA: the pose of ``frame`` A (default: end_effector) in frame B = ``relative_to``,
         (4, 4) [m], or (N, 4, 4) for q (N, dof). See :mod:`kinengine.kinematics.relative`."""
-        fa = self._kin.frame_id(self._end_effector if frame is None else frame)
-        fb = self._kin.frame_id(relative_to)
+        fa, fb = self._frame_id(frame), self._kin.frame_id(relative_to)
         return _relative.relative_pose(self._kin, self._coords.check(q, check_limits=check_limits), fa, fb)
 
     def relative_jacobian(
@@ -372,8 +360,7 @@ class Robot:
 
         In B: d/dt(B_p_BA) = J[:3]·q̇ and Ċ_BA = [J[3:]·q̇]× C_BA. See :mod:`kinengine.kinematics.relative`.
         """
-        fa = self._kin.frame_id(self._end_effector if frame is None else frame)
-        fb = self._kin.frame_id(relative_to)
+        fa, fb = self._frame_id(frame), self._kin.frame_id(relative_to)
         fe = None if expressed_in is None else self._kin.frame_id(expressed_in)
         qc = self._coords.check(q, check_limits=check_limits)
         return _relative.relative_jacobian(self._kin, qc, fa, fb, fe)
@@ -398,8 +385,7 @@ class Robot:
             pass
         kin, coords = self._kin, self._coords
         ref = resolve_reference(reference)
-        fid = kin.frame_id(self._end_effector if frame is None else frame)
-        qc: FloatArray = coords.check(q, allow_batch=False)
+        fid, _, qc = self._checked(q, frame, allow_batch=False)
         vc: FloatArray = coords.check(qdot, name="qdot", allow_batch=False)
         # not at dof 1: eigenpy gives a (6, 1) result the shape (6,)
         if (
@@ -418,8 +404,7 @@ class Robot:
         """∂J/∂q, (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, in ``reference``. See
         :mod:`kinengine.kinematics.derivatives`."""
         ref = resolve_reference(reference)
-        fid = self._kin.frame_id(self._end_effector if frame is None else frame)
-        qc = self._coords.check(q, allow_batch=False)
+        fid, _, qc = self._checked(q, frame, allow_batch=False)
         return _derivatives.kinematic_hessian(self._kin, qc, fid, ref)
 
     # -- singularities ------------------------------------------------------------------------------
@@ -604,6 +589,25 @@ class Robot:
     def frame_id(self, frame: str) -> int:
         """Pinocchio's frame index of a frame name (FrameNotFoundError with suggestions otherwise)."""
         return self._kin.frame_id(frame)
+
+    def _frame_id(self, frame: str | None) -> int:
+        """:meth:`frame_id` of ``frame``, None: the end effector."""
+        return self._kin.frame_id(self._end_effector if frame is None else frame)
+
+    def _checked(
+        self,
+        q: ArrayLike,
+        frame: str | None,
+        relative_to: str | None = None,
+        *,
+        check_limits: bool = False,
+        allow_batch: bool = True,
+    ) -> tuple[int, int | None, FloatArray]:
+        """A method's inputs checked, names before values: (the frame id of ``frame`` (None: the end
+        effector), that of ``relative_to`` (None if not given), q as float64 (dof,) or (N, dof))."""
+        fa = self._frame_id(frame)
+        fb = None if relative_to is None else self._kin.frame_id(relative_to)
+        return fa, fb, self._coords.check(q, check_limits=check_limits, allow_batch=allow_batch)
 
     def frame(self, name: str | None = None, *, check_inputs: bool = True) -> FrameHandle:
         """A handle on one frame (default: end_effector) for hot loops: ``fk.pose(q)``,
@@ -830,22 +834,22 @@ class Robot:
         obstacles, with the checked pairs set; built once per Robot (again if other ``packages`` are given:
         ROS package name -> folder for ``package://`` meshes, default :attr:`packages`), and then used by
         the queries below. URDFError naming the missing mesh files (:mod:`kinengine.collision.geometry`)."""
-        from .collision import checked_packages, collision_checker
+        from .collision import checked_packages
 
         chosen = self._packages if packages is None else checked_packages(packages)
         cached = self._collision
         if cached is None or (packages is not None and cached[0] != chosen):
-            checker = collision_checker(
-                self._kin,
-                self._urdf_text,
-                self.source,
-                chosen,
-                self._obstacles,
-                self._disabled_pairs,
-                self.name,
-            )
-            cached = self._collision = (chosen, checker)
+            cached = self._collision = (chosen, self._new_checker(chosen, self._disabled_pairs))
         return cached[1].geometry
+
+    def _new_checker(
+        self, packages: Mapping[str, str], disabled: set[frozenset[str]] | frozenset[frozenset[str]]
+    ) -> CollisionChecker:
+        """A collision model of this robot and its obstacles with these packages and disabled pairs."""
+        from .collision import collision_checker
+
+        urdf, obstacles = self._urdf_text, self._obstacles
+        return collision_checker(self._kin, urdf, self.source, packages, obstacles, disabled, self.name)
 
     def collision_checker(self) -> CollisionChecker:
         """The collision model the queries below use (:class:`kinengine.collision.CollisionChecker`)."""
@@ -858,17 +862,14 @@ class Robot:
         """The link pairs checked for collision: adjacent links and rigidly joined ones left out, an SRDF's
         ``<disable_collisions>`` (a file or its text; default: the one given to :meth:`with_srdf`) too, then
         the moving links against each obstacle. See :mod:`kinengine.collision.pairs`."""
-        from .collision import collision_checker, read_disabled_pairs
+        from .collision import read_disabled_pairs
 
         if srdf is None:
             links = self.collision_checker().links
         else:
             disabled = read_disabled_pairs(srdf)
             self._warn_unknown_links(disabled)
-            checker = collision_checker(
-                self._kin, self._urdf_text, self.source, self._packages, self._obstacles, disabled, self.name
-            )
-            links = checker.links
+            links = self._new_checker(self._packages, disabled).links
         return list(dict.fromkeys(links))
 
     def distances(self, q: ArrayLike) -> Distances:

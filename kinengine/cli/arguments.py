@@ -6,9 +6,9 @@ entries are refused. Output paths are checked before the work (a folder, a missi
 folder, a read-only file, a dangling link, a device other than /dev/null). :class:`OneLineParser`
 prints argparse's own errors as one line (exit status 2), like every other kinengine error.
 
-Also the robot options every robot-taking command shares (:func:`add_robot_arguments`,
+Also the robot options every robot-taking command shares (:func:`robot_command`, :func:`add_robot_arguments`,
 :func:`load_robot`): ``--xacro-arg NAME=VALUE`` and ``--package NAME=PATH``, both repeatable, and
-``--root BODY`` for an MJCF file.
+``--root BODY`` for an MJCF file; and the options several commands share (``--q``, ``--frame``, ``--frames``).
 """
 
 from __future__ import annotations
@@ -199,6 +199,48 @@ def add_robot_arguments(parser: argparse.ArgumentParser) -> None:
         help="evaluate a .xacro file's expressions with xacro's own Python eval, which can run any "
         "command (default: kinengine's restricted evaluator); only for files you would build with ROS",
     )
+
+
+def robot_command(
+    subparsers: argparse._SubParsersAction,
+    name: str,
+    help: str,
+    *,
+    description: str | None = None,
+    **argument: str,
+) -> argparse.ArgumentParser:
+    """The parser of a sub-command that takes a robot: the positional ``robot`` (a name or file;
+    ``argument``: e.g. its ``metavar`` or ``nargs``), then the options of :func:`add_robot_arguments`."""
+    parser = subparsers.add_parser(name, help=help, description=description)
+    parser.add_argument("robot", help=ROBOT_HELP, **argument)
+    add_robot_arguments(parser)
+    return parser
+
+
+Q_HELP = "comma-separated joint values [rad | m] (default: zero clipped into the limits)"
+FRAMES_HELP = "comma-separated frames drawn as RGB triads (default: the end effector; '' for none)"
+
+
+def add_q_argument(parser: argparse.ArgumentParser) -> None:
+    """``--q v1,v2,...``: the configuration [rad | m] (None when not given: the command's default q)."""
+    parser.add_argument("--q", type=parse_vector, default=None, help=Q_HELP)
+
+
+def add_frame_argument(
+    parser: argparse.ArgumentParser, help: str = "frame name (default: the end effector)"
+) -> None:
+    """``--frame NAME``: one frame (None when not given: the end effector)."""
+    parser.add_argument("--frame", type=name_argument, default=None, help=help)
+
+
+def name_list(text: str) -> list[str]:
+    """'tool0, flange' -> ['tool0', 'flange'] (argparse type for --frames)."""
+    return [name for name in text.replace(" ", "").split(",") if name]
+
+
+def add_frames_argument(parser: argparse.ArgumentParser) -> None:
+    """``--frames a,b``: frames drawn as triads (None when not given: the end effector; '' for none)."""
+    parser.add_argument("--frames", type=name_list, default=None, help=FRAMES_HELP)
 
 
 def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:

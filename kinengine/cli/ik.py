@@ -8,7 +8,7 @@ import json
 import numpy as np
 
 from ..parameterizations import get_rotation
-from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, name_argument, parse_vector, printable
+from .arguments import add_frame_argument, load_robot, parse_vector, printable, robot_command
 
 
 def _triple(text: str) -> list[float]:
@@ -65,14 +65,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("ik", help="every closed-form inverse-kinematics solution of a pose (the ik extra)")
-    p.add_argument("robot", help=ROBOT_HELP)
-    add_robot_arguments(p)
+    p = robot_command(sub, "ik", "every closed-form inverse-kinematics solution of a pose (the ik extra)")
     p.add_argument("--xyz", type=_triple, required=True, help="position X,Y,Z [m] in the root link frame")
     p.add_argument(
         "--rpy", type=_triple, default=[0.0, 0.0, 0.0], help="orientation roll,pitch,yaw [rad] as in URDF"
     )
-    p.add_argument("--frame", type=name_argument, default=None, help="frame name (default: the end effector)")
+    add_frame_argument(p)
     p.add_argument(
         "--all",
         action="store_true",

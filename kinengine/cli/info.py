@@ -11,7 +11,7 @@ from importlib import metadata
 
 from .. import __version__, accelerator_status
 from ..loading import extra_coordinates
-from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, printable
+from .arguments import load_robot, printable, robot_command
 
 DEPENDENCIES = (
     "pin",
@@ -86,9 +86,10 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "info", help="joints, limits and frames of a robot; without one: versions and the C accelerator"
+    p = robot_command(
+        sub,
+        "info",
+        "joints, limits and frames of a robot; without one: versions and the C accelerator",
+        nargs="?",
     )
-    p.add_argument("robot", nargs="?", help=ROBOT_HELP)
-    add_robot_arguments(p)
     p.set_defaults(handler=_run)

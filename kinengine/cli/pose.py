@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from ..parameterizations import parameter_labels
-from .arguments import ROBOT_HELP, add_robot_arguments, load_robot, name_argument, parse_vector, printable
+from .arguments import add_frame_argument, add_q_argument, load_robot, printable, robot_command
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -44,16 +44,9 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("pose", help="frame pose and geometric Jacobian at a configuration")
-    p.add_argument("robot", help=ROBOT_HELP)
-    add_robot_arguments(p)
-    p.add_argument(
-        "--q",
-        type=parse_vector,
-        default=None,
-        help="comma-separated joint values [rad | m] (default: zero clipped into the limits)",
-    )
-    p.add_argument("--frame", type=name_argument, default=None, help="frame name (default: the end effector)")
+    p = robot_command(sub, "pose", "frame pose and geometric Jacobian at a configuration")
+    add_q_argument(p)
+    add_frame_argument(p)
     p.add_argument(
         "--reference", default="local_world_aligned", choices=["local_world_aligned", "world", "local"]
     )

@@ -9,15 +9,7 @@ import numpy as np
 
 from ..errors import OptionError
 from ..workspace import ReachabilityMap, base_placements, reachability_map
-from .arguments import (
-    ROBOT_HELP,
-    add_robot_arguments,
-    bounded_int,
-    load_robot,
-    name_argument,
-    output_path,
-    strict_float,
-)
+from .arguments import add_frame_argument, bounded_int, load_robot, output_path, robot_command, strict_float
 
 
 def _run_reach(args: argparse.Namespace) -> int:
@@ -82,10 +74,8 @@ def _run_place(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("reach", help="reachability map of a frame (voxels × orientations, IK for each)")
-    p.add_argument("robot", help=ROBOT_HELP)
-    add_robot_arguments(p)
-    p.add_argument("--frame", type=name_argument, default=None, help="frame to map (default: end effector)")
+    p = robot_command(sub, "reach", "reachability map of a frame (voxels × orientations, IK for each)")
+    add_frame_argument(p, "frame to map (default: end effector)")
     p.add_argument("--voxel", type=strict_float, default=0.05, help="voxel edge [m] (default 0.05)")
     p.add_argument(
         "--orientations", type=bounded_int(1, 100_000), default=50, help="orientations per voxel (default 50)"

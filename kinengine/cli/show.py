@@ -17,13 +17,14 @@ from typing import TYPE_CHECKING, cast
 from ..errors import KinematicsError
 from ..presentation.plotting import plot_robot
 from .arguments import (
-    ROBOT_HELP,
-    add_robot_arguments,
+    add_frames_argument,
+    add_q_argument,
     bounded_int,
     load_robot,
     name_argument,
     output_path,
     parse_vector,
+    robot_command,
     summary,
 )
 
@@ -35,28 +36,13 @@ MAX_DPI = 600
 """The finest --dpi: the 6.4 x 4.8 inch figure is then 3840 x 2880 pixels (~44 MB in memory)."""
 
 
-def _names(text: str) -> list[str]:
-    """'tool0, flange' -> ['tool0', 'flange'] (argparse type for --frames)."""
-    return [name for name in text.replace(" ", "").split(",") if name]
-
-
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``show`` on the kinengine command line."""
-    p = subparsers.add_parser("show", help="draw the robot at q into a PNG", description=summary(__doc__))
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    add_robot_arguments(p)
-    p.add_argument(
-        "--q",
-        type=parse_vector,
-        default=None,
-        help="comma-separated joint values [rad | m] (default: zero clipped into the limits)",
+    p = robot_command(
+        subparsers, "show", "draw the robot at q into a PNG", description=summary(__doc__), metavar="ROBOT"
     )
-    p.add_argument(
-        "--frames",
-        type=_names,
-        default=None,
-        help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)",
-    )
+    add_q_argument(p)
+    add_frames_argument(p)
     p.add_argument(
         "--ellipsoid",
         type=name_argument,

@@ -15,27 +15,26 @@ import logging
 import time
 
 from ..presentation.viewer import view
-from .arguments import ROBOT_HELP, add_robot_arguments, flush_warnings, load_robot, parse_vector, summary
-
-
-def _names(text: str) -> list[str]:
-    """'tool0, flange' -> ['tool0', 'flange'] (argparse type for --frames)."""
-    return [name for name in text.replace(" ", "").split(",") if name]
+from .arguments import (
+    add_frames_argument,
+    add_q_argument,
+    flush_warnings,
+    load_robot,
+    robot_command,
+    summary,
+)
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register ``view`` on the kinengine command line."""
-    p = subparsers.add_parser(
-        "view", help="show the robot in the browser (interactive 3D viewer)", description=summary(__doc__)
+    p = robot_command(
+        subparsers,
+        "view",
+        "show the robot in the browser (interactive 3D viewer)",
+        description=summary(__doc__),
+        metavar="ROBOT",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    add_robot_arguments(p)
-    p.add_argument(
-        "--q",
-        type=parse_vector,
-        default=None,
-        help="comma-separated joint values [rad | m] (default: zero clipped into the limits)",
-    )
+    add_q_argument(p)
     p.add_argument(
         "--port",
         type=int,
@@ -47,12 +46,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
         default="127.0.0.1",
         help="address to listen on (default 127.0.0.1; 0.0.0.0 serves the whole network)",
     )
-    p.add_argument(
-        "--frames",
-        type=_names,
-        default=None,
-        help="comma-separated frames drawn as RGB triads (default: the end effector; '' for none)",
-    )
+    add_frames_argument(p)
     p.add_argument(
         "--ellipsoid",
         default=None,

@@ -61,9 +61,20 @@ def _viser() -> Any:
 class Viewer:
     """A running viewer of one robot; build it with :func:`view` or ``robot.view(q)``.
 
-    ``url``: the page; ``q``: the configuration shown (dof,) [rad or m]; ``update(q)`` moves the robot;
-    ``close()`` stops the server (also on leaving a ``with`` block). ``camera_position`` and
-    ``camera_look_at`` [m, in I] and ``fov`` [rad] describe the initial camera of a new page.
+    ``Viewer(robot, q)`` (alias ``view``) serves ``robot`` at q (dof,) (None: neutral) in the browser.
+    ``port`` None: 8080 (the next free one if taken; 0: any free port; ``Viewer.url`` says which);
+    ``frames``: frames drawn as triads; ``ellipsoid``: frame whose velocity ellipsoid is drawn (and whose
+    pose the readout shows; default: the end effector); ``parameterization``: the rotation
+    parameterization of the readout; ``meshes=False`` draws URDF primitives and the skeleton only;
+    ``packages`` maps ROS package names to folders for ``package://`` mesh files (default: the robot's
+    ``packages``, then ``ROS_PACKAGE_PATH``, then the folders above the robot's file); ``host``
+    "0.0.0.0" serves the network (with a one-line warning; None or "" is refused, a name that does not
+    resolve within a few seconds or an address of another machine too: OptionError).
+
+    ``url``: the page; ``address``: the numeric address listened on; ``port``: the port; ``q``: the
+    configuration shown (dof,) [rad or m]; ``update(q)`` moves the robot; ``close()`` stops the server
+    (also on leaving a ``with`` block). ``camera_position`` and ``camera_look_at`` [m, in I] and ``fov``
+    [rad] describe the initial camera of a new page.
     """
 
     def __init__(
@@ -105,7 +116,7 @@ class Viewer:
                 f"the visuals of {robot.name} could not be read ({visuals.error}); the robot is "
                 "drawn as its skeleton",
                 UserWarning,
-                stacklevel=3,
+                stacklevel=2,  # the caller of Viewer(...) / view(...)
             )
         elif visuals.failures:
             (first, why), n = visuals.failures[0], len(visuals.failures)
@@ -114,7 +125,7 @@ class Viewer:
                 f"(first: {first}: {why}); "
                 f"{'those links are' if n > 1 else 'that link is'} drawn as skeleton only",
                 UserWarning,
-                stacklevel=3,
+                stacklevel=2,
             )
 
         with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner; the URL is self.url
@@ -308,43 +319,9 @@ class Viewer:
         return f"<kinengine Viewer of {self.robot.name} at {self.url}>"
 
 
-def view(
-    robot: RobotLike,
-    q: npt.ArrayLike | None = None,
-    *,
-    port: int | None = None,
-    host: str = "127.0.0.1",
-    frames: Sequence[str] = (),
-    ellipsoid: str | None = None,
-    parameterization: str = "euler_zyx",
-    meshes: bool = True,
-    singularity_warning: float = SINGULARITY_WARNING,
-    packages: Mapping[str, str | os.PathLike] | None = None,
-) -> Viewer:
-    """Serve ``robot`` at q (dof,) (None: neutral) in the browser; returns the running :class:`Viewer`.
-
-    ``port`` None: 8080 (the next free one if taken; 0: any free port; ``Viewer.url`` says which);
-    ``frames``: frames drawn as triads; ``ellipsoid``: frame whose velocity ellipsoid is drawn (and whose
-    pose the readout shows; default: the end effector); ``parameterization``: the rotation
-    parameterization of the readout; ``meshes=False`` draws URDF primitives and the skeleton only;
-    ``packages`` maps ROS package names to folders for ``package://`` mesh files (default: the robot's
-    ``packages``, then ``ROS_PACKAGE_PATH``, then the folders above the robot's file); ``host``
-    "0.0.0.0" serves the network (with a one-line warning; None or "" is refused, a name that does not
-    resolve within a few seconds or an address of another machine too: OptionError).
-    ``Viewer.address`` is the numeric address listened on, ``Viewer.port`` the port.
-    """
-    return Viewer(
-        robot,
-        q,
-        port=port,
-        host=host,
-        frames=frames,
-        ellipsoid=ellipsoid,
-        parameterization=parameterization,
-        meshes=meshes,
-        singularity_warning=singularity_warning,
-        packages=packages,
-    )
+view = Viewer
+"""``view(robot, q, ...)``: serve ``robot`` in the browser and return the running :class:`Viewer` (the
+Viewer's constructor, under the name the docs and ``robot.view(q)`` use)."""
 
 
 __all__ = ["DEFAULT_PORT", "FOV", "SINGULARITY_WARNING", "Viewer", "view"]

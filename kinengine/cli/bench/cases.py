@@ -61,72 +61,30 @@ def latency_cases(robot: Robot, frame: str, rotations: list[str]) -> list[Case]:
     q = regular_configuration(robot, frame, rotations)
     floor = floors(robot, frame, q)
     fk, fast = robot.frame(frame), robot.frame(frame, check_inputs=False)
-    cases = [
-        Case(
-            "latency",
-            "frame_pose",
-            1,
-            lambda: robot.frame_pose(q, frame),
-            floor["frame_pose"],
-            compare=True,
-            q=q,
-            floor=FLOOR_POSE,
-        )
+    # (row, kinengine call, floor key, floor code, q for the peers)
+    rows: list[tuple[str, Callable[[], object], str, str, np.ndarray | None]] = [
+        ("frame_pose", lambda: robot.frame_pose(q, frame), "frame_pose", FLOOR_POSE, q)
     ]
     for ref in REFERENCES:
-        cases.append(
-            Case(
-                "latency",
-                f"jacobian[{ref}]",
-                1,
-                lambda ref=ref: robot.jacobian(q, frame, ref),
-                floor[f"jacobian[{ref}]"],
-                compare=True,
-                q=q,
-                floor=FLOOR_JACOBIAN.format(ref=PIN_NAMES[ref]),
-            )
+        code = FLOOR_JACOBIAN.format(ref=PIN_NAMES[ref])
+        rows.append(
+            (f"jacobian[{ref}]", lambda ref=ref: robot.jacobian(q, frame, ref), f"jacobian[{ref}]", code, q)
         )
-    cases.append(
-        Case(
-            "latency",
-            "kinematics",
-            1,
-            lambda: robot.kinematics(q, frame),
-            floor["kinematics"],
-            compare=True,
-            floor=FLOOR_KINEMATICS,
-        )
+    rows.append(("kinematics", lambda: robot.kinematics(q, frame), "kinematics", FLOOR_KINEMATICS, None))
+    lwa_key, lwa_code = (
+        "jacobian[local_world_aligned]",
+        FLOOR_JACOBIAN.format(ref=PIN_NAMES["local_world_aligned"]),
     )
-    for label, handle in (("", fk), (", check_inputs=False", fast)):
-        cases += [
-            Case(
-                "latency",
-                f"frame(){label}.pose",
-                1,
-                lambda h=handle: h.pose(q),
-                floor["frame_pose"],
-                compare=True,
-                floor=FLOOR_POSE,
-            ),
-            Case(
-                "latency",
-                f"frame(){label}.jacobian",
-                1,
-                lambda h=handle: h.jacobian(q),
-                floor["jacobian[local_world_aligned]"],
-                compare=True,
-                floor=FLOOR_JACOBIAN.format(ref="pin.LOCAL_WORLD_ALIGNED"),
-            ),
-            Case(
-                "latency",
-                f"frame(){label}.kinematics",
-                1,
-                lambda h=handle: h.kinematics(q),
-                floor["kinematics"],
-                compare=True,
-                floor=FLOOR_KINEMATICS,
-            ),
+    for label, h in (("", fk), (", check_inputs=False", fast)):
+        rows += [
+            (f"frame(){label}.pose", lambda h=h: h.pose(q), "frame_pose", FLOOR_POSE, None),
+            (f"frame(){label}.jacobian", lambda h=h: h.jacobian(q), lwa_key, lwa_code, None),
+            (f"frame(){label}.kinematics", lambda h=h: h.kinematics(q), "kinematics", FLOOR_KINEMATICS, None),
         ]
+    cases = [
+        Case("latency", name, 1, call, floor[key], compare=True, q=q_in, floor=code)
+        for name, call, key, code, q_in in rows
+    ]
     for rot in rotations:
         exact = rot in FLOOR_ANALYTIC
         cases.append(
@@ -238,42 +196,27 @@ def throughput_cases(
             return T, J
 
         timed = n <= loop_max
+        untimed = "" if timed else f"floor not timed above N = {loop_max:,}"
         out = (np.empty((n, 4, 4)), np.empty((n, 6, dof)))
-        cases += [
-            Case(
-                "throughput",
-                "frame_pose",
-                n,
-                lambda Q=Q: robot.frame_pose(Q, frame),
-                poses if timed else None,
-                "" if timed else f"floor not timed above N = {loop_max:,}",
-                compare=timed,
-                q=Q,
-                floor=FLOOR_LOOP,
-            ),
-            Case(
-                "throughput",
-                "jacobian[local_world_aligned]",
-                n,
-                lambda Q=Q: robot.jacobian(Q, frame),
-                jacobians if timed else None,
-                "" if timed else f"floor not timed above N = {loop_max:,}",
-                compare=timed,
-                q=Q,
-                floor=FLOOR_LOOP,
-            ),
-            Case(
-                "throughput",
-                "kinematics",
-                n,
-                lambda Q=Q: robot.kinematics(Q, frame),
-                both if timed else None,
-                "robot.kinematics(Q): pose and Jacobian in one call"
-                + ("" if timed else f"; floor not timed above N = {loop_max:,}"),
-                compare=timed,
-                q=Q,
-                floor=FLOOR_LOOP,
-            ),
+        for name, call, loop, note in (
+            ("frame_pose", robot.frame_pose, poses, ""),
+            ("jacobian[local_world_aligned]", robot.jacobian, jacobians, ""),
+            ("kinematics", robot.kinematics, both, "robot.kinematics(Q): pose and Jacobian in one call"),
+        ):
+            cases.append(
+                Case(
+                    "throughput",
+                    name,
+                    n,
+                    lambda Q=Q, call=call: call(Q, frame),
+                    loop if timed else None,
+                    "; ".join(text for text in (note, untimed) if text),
+                    compare=timed,
+                    q=Q,
+                    floor=FLOOR_LOOP,
+                )
+            )
+        cases.append(
             Case(
                 "throughput",
                 "kinematics[out=]",
@@ -283,8 +226,8 @@ def throughput_cases(
                 "preallocated out=(T, J)",
                 compare=timed,
                 floor=FLOOR_LOOP,
-            ),
-        ]
+            )
+        )
         if n > loop_max:
             continue
         for rot in ("euler_zyx", "quaternion"):
