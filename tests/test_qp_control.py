@@ -395,6 +395,22 @@ def test_a_free_steps_status_is_built_from_that_step_when_read(abb):
     assert ik.status is not status and ik.status.step == 4
 
 
+def test_a_joint_outside_its_limits_is_driven_back_and_named(abb):
+    """q beyond joint_1's upper limit: its step is the velocity limit back toward the range (the formula's
+    bounds have no solution), the status names it, and after enough steps it is back in its range."""
+    q = REGULAR.copy()
+    q[0] = abb.upper_limits[0] + 0.1
+    ik = DifferentialIK(abb, [PoseTarget("tool0", abb.frame_pose(q, "tool0"))])
+    qdot, status = ik.solve(q, 0.01, info=True)
+    assert qdot[0] == pytest.approx(-ik.velocity_limits[0], rel=1e-9)
+    assert status.outside_limits == ("joint_1",)
+    for _ in range(5):
+        q = q + ik.solve(q, 0.01) * 0.01
+    assert q[0] <= abb.upper_limits[0] + 1e-12
+    ik.solve(q, 0.01)
+    assert ik.status.outside_limits == ()
+
+
 # -- papercuts -------------------------------------------------------------------------------------
 def test_velocity_and_effort_limits_come_from_the_urdf(panda):
     joints = {j.name: j for j in panda.description.joints}

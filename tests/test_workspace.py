@@ -332,6 +332,41 @@ def test_base_placement_finds_the_base_the_task_was_made_with(abb):
     np.testing.assert_allclose(result.best[:3, 3], base[:3, 3], atol=0.25)
 
 
+def test_base_placement_for_one_task_pose_picks_a_base_ik_verifies(abb):
+    """One task pose ties thousands of candidates at score 1; the tie is broken by the voxel's
+    reachability index, so the re-checked ones (and the best) reach the pose by IK."""
+    rmap = reachability_map(abb, voxel=0.05, orientations=30, progress=False)
+    for seed in range(4):
+        T = abb.frame_pose(abb.random_configuration(rng=seed))
+        result = base_placements(rmap, T[None], yaws=16)
+        best = result.order[0]
+        assert result.verified[best] == 1
+        assert result.depth[best] == pytest.approx(
+            rmap.index[rmap.grid.lookup((np.linalg.inv(result.best) @ T)[None, :3, 3])[0]]
+        )
+        assert abb.ik_solutions(np.linalg.inv(result.best) @ T).reachable
+
+
+def test_base_placement_warns_when_no_candidate_is_verified(abb_map, abb):
+    T = abb.frame_pose(abb.neutral())  # the only candidate base stands 10 m above it: out of reach
+    with pytest.warns(UserWarning, match="none of the 1 best-scored base poses reaches a task pose by IK"):
+        result = base_placements(abb_map, T[None], xy=[[0.0, 0.0]], yaws=[0.0], z=10.0, top=1)
+    assert result.verified.max() == 0
+
+
+def test_maps_compare_equal_by_value_and_refuse_non_rotations(abb_map, tmp_path):
+    abb_map.save(tmp_path / "m.npz")
+    again = ReachabilityMap.load(tmp_path / "m.npz")
+    assert again == abb_map and again is not abb_map
+    other = ReachabilityMap.load(tmp_path / "m.npz")
+    object.__setattr__(other, "reached", ~other.reached)
+    assert other != abb_map
+    with pytest.raises(OptionError, match="not a rotation matrix"):
+        abb_map.reachable(2 * np.eye(4))
+    with pytest.raises(OptionError, match="cannot write the reachability map to .*nonexistent"):
+        abb_map.save(tmp_path / "nonexistent" / "x.npz")
+
+
 def test_base_placement_arguments_are_checked(abb_map):
     with pytest.raises(OptionError, match="targets"):
         base_placements(abb_map, np.eye(3))

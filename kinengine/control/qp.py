@@ -164,6 +164,7 @@ class DifferentialIK:
             self.stall_residual,
             self.warn_on_stall,
         )
+        self._monitor.lower, self._monitor.upper = self._limits.lower, self._limits.upper
 
     @property
     def status(self) -> DiffIKStatus:
@@ -247,7 +248,7 @@ class DifferentialIK:
         if self._limits.has_acceleration:  # the next step's acceleration bounds start from it
             self._qdot = qdot.copy()
         monitor = self._monitor
-        monitor.record(status, scale, step, lb, ub, G, h, math.sqrt(residual_sq))
+        monitor.record(status, scale, step, lb, ub, G, h, math.sqrt(residual_sq), q)
         return (qdot, monitor.status) if info else qdot
 
     def _level_terms(

@@ -29,6 +29,8 @@ class DiffIKStatus:
     the extra inequality blocks. residual: ‖e‖ of every PoseTarget's selected rows at q, before the step
     ([m] and [rad] mixed). stalled: the residual has not decreased by ``stall_decrease`` over the last
     ``stall_window`` steps, all of which had a bound active, and is above ``stall_residual``.
+    outside_limits: the coordinates whose q was outside its position limits at the step; each is driven
+    back toward its range as fast as its velocity (and acceleration) limit allows, whatever the tasks ask.
     """
 
     qp_status: str
@@ -40,6 +42,7 @@ class DiffIKStatus:
     scale: float = 1.0
     step: int = 0
     active_joints: tuple[str, ...] = ()
+    outside_limits: tuple[str, ...] = ()
 
     @property
     def bounds_active(self) -> bool:
@@ -78,6 +81,9 @@ class StatusMonitor:
         # the last step's values, made a DiffIKStatus only when read: (qp status, scale, active lower,
         # active upper, active rows (None: m rows, none active), m, residual, stalled)
         self._last: tuple = ()
+        self._q = np.zeros(n)
+        self.lower, self.upper = np.full(n, -np.inf), np.full(n, np.inf)
+        """The position limits ``outside_limits`` is judged against (set by DifferentialIK)."""
 
     @property
     def status(self) -> DiffIKStatus:
@@ -86,8 +92,18 @@ class StatusMonitor:
             status, scale, lower, upper, rows, m, residual, stalled = self._last
             if rows is None:
                 rows = self._no_rows if not m else np.zeros(m, dtype=bool)
+            outside = (self._q < self.lower) | (self._q > self.upper)
             self._status = DiffIKStatus(
-                status, lower, upper, rows, residual, stalled, scale, self._steps, self._names(lower, upper)
+                status,
+                lower,
+                upper,
+                rows,
+                residual,
+                stalled,
+                scale,
+                self._steps,
+                self._names(lower, upper),
+                tuple(name for name, out in zip(self.joint_names, outside, strict=True) if out),
             )
         return self._status
 
@@ -106,10 +122,12 @@ class StatusMonitor:
         G: np.ndarray,
         h: np.ndarray,
         residual: float,
+        q: np.ndarray,
     ) -> None:
-        """Record a step (Δq ``step`` within lb <= Δq <= ub, G Δq <= h): stall test and warning; the
+        """Record a step (Δq ``step`` from q within lb <= Δq <= ub, G Δq <= h): stall test and warning; the
         :class:`DiffIKStatus` is built when :attr:`status` is read."""
         self._steps += 1
+        self._q[:] = q
         self._status = None
         history = self._history
         history.append(residual)

@@ -3,13 +3,17 @@
 A candidate base pose B = Trans(x, y, z)·Rot_z(yaw) places the robot's root link frame in the world. A
 task pose T_W (4, 4) in the world is T = B⁻¹ T_W in the root link frame; it scores when the map reached
 its cell (voxel and nearest orientation). Every candidate of a planar grid × yaws is scored by the
-number of task poses that score; the best ``top`` are re-checked by inverse kinematics on the real task
-poses (``verified``: how many are solved within the joint limits) and ranked by that count first.
+number of task poses that score, ties broken by the sum of the reachability indices of their voxels (a
+task pose in a voxel reached from most orientations is more likely reached at its own); the best ``top``
+are re-checked by inverse kinematics on the real task poses (``verified``: how many are solved within the
+joint limits) and ranked by that count first. A cell is coarser than a pose, so a score can promise more
+than IK delivers: when no re-checked candidate is verified for any task pose, a warning says so.
 """
 
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -31,15 +35,17 @@ class BasePlacements:
     """Candidate base poses and their scores.
 
     ``poses`` (C, 4, 4) base poses in the world [m]; ``xy`` (C, 2) [m], ``yaw`` (C,) [rad], ``z`` [m];
-    ``scores`` (C,) task poses whose map cell is reached; ``order`` (C,) candidates best first (verified
-    count, then score); ``verified`` (C,) task poses solved by IK (−1 where not re-checked); ``best`` (4, 4)
-    the first of ``order``; ``targets`` (N, 4, 4) the task poses in the world."""
+    ``scores`` (C,) task poses whose map cell is reached; ``depth`` (C,) the sum of their voxels'
+    reachability indices; ``order`` (C,) candidates best first (verified count, then score, then depth);
+    ``verified`` (C,) task poses solved by IK (−1 where not re-checked); ``best`` (4, 4) the first of
+    ``order``; ``targets`` (N, 4, 4) the task poses in the world."""
 
     poses: npt.NDArray[np.float64]
     xy: npt.NDArray[np.float64]
     yaw: npt.NDArray[np.float64]
     z: float
     scores: npt.NDArray[np.int64]
+    depth: npt.NDArray[np.float64]
     verified: npt.NDArray[np.int64]
     order: npt.NDArray[np.intp]
     targets: npt.NDArray[np.float64]
@@ -115,21 +121,34 @@ def base_placements(
     poses[:, 2, 2] = poses[:, 3, 3] = 1.0
     poses[:, 0, 3], poses[:, 1, 3], poses[:, 2, 3] = XY[:, 0], XY[:, 1], float(z)
     scores = np.zeros(len(poses), dtype=np.int64)
+    depth = np.zeros(len(poses))
     inverse = np.linalg.inv(poses)
+    index = np.append(rmap.index, 0.0)  # [-1]: outside the map
     step = max(1, 2_000_000 // len(T_w))  # candidates scored at once: bounded temporary memory
     for a in range(0, len(poses), step):
         local = np.einsum("cij,njk->cnik", inverse[a : a + step], T_w).reshape(-1, 4, 4)
-        scores[a : a + step] = np.asarray(rmap.reachable(local)).reshape(-1, len(T_w)).sum(axis=1)
+        hit = np.asarray(rmap.reachable(local)).reshape(-1, len(T_w))
+        scores[a : a + step] = hit.sum(axis=1)
+        voxel_index = index[rmap.grid.lookup(local[:, :3, 3])].reshape(-1, len(T_w))
+        depth[a : a + step] = np.where(hit, voxel_index, 0.0).sum(axis=1)
     if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
         raise OptionError(f"`top` must be a positive count, got {top!r}")
     verified = np.full(len(poses), -1, dtype=np.int64)
     if robot is None:
         robot = rmap.robot()
     frame = rmap.metadata["frame"]
-    for i in np.argsort(-scores, kind="stable")[:top]:
+    for i in np.lexsort((-depth, -scores))[:top]:
         verified[i] = _solved(robot, frame, inverse[i] @ T_w, rmap.metadata["method"])
-    order = np.lexsort((-scores, -verified))
-    return BasePlacements(poses, XY, YAW, float(z), scores, verified, order, T_w)
+    order = np.lexsort((-depth, -scores, -verified))
+    if verified.max() == 0:
+        warnings.warn(
+            f"none of the {min(top, len(poses))} best-scored base poses reaches a task pose by IK (the map's "
+            "cells are coarser than the poses): raise `top`, or use a map with a finer voxel and more "
+            "orientations",
+            UserWarning,
+            stacklevel=2,
+        )
+    return BasePlacements(poses, XY, YAW, float(z), scores, depth, verified, order, T_w)
 
 
 def _solved(robot: Robot, frame: str, T: np.ndarray, method: str) -> int:

@@ -38,7 +38,7 @@ METHODS = ("auto", "closed_form", "numeric")
 Progress = bool | Callable[[int, int], None]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ReachabilityMap:
     """A computed reachability map.
 
@@ -46,7 +46,8 @@ class ReachabilityMap:
     fraction of the O orientations reached; ``manipulability`` (V,) the best Yoshikawa measure among the
     voxel's reached poses (0 where none); ``orientations`` (O, 3, 3) rotations C_IF; ``metadata`` (robot,
     frame, urdf_sha256, voxel, grid, method, kinengine version); ``stats`` of the run that produced it
-    (chunks computed and resumed, seconds)."""
+    (chunks computed and resumed, seconds). Two maps are equal (``==``) when their arrays and metadata are;
+    ``stats`` do not count."""
 
     centers: npt.NDArray[np.float64]
     reached: npt.NDArray[np.bool_]
@@ -80,6 +81,11 @@ class ReachabilityMap:
             raise OptionError("`T` must be a pose (4, 4) or poses (N, 4, 4)")
         if not np.all(np.isfinite(T)):
             raise OptionError("`T` holds NaN or inf: a pose T_IF (4, 4) has finite entries")
+        C = T[:, :3, :3]
+        if np.any(np.abs(np.einsum("nki,nkj->nij", C, C) - np.eye(3)) > 1e-6) or np.any(
+            np.linalg.det(C) <= 0
+        ):
+            raise OptionError("`T`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)")
         v = self.grid.lookup(T[:, :3, 3])
         k = nearest_orientation(self.orientations, T[:, :3, :3])
         out = (v >= 0) & self.reached[np.maximum(v, 0), k]
@@ -130,8 +136,17 @@ class ReachabilityMap:
         return robot
 
     def save(self, path: str | os.PathLike[str]) -> None:
-        """Write the map: ``*.npz`` (numpy, no extra needed) or a Zarr store (any other path or URL)."""
+        """Write the map: ``*.npz`` (numpy, no extra needed) or a Zarr store (any other path or URL);
+        OptionError naming the path when it cannot be written."""
         path = os.fspath(path)
+        try:
+            self._save(path)
+        except OSError as exc:
+            raise OptionError(
+                f"cannot write the reachability map to {path!r}: {exc.strerror or exc}"
+            ) from None
+
+    def _save(self, path: str) -> None:
         if path.endswith(".npz"):
             np.savez_compressed(
                 path,
@@ -193,6 +208,16 @@ class ReachabilityMap:
             np.asarray(group["cells"][:]),
             dict(metadata),
         )
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, ReachabilityMap):
+            return NotImplemented
+        arrays = ("centers", "reached", "manipulability", "orientations", "cells")
+        return self.metadata == other.metadata and all(
+            np.array_equal(getattr(self, name), getattr(other, name)) for name in arrays
+        )
+
+    __hash__ = None  # type: ignore[assignment]
 
     def __repr__(self) -> str:
         reached = float(self.index.mean()) if len(self.centers) else 0.0
