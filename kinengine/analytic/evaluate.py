@@ -76,11 +76,10 @@ def analytic_function(
     if kin.dof == 0:
         return lambda q: analytic_single(kin, q, fid, pmap, threshold)
     local = threading.local()
-    jacobian_single, rotation = pmap.jacobian_single, pmap.rotation
-    plain = pmap.rows is None and (pmap.position is None or pmap.position.name == "cartesian")
-    rate = None if rotation is None or not plain else rotation.pose_rate
-    _, _, _, template, pack_into, offset, shape = pmap.layout.fast
-    first = shape[0] - (0 if rotation is None else rotation.size)  # E_R's first row in E
+    jacobian_single, template, shape = pmap.jacobian_single, pmap.layout.template, pmap.layout.shape
+    pack_into, offset = pmap.layout.pack_into, pmap.layout.offset
+    plain = pmap.rows is None and pmap.formula_parts == (pmap.rotation,)  # E = blockdiag(I or none, E_R)
+    chart = pmap.rotation.chart if plain and pmap.rotation is not None else None
 
     def thread_path() -> tuple[np.ndarray, np.ndarray, Callable[..., np.ndarray], np.ndarray]:
         """This thread's (C, p) views, unchecked frame Jacobian and E = blockdiag(I, E_R) (m, 6) buffer."""
@@ -89,7 +88,7 @@ def analytic_function(
         return local.path
 
     def evaluate(q: np.ndarray) -> npt.NDArray[np.float64]:
-        """J_A = E·J_e0 with E_R from the rotation's :meth:`pose_rate` at regular poses (written into this
+        """J_A = E·J_e0 with E_R from the rotation's :meth:`chart` at regular poses (written into this
         thread's E); any other pose map or pose takes :meth:`PoseMap.jacobian_single` (the error, or
         position formulas and row selections)."""
         try:
@@ -97,14 +96,12 @@ def analytic_function(
         except AttributeError:
             C, p, jacobian, E = thread_path()
         J = jacobian(q, "local_world_aligned")  # also places the frame: C and p show T_IF at q
-        found = None if rate is None else rate(C)
-        if found is None or not found[0] >= threshold:
-            return jacobian_single(C.tolist(), p.tolist(), J, threshold)
-        E_R = found[1]
-        if type(E_R) is tuple:  # the formulas' entries
-            pack_into(E, offset, *E_R)
-        else:
-            E[first:, 3:] = E_R
+        rows = C.tolist()
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = rows
+        found = None if chart is None else chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        if found is None or not found[1] >= threshold:  # (chart gives None at distance 0)
+            return jacobian_single(rows, p.tolist(), J, threshold)
+        pack_into(E, offset, *found[2])
         return E.dot(J)
 
     return evaluate

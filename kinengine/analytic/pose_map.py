@@ -33,6 +33,8 @@ from ..parameterizations.base import (
     Parameterization,
     PositionParameterization,
     RotationParameterization,
+    is_singular,
+    singular_where,
 )
 from .layout import Layout, combine
 from .singular import check_on_singularity, pose_of, singularity_error  # noqa: F401 (re-exported)
@@ -54,6 +56,8 @@ class PoseMap:
     layout: Layout = field(init=False, repr=False, compare=False)
     part_rows: tuple[tuple[int, ...], ...] = field(init=False, repr=False, compare=False)
     """Per part (in :attr:`parts` order), the indices of its rows among the selected rows."""
+    formula_parts: tuple[Parameterization, ...] = field(init=False, repr=False, compare=False)
+    """The parts whose E is computed (in :attr:`parts` order): all but Cartesian, whose E = I is constant."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layout", Layout(self.position, self.rotation))
@@ -64,6 +68,7 @@ class PoseMap:
             spans.append(tuple(i for i, r in enumerate(selected) if start <= r < start + part.size))
             start += part.size
         object.__setattr__(self, "part_rows", tuple(spans))
+        object.__setattr__(self, "formula_parts", tuple(p for p in self.parts if p.name != "cartesian"))
 
     @property
     def size(self) -> int:
@@ -104,7 +109,7 @@ class PoseMap:
             distances.append(np.asarray(param.singularity_distance(values), dtype=np.float64))
         distance = np.stack(distances, axis=-1)
         if nan:
-            below = ~(distance >= threshold) | (distance == 0.0)
+            below = singular_where(distance, threshold)
             for k, rows in enumerate(self.part_rows):
                 chi[..., list(rows)] = np.where(below[..., k : k + 1], np.nan, chi[..., list(rows)])
             return chi
@@ -154,38 +159,26 @@ class PoseMap:
         only goes into the error message. ``nan``: a part within ``threshold`` of its singular set gets NaN
         entries in E, hence NaN rows in J_A (no error). The error message states J_e0's rank.
         """
-        position_formula, position, rotation, template, pack_into, offset, shape = self.layout.fast
+        layout = self.layout
+        flat = (*C[0], *C[1], *C[2])
         entries: tuple[float, ...] = ()
-        param: Parameterization | None = position
-        try:
-            if position_formula and position is not None:
-                chi = position._from_position(math, *p)
-                distance = position._distance(math, *chi)
-                if not distance >= threshold or distance == 0.0:
-                    if not nan:
-                        raise singularity_error(position, distance, threshold, pose_of(C, p), row, J)
-                    entries = (math.nan,) * (3 * position.size)
-                else:
-                    entries = position._E(math, *chi)
-            param = rotation
-            if rotation is not None:
-                (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
-                chi = rotation._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)
-                distance = rotation._distance(math, *chi)
-                if not distance >= threshold or distance == 0.0:
-                    if not nan:
-                        raise singularity_error(rotation, distance, threshold, pose_of(C, p), row, J)
-                    entries += (math.nan,) * (3 * rotation.size)
-                else:
-                    entries += rotation._E(math, *chi)
-        except ZeroDivisionError:  # exactly on the singular set with threshold 0 (distance rounds above 0)
-            if nan:
-                return np.full((self.size, J.shape[1]), np.nan)
-            assert param is not None  # the parameterization whose formula divided by zero
-            raise singularity_error(param, 0.0, threshold, pose_of(C, p), row, J) from None
-        buffer = bytearray(template)
-        pack_into(buffer, offset, *entries)
-        JA = np.ndarray(shape, _F64, buffer).dot(J)
+        for param in self.formula_parts:
+            try:
+                chi = param._coordinates(math, p, flat)
+                distance = param._distance(math, *chi)
+                E = None if is_singular(distance, threshold) else param._E(math, *chi)
+            except (
+                ZeroDivisionError
+            ):  # exactly on the singular set with threshold 0 (distance rounds above 0)
+                distance, E = 0.0, None
+            if E is None:
+                if not nan:
+                    raise singularity_error(param, distance, threshold, pose_of(C, p), row, J)
+                E = (math.nan,) * (3 * param.size)
+            entries += E
+        buffer = bytearray(layout.template)
+        layout.pack_into(buffer, layout.offset, *entries)
+        JA = np.ndarray(layout.shape, _F64, buffer).dot(J)
         return JA if self.rows is None else JA[self.rows, :]
 
     def fill_columns(
@@ -203,11 +196,7 @@ class PoseMap:
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             blocks = (J[:3], J[3:]) if self.position is not None else (J[3:],)
             for param, block in zip(self.parts, blocks, strict=False):  # no rotation: J[3:] unused
-                if isinstance(param, PositionParameterization):
-                    chi = param._from_position(np, *p)
-                else:
-                    assert isinstance(param, RotationParameterization)  # parts: position, then rotation
-                    chi = param._from_rotation(np, False, *C)
+                chi = param._coordinates(np, p, C)
                 distances.append(param._distance(np, *chi))
                 E = param._E(np, *chi)
                 E_rows += [(E[k : k + 3], block) for k in range(0, len(E), 3)]
@@ -230,7 +219,7 @@ class PoseMap:
         jacobian(row) its J_e0 (6, dof) (for the robot's rank in the message). The error is the one a
         single call at that row raises (position checked before rotation).
         """
-        below = ~(distances >= threshold) | (distances == 0.0)  # NaN and exact zero: E had no finite value
+        below = singular_where(distances, threshold)
         if below.any():
             row = int(np.argmax(below.any(axis=1)))
             part = int(np.argmax(below[row]))
@@ -245,7 +234,7 @@ class PoseMap:
 
     def nan_where_singular(self, distances: np.ndarray, threshold: float, out: np.ndarray) -> None:
         """NaN in out (N, m, dof)'s rows of every part within ``threshold`` of its singular set, per row."""
-        below = ~(distances >= threshold) | (distances == 0.0)
+        below = singular_where(distances, threshold)
         for k, rows in enumerate(self.part_rows):
             hit = np.flatnonzero(below[:, k])
             if hit.size and rows:

@@ -13,23 +13,13 @@ import numpy as np
 from .base import SMALL_ANGLE_SQ, Component, Entries, Namespace
 
 
-def quaternion_from_matrix(
-    xp: Namespace,
-    c00: Component,
-    c01: Component,
-    c02: Component,
-    c10: Component,
-    c11: Component,
-    c12: Component,
-    c20: Component,
-    c21: Component,
-    c22: Component,
-) -> tuple[Component, Component, Component, Component]:
-    """Unit quaternion (w, x, y, z) of C_IE, canonical like scipy's ``as_quat(canonical=True)``.
+def quaternion_from_matrix(xp: Namespace, *C: Component) -> tuple[Component, Component, Component, Component]:
+    """Unit quaternion (w, x, y, z) of C_IE (9 entries, row-major), like scipy's ``as_quat(canonical=True)``.
 
     Canonical: w > 0, or w = 0 and the first nonzero of (x, y, z) > 0. The case split on the largest
     of (C00, C11, C22, trace) is scipy's (Shepperd's method), so results match scipy to rounding.
     """
+    c00, c01, c02, c10, c11, c12, c20, c21, c22 = C
     trace = c00 + c11 + c22
     if xp is math:
         best = max(c00, c11, c22, trace)  # the first maximum, like numpy's argmax
