@@ -22,49 +22,24 @@ ANALYTIC_CALLS = 100
 of the analytic single-call loop costs about twice a row of Pinocchio's pose and Jacobian loop."""
 
 
-def frame_views(data: pin.Data, fid: int) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """(C_IF (3, 3), p (3,)) as live views of ``data.oMf[fid]``: every placement update shows in them.
-
-    Valid as long as ``data`` lives; reading them costs a third of building ``.homogeneous``.
-    """
-    placement = data.oMf[fid]
-    return placement.rotation, placement.translation
-
-
-def analytic_at(
+def analytic_single(
     kin: Kinematics,
     q: np.ndarray,
     fid: int,
-    views: tuple[np.ndarray, np.ndarray],
     pmap: PoseMap,
     threshold: float,
-    row: int | None = None,
     nan: bool = False,
+    row: int | None = None,
 ) -> npt.NDArray[np.float64]:
-    """J_A (m, dof) at one checked q (dof,). ``views``: :func:`frame_views` of this thread's Data and frame.
-    ``nan``: NaN rows for a parameterization within ``threshold`` of its singular set instead of the error."""
+    """J_A (m, dof) at one checked q, with this thread's views of the frame's placement and its unchecked
+    handle (which writes and folds only the mimic joints that move the frame). ``nan``: NaN rows for a
+    parameterization within ``threshold`` of its singular set instead of the error; ``row`` (a batch row)
+    only goes into the error message."""
+    (C, p), jacobian, pose = kin.per_thread(("analytic", fid), lambda: _single_path(kin, fid))
+    J = jacobian(q, "local_world_aligned")  # places the frame too (but a 0-dof Jacobian is zeros)
     if kin.dof == 0:
-        kin.pose(q, fid)  # places the frame for the views; a 0-dof Jacobian is (6, 0)
-        J = np.zeros((6, 0))
-    else:  # in LOCAL_WORLD_ALIGNED, computeFrameJacobian also places the frame (data.oMf[fid])
-        J = pin.computeFrameJacobian(
-            kin.model, kin.data(), kin.coordinates.to_pinocchio(q), fid, pin.LOCAL_WORLD_ALIGNED
-        )
-        J = kin.coordinates.fold(J.reshape(6, -1))  # eigenpy returns a (6, 1) matrix as (6,)
-    return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, row, nan)
-
-
-def analytic_single(
-    kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float, nan: bool = False
-) -> npt.NDArray[np.float64]:
-    """J_A (m, dof) at one checked q, with this thread's cached views of the frame and the frame's unchecked
-    handle (which writes and folds only the mimic joints that move the frame)."""
-    if kin.dof == 0:
-        views = kin.per_thread(("frame views", fid), lambda: frame_views(kin.data(), fid))
-        return analytic_at(kin, q, fid, views, pmap, threshold, nan=nan)
-    views, jacobian = kin.per_thread(("analytic", fid), lambda: _single_path(kin, fid))
-    J = jacobian(q, "local_world_aligned")  # also places the frame: the views show T_IF at q
-    return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, None, nan)
+        pose(q)
+    return pmap.jacobian_single(C.tolist(), p.tolist(), J, threshold, row, nan)
 
 
 def analytic_function(
@@ -83,7 +58,7 @@ def analytic_function(
 
     def thread_path() -> tuple[np.ndarray, np.ndarray, Callable[..., np.ndarray], np.ndarray]:
         """This thread's (C, p) views, unchecked frame Jacobian and E = blockdiag(I, E_R) (m, 6) buffer."""
-        (C, p), jacobian = _single_path(kin, fid)
+        (C, p), jacobian, _ = _single_path(kin, fid)
         local.path = C, p, jacobian, np.frombuffer(bytearray(template)).reshape(shape)
         return local.path
 
@@ -107,12 +82,11 @@ def analytic_function(
     return evaluate
 
 
-def _single_path(
-    kin: Kinematics, fid: int
-) -> tuple[tuple[np.ndarray, np.ndarray], Callable[[np.ndarray, str], npt.NDArray[np.float64]]]:
+def _single_path(kin: Kinematics, fid: int) -> tuple[tuple[np.ndarray, np.ndarray], Callable, Callable]:
+    """((C_IF, p) views, J_e0(q, reference), T_IF(q)) of the frame's unchecked handle in this thread."""
     name = next(n for n, i in kin.frame_ids.items() if i == fid)
     handle = FrameHandle(kin, name, check_inputs=False)
-    return handle.placement(), handle.jacobian  # views of the Data the handle's Jacobian places
+    return handle.placement(), handle.jacobian, handle.pose  # views of the Data the handle's calls place
 
 
 def analytic_batch(
@@ -187,17 +161,15 @@ def _analytic_loop(
     out: np.ndarray,
     nan: bool = False,
 ) -> npt.NDArray[np.float64]:
-    views = frame_views(kin.data(), fid)
     for i, qi in enumerate(Q):
-        out[i] = analytic_at(kin, qi, fid, views, pmap, threshold, i, nan)
+        out[i] = analytic_single(kin, qi, fid, pmap, threshold, nan, i)
     return out
 
 
 __all__ = [
     "ANALYTIC_CALLS",
-    "analytic_at",
     "analytic_batch",
+    "analytic_function",
     "analytic_relative",
     "analytic_single",
-    "frame_views",
 ]
