@@ -93,7 +93,6 @@ class PoseMap:
         ``J(row)`` gives that pose's geometric Jacobian for the message) or gets NaN in that part's rows.
         """
         parts: list[npt.NDArray[np.float64]] = []
-        distances: list[npt.NDArray[np.float64]] = []
         with warnings.catch_warnings():
             if threshold is not None:
                 warnings.simplefilter("ignore", UserWarning)
@@ -101,28 +100,20 @@ class PoseMap:
                 parts.append(self.position.from_position(T[..., :3, 3]))
             if self.rotation is not None:
                 parts.append(self.rotation.from_rotation(T[..., :3, :3]))
-        chi = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
+        chi = np.concatenate(parts, axis=-1)
         chi = chi if self.rows is None else chi[..., self.rows]
         if threshold is None:
             return chi
-        for param, values in zip(self.parts, parts, strict=False):
-            distances.append(np.asarray(param.singularity_distance(values), dtype=np.float64))
-        distance = np.stack(distances, axis=-1)
+        distances = [
+            np.asarray(param.singularity_distance(x)) for param, x in zip(self.parts, parts, strict=True)
+        ]
+        distance = np.stack(distances, axis=-1).reshape(-1, len(parts))  # (N, parts), N = 1 for one pose
+        single, poses = T.ndim == 2, T.reshape(-1, 4, 4)
         if nan:
-            below = singular_where(distance, threshold)
-            for k, rows in enumerate(self.part_rows):
-                chi[..., list(rows)] = np.where(below[..., k : k + 1], np.nan, chi[..., list(rows)])
-            return chi
-        if T.ndim == 2:
-            self.raise_if_singular(
-                distance[None],
-                threshold,
-                lambda row: T,
-                None if J is None else (lambda row: J(None)),
-                single=True,
-            )
+            self.nan_where_singular(distance, threshold, chi.reshape(-1, self.size))  # a view: NaN into chi
         else:
-            self.raise_if_singular(distance, threshold, lambda row: T[row], J)
+            jacobian = None if J is None else (lambda row: J(None if single else row))
+            self.raise_if_singular(distance, threshold, lambda row: poses[row], jacobian, single)
         return chi
 
     def jacobian(
@@ -233,7 +224,7 @@ class PoseMap:
             )
 
     def nan_where_singular(self, distances: np.ndarray, threshold: float, out: np.ndarray) -> None:
-        """NaN in out (N, m, dof)'s rows of every part within ``threshold`` of its singular set, per row."""
+        """NaN in out (N, m, ...)'s rows of every part within ``threshold`` of its singular set, per row."""
         below = singular_where(distances, threshold)
         for k, rows in enumerate(self.part_rows):
             hit = np.flatnonzero(below[:, k])

@@ -68,19 +68,10 @@ class AngleAxis(RotationParameterization):
         s, half = xp.sin(theta), xp.sin(0.5 * theta)
         v = 2.0 * half * half  # 1 − cos θ
         return (
-            nx,
-            s * (1.0 - nx * nx),
-            -s * nx * ny - v * nz,
-            -s * nx * nz + v * ny,
-            ny,
-            -s * nx * ny + v * nz,
-            s * (1.0 - ny * ny),
-            -s * ny * nz - v * nx,
-            nz,
-            -s * nx * nz - v * ny,
-            -s * ny * nz + v * nx,
-            s * (1.0 - nz * nz),
-        )
+            nx, s * (1.0 - nx * nx), -s * nx * ny - v * nz, -s * nx * nz + v * ny,
+            ny, -s * nx * ny + v * nz, s * (1.0 - ny * ny), -s * ny * nz - v * nx,
+            nz, -s * nx * nz - v * ny, -s * ny * nz + v * nx, s * (1.0 - nz * nz),
+        )  # fmt: skip
 
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         theta, nx, ny, nz = chi

@@ -207,6 +207,13 @@ class PositionParameterization(Parameterization):
     def _coordinates(self, xp: Namespace, p: Values, C: Values) -> Entries:
         return self._from_position(xp, *p)
 
+    def _azimuth(self, xp: Namespace, x: Component, y: Component) -> tuple[Component, Component]:
+        """(ρ, θ) = (√(x² + y²), atan2(y, x)) [m, rad] of a point; a UserWarning on the z axis (ρ = 0), where
+        the azimuth θ is undefined (atan2(0, 0) = 0)."""
+        rho = xp.sqrt(x * x + y * y)
+        warn_where(xp, rho == 0.0, f"{self.name}: point on the z axis (ρ = 0); azimuth θ undefined, set to 0")
+        return rho, xp.atan2(y, x)
+
     @abstractmethod
     def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries: ...
 

@@ -182,35 +182,19 @@ class EulerAngles(RotationParameterization):
             r = 1.0 / s2
             k = c2 * r
             d1 = wa - s1 * k * wb + e * c1 * k * wt  # χ̇1
-            return self._to_columns(
-                (
-                    0.0,
-                    -c1 * k * d1 + s1 * r * r * d2,
-                    -e * (s1 * k * d1 + c1 * r * r * d2),
-                    0.0,
-                    -s1 * d1,
-                    e * c1 * d1,
-                    0.0,
-                    c1 * r * d1 - s1 * k * r * d2,
-                    e * (s1 * r * d1 + c1 * k * r * d2),
-                )
-            )
+            return self._to_columns((
+                0.0, -c1 * k * d1 + s1 * r * r * d2, -e * (s1 * k * d1 + c1 * r * r * d2),
+                0.0, -s1 * d1, e * c1 * d1,
+                0.0, c1 * r * d1 - s1 * k * r * d2, e * (s1 * r * d1 + c1 * k * r * d2),
+            ))  # fmt: skip
         r = 1.0 / c2
         t = s2 * r
         d1 = wa + s1 * t * wb - e * c1 * t * wt
-        return self._to_columns(
-            (
-                0.0,
-                c1 * t * d1 + s1 * r * r * d2,
-                e * (s1 * t * d1 - c1 * r * r * d2),
-                0.0,
-                -s1 * d1,
-                e * c1 * d1,
-                0.0,
-                -e * (c1 * r * d1 + s1 * t * r * d2),
-                -s1 * r * d1 + c1 * t * r * d2,
-            )
-        )
+        return self._to_columns((
+            0.0, c1 * t * d1 + s1 * r * r * d2, e * (s1 * t * d1 - c1 * r * r * d2),
+            0.0, -s1 * d1, e * c1 * d1,
+            0.0, -e * (c1 * r * d1 + s1 * t * r * d2), -s1 * r * d1 + c1 * t * r * d2,
+        ))  # fmt: skip
 
     def _distance(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Component:
         return abs(xp.sin(chi2)) if self._proper else abs(xp.cos(chi2))
