@@ -21,26 +21,19 @@ def quaternion_from_matrix(xp: Namespace, *C: Component) -> tuple[Component, Com
     """
     c00, c01, c02, c10, c11, c12, c20, c21, c22 = C
     trace = c00 + c11 + c22
-    if xp is math:
-        best = max(c00, c11, c22, trace)  # the first maximum, like numpy's argmax
-        if best == c00:
-            x, y, z, w = 1.0 - trace + 2.0 * c00, c10 + c01, c20 + c02, c21 - c12
-        elif best == c11:
-            x, y, z, w = c10 + c01, 1.0 - trace + 2.0 * c11, c21 + c12, c02 - c20
-        elif best == c22:
-            x, y, z, w = c20 + c02, c21 + c12, 1.0 - trace + 2.0 * c22, c10 - c01
-        else:
-            x, y, z, w = c21 - c12, c02 - c20, c10 - c01, 1.0 + trace
-        norm = math.sqrt(x * x + y * y + z * z + w * w)
-        if w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0))))):
-            norm = -norm
-        return w / norm, x / norm, y / norm, z / norm
-    cases = (
+    cases = (  # 4x·(x, y, z, w), 4y·(...), 4z·(...), 4w·(...): Shepperd's case for C00, C11, C22, trace
         (1.0 - trace + 2.0 * c00, c10 + c01, c20 + c02, c21 - c12),
         (c10 + c01, 1.0 - trace + 2.0 * c11, c21 + c12, c02 - c20),
         (c20 + c02, c21 + c12, 1.0 - trace + 2.0 * c22, c10 - c01),
         (c21 - c12, c02 - c20, c10 - c01, 1.0 + trace),
     )
+    if xp is math:
+        diagonal = (c00, c11, c22, trace)
+        x, y, z, w = cases[diagonal.index(max(diagonal))]  # the first maximum, like numpy's argmax
+        norm = math.sqrt(x * x + y * y + z * z + w * w)
+        if w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0))))):
+            norm = -norm
+        return w / norm, x / norm, y / norm, z / norm
     choice = np.argmax(np.stack([c00, c11, c22, trace], axis=-1), axis=-1)
     x, y, z, w = (np.choose(choice, [case[k] for case in cases]) for k in range(4))
     norm = np.sqrt(x * x + y * y + z * z + w * w)
