@@ -21,7 +21,6 @@ import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -129,10 +128,8 @@ class PoseMap:
         (``nan``: NaN in that parameterization's rows instead).
         Batches: :func:`kinengine.batch.analytic_jacobian` (with :meth:`fill_columns`).
         """
-        (c0, c1, c2, px), (c3, c4, c5, py), (c6, c7, c8, pz), _ = T.tolist()
-        return self.jacobian_single(
-            ((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J, threshold, nan=nan
-        )
+        rows = T.tolist()[:3]
+        return self.jacobian_single([r[:3] for r in rows], [r[3] for r in rows], J, threshold, nan=nan)
 
     def jacobian_single(
         self,
@@ -158,9 +155,7 @@ class PoseMap:
                 chi = param._coordinates(math, p, flat)
                 distance = param._distance(math, *chi)
                 E = None if is_singular(distance, threshold) else param._E(math, *chi)
-            except (
-                ZeroDivisionError
-            ):  # exactly on the singular set with threshold 0 (distance rounds above 0)
+            except ZeroDivisionError:  # on the singular set with threshold 0 (the distance rounded above 0)
                 distance, E = 0.0, None
             if E is None:
                 if not nan:
@@ -233,7 +228,6 @@ class PoseMap:
 
 
 _F64 = np.dtype(np.float64)
-_P = TypeVar("_P", bound=Parameterization)
 
 
 @lru_cache(maxsize=256)
@@ -246,8 +240,8 @@ def pose_map(
             "position and rotation are both None: choose at least one, e.g. "
             "position='cartesian' or rotation='quaternion'"
         )
-    p = None if position is None else _lookup(get_position, position)
-    r = None if rotation is None else _lookup(get_rotation, rotation)
+    p = None if position is None else get_position(position)
+    r = None if rotation is None else get_rotation(rotation)
     labels = (tuple(p.labels) if p else ()) + (tuple(r.labels) if r else ())
     if rows is None:
         return PoseMap(p, r, labels, None)
@@ -266,12 +260,6 @@ def pose_map(
     if len(set(index)) != len(index):
         raise ParameterizationError(f"rows {rows} select a row twice")
     return PoseMap(p, r, tuple(labels[i] for i in index), tuple(index))
-
-
-def _lookup(getter: Callable[[str], _P], name: object) -> _P:
-    if not isinstance(name, str):
-        raise ParameterizationError(f"parameterization names are strings, got {name!r}")
-    return getter(name)
 
 
 def as_rows(rows: Sequence[str | int] | str | None) -> tuple[str | int, ...] | None:

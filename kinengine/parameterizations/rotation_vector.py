@@ -86,17 +86,13 @@ def _inverse_left_jacobian(xp: Namespace, t: Component, x: Component, y: Compone
 def _log_by_quaternion(xp: Namespace, *C: Component) -> Entries:
     """φ from the canonical quaternion of C (scipy's ``as_rotvec``, θ <= π, its sign rule at θ = π)."""
     w, x, y, z = quaternion_from_matrix(xp, *C)
-    s2 = x * x + y * y + z * z  # sin²(θ/2)
-    if xp is math:
-        scale = (
-            2.0 / w * (1.0 - s2 / (3.0 * w * w))
-            if s2 < _TINY_SIN2
-            else 2.0 * math.atan2(math.sqrt(s2), w) / math.sqrt(s2)
-        )
-    else:
-        small = s2 < _TINY_SIN2
-        s = np.sqrt(np.where(small, 1.0, s2))
-        scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.arctan2(s, w) / s)
+    scale = series_or_closed(  # θ / sin(θ/2) of s2 = sin²(θ/2)
+        xp,
+        x * x + y * y + z * z,
+        lambda s2: 2.0 / w * (1.0 - s2 / (3.0 * w * w)),
+        lambda xp, s2: 2.0 * xp.atan2(xp.sqrt(s2), w) / xp.sqrt(s2),
+        _TINY_SIN2,
+    )
     return scale * x, scale * y, scale * z
 
 
