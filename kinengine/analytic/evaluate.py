@@ -17,6 +17,7 @@ from ..kinematics.engine import Kinematics
 from ..kinematics.handle import FrameHandle
 from .pose_map import PoseMap
 
+LWA = pin.LOCAL_WORLD_ALIGNED
 ANALYTIC_CALLS = 100
 """numpy calls for χ, E and E·J_e0 over a chunk (about; they vary with the parameterization). A row
 of the analytic single-call loop costs about twice a row of Pinocchio's pose and Jacobian loop."""
@@ -107,24 +108,20 @@ def analytic_batch(
         else batch.compiled_chain(kin, fid)
     )
     if chain is None:
-        return _analytic_loop(kin, Q, fid, pmap, threshold, out, nan)
+        for i, qi in enumerate(Q):
+            out[i] = analytic_single(kin, qi, fid, pmap, threshold, nan, i)
+        return out
     distances = np.empty((n, len(pmap.parts)))
     batch.run_chain(chain, Q, None, None, pin.LOCAL_WORLD_ALIGNED, (pmap, out, distances))
     if nan:
         pmap.nan_where_singular(distances, threshold, out)
-        return out
-
-    def pose(row: int) -> npt.NDArray[np.float64]:
-        T, _ = batch.evaluate(kin, Q[row : row + 1], fid, None, jacobian=False)
-        assert T is not None  # pose=True (the default): the poses are computed
-        return T[0]
-
-    pmap.raise_if_singular(
-        distances,
-        threshold,
-        pose,
-        lambda row: kin.jacobian(Q[row], fid, pin.LOCAL_WORLD_ALIGNED),
-    )
+    else:
+        pmap.raise_if_singular(
+            distances,
+            threshold,
+            lambda row: kin.pose(Q[row], fid),
+            lambda row: kin.jacobian(Q[row], fid, LWA),
+        )
     return out
 
 
@@ -149,20 +146,6 @@ def analytic_relative(
         pmap.nan_where_singular(distances, threshold, out)
     else:
         pmap.raise_if_singular(distances, threshold, lambda row: T[row], lambda row: J[row])
-    return out
-
-
-def _analytic_loop(
-    kin: Kinematics,
-    Q: np.ndarray,
-    fid: int,
-    pmap: PoseMap,
-    threshold: float,
-    out: np.ndarray,
-    nan: bool = False,
-) -> npt.NDArray[np.float64]:
-    for i, qi in enumerate(Q):
-        out[i] = analytic_single(kin, qi, fid, pmap, threshold, nan, i)
     return out
 
 
