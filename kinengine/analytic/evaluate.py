@@ -113,15 +113,8 @@ def analytic_batch(
         return out
     distances = np.empty((n, len(pmap.parts)))
     batch.run_chain(chain, Q, None, None, pin.LOCAL_WORLD_ALIGNED, (pmap, out, distances))
-    if nan:
-        pmap.nan_where_singular(distances, threshold, out)
-    else:
-        pmap.raise_if_singular(
-            distances,
-            threshold,
-            lambda row: kin.pose(Q[row], fid),
-            lambda row: kin.jacobian(Q[row], fid, LWA),
-        )
+    pose, jacobian = (lambda row: kin.pose(Q[row], fid)), (lambda row: kin.jacobian(Q[row], fid, LWA))
+    pmap.singular_rows(distances, threshold, out, nan, pose, jacobian)
     return out
 
 
@@ -142,10 +135,7 @@ def analytic_relative(
     for k, distance in enumerate(pmap.fill_columns(p, C, np.ascontiguousarray(J.transpose(1, 2, 0)), out)):
         distances[:, k] = distance
     out = np.ascontiguousarray(out.transpose(2, 0, 1))
-    if nan:
-        pmap.nan_where_singular(distances, threshold, out)
-    else:
-        pmap.raise_if_singular(distances, threshold, lambda row: T[row], lambda row: J[row])
+    pmap.singular_rows(distances, threshold, out, nan, lambda row: T[row], lambda row: J[row])
     return out
 
 

@@ -108,11 +108,9 @@ class PoseMap:
         ]
         distance = np.stack(distances, axis=-1).reshape(-1, len(parts))  # (N, parts), N = 1 for one pose
         single, poses = T.ndim == 2, T.reshape(-1, 4, 4)
-        if nan:
-            self.nan_where_singular(distance, threshold, chi.reshape(-1, self.size))  # a view: NaN into chi
-        else:
-            jacobian = None if J is None else (lambda row: J(None if single else row))
-            self.raise_if_singular(distance, threshold, lambda row: poses[row], jacobian, single)
+        jacobian = None if J is None else (lambda row: J(None if single else row))
+        out = chi.reshape(-1, self.size)  # a view: NaN rows go into chi
+        self.singular_rows(distance, threshold, out, nan, lambda row: poses[row], jacobian, single)
         return chi
 
     def jacobian(
@@ -175,7 +173,7 @@ class PoseMap:
         p: 3 arrays (n,) [m]; C: the 9 entries of C_IF row-major, arrays (n,); J: J_e0 (6, dof, n) in
         "local_world_aligned"; out: (m, dof, n) receives J_A. The formulas are the parameterizations'
         own, evaluated with numpy. Returns each parameterization's distance to its singular set,
-        (n,) or a float, in χ's order; the caller decides (see :meth:`raise_if_singular`).
+        (n,) or a float, in χ's order; the caller decides (see :meth:`singular_rows`).
         """
         E_rows: list[tuple[Entries, npt.NDArray[np.float64]]] = []
         distances: list[npt.NDArray[np.float64] | float] = []
@@ -191,22 +189,30 @@ class PoseMap:
                 combine(*E_rows[source], out[target], scratch)
         return distances
 
-    def raise_if_singular(
+    def singular_rows(
         self,
         distances: np.ndarray,
         threshold: float,
+        out: np.ndarray,
+        nan: bool,
         pose: Callable[[int], np.ndarray],
         jacobian: Callable[[int], np.ndarray] | None = None,
         single: bool = False,
     ) -> None:
-        """RepresentationSingularityError for the first batch row closer than ``threshold`` to a singular set.
+        """What the batch rows closer than ``threshold`` to a part's singular set get: NaN in that part's rows
+        of out (N, m, ...) (``nan``), or the RepresentationSingularityError one call at the first such row
+        raises (position checked before rotation; ``single``: not named as a batch row).
 
         distances: (N, len(parts)) from :meth:`fill_columns`; pose(row) gives that row's T_IF (4, 4) and
-        jacobian(row) its J_e0 (6, dof) (for the robot's rank in the message). The error is the one a
-        single call at that row raises (position checked before rotation).
+        jacobian(row) its J_e0 (6, dof) (for the robot's rank in the message).
         """
         below = singular_where(distances, threshold)
-        if below.any():
+        if nan:
+            for k, rows in enumerate(self.part_rows):
+                hit = np.flatnonzero(below[:, k])
+                if hit.size and rows:
+                    out[np.ix_(hit, np.array(rows, dtype=np.intp))] = np.nan
+        elif below.any():
             row = int(np.argmax(below.any(axis=1)))
             part = int(np.argmax(below[row]))
             raise singularity_error(
@@ -217,14 +223,6 @@ class PoseMap:
                 None if single else row,
                 None if jacobian is None else jacobian(row),
             )
-
-    def nan_where_singular(self, distances: np.ndarray, threshold: float, out: np.ndarray) -> None:
-        """NaN in out (N, m, ...)'s rows of every part within ``threshold`` of its singular set, per row."""
-        below = singular_where(distances, threshold)
-        for k, rows in enumerate(self.part_rows):
-            hit = np.flatnonzero(below[:, k])
-            if hit.size and rows:
-                out[np.ix_(hit, np.array(rows, dtype=np.intp))] = np.nan
 
 
 _F64 = np.dtype(np.float64)
