@@ -36,7 +36,7 @@ from ..parameterizations.base import (
     singular_where,
 )
 from .layout import Layout, combine
-from .singular import check_on_singularity, pose_of, singularity_error  # noqa: F401 (re-exported)
+from .singular import pose_of, singularity_error
 
 DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 """analytic_jacobian raises RepresentationSingularityError when the distance to the singular set

@@ -151,10 +151,10 @@ class Parameterization(ABC):
     def singularity_distance(self, chi: npt.ArrayLike) -> float | FloatArray:
         """(m,) -> float, (..., m) -> (...,): >= 0, zero exactly on the singular set, ~ the vanishing
         sine/cosine/radius there (E's entries grow like 1/distance); ``inf`` if never singular."""
-        chi = as_float_array(chi, (self.size,), "chi")
-        if chi.ndim == 1:
-            return float(self._distance(math, *chi.tolist()))
-        return np.broadcast_to(self._distance(np, *columns(chi, self.size)), chi.shape[:-1]).copy()
+        distance = apply(
+            lambda xp, *c: (self._distance(xp, *c),), as_float_array(chi, (self.size,), "chi"), ()
+        )
+        return float(distance) if distance.ndim == 0 else distance
 
     def _evaluate(
         self, formula: Callable[..., Entries], shape: tuple[int, int], values: FloatArray
