@@ -44,20 +44,14 @@ def quaternion_from_matrix(xp: Namespace, *C: Component) -> tuple[Component, Com
 
 def rotation_entries(alpha: Component, beta: Component, x: Component, y: Component, z: Component) -> Entries:
     """Row-major entries of I + α[u]x + β[u]x² for u = (x, y, z) ([u]x² = u u^T − |u|² I)."""
-    u2 = x * x + y * y + z * z
-    bxy, bxz, byz = beta * x * y, beta * x * z, beta * y * z
+    bx, by, bz = beta * x, beta * y, beta * z
+    bxx, byy, bzz, bxy, bxz, byz = bx * x, by * y, bz * z, bx * y, bx * z, by * z
     ax, ay, az = alpha * x, alpha * y, alpha * z
     return (
-        1.0 + beta * (x * x - u2),
-        bxy - az,
-        bxz + ay,
-        bxy + az,
-        1.0 + beta * (y * y - u2),
-        byz - ax,
-        bxz - ay,
-        byz + ax,
-        1.0 + beta * (z * z - u2),
-    )
+        1.0 - byy - bzz, bxy - az, bxz + ay,
+        bxy + az, 1.0 - bxx - bzz, byz - ax,
+        bxz - ay, byz + ax, 1.0 - bxx - byy,
+    )  # fmt: skip
 
 
 def matrix_from_quaternion(w: Component, x: Component, y: Component, z: Component) -> Entries:
