@@ -1,6 +1,5 @@
 """analytic_jacobian's looked-up path (options seen before, q a float64 (dof,) array) against the general path
-(the same call with q as a list, or rows as a list): bitwise equal (within 1e-14 where E_R comes from
-Pinocchio's C++ helpers), errors raised every time, threads apart."""
+(the same call with q as a list, or rows as a list): bitwise equal, errors raised every time, threads apart."""
 
 from __future__ import annotations
 
@@ -12,10 +11,6 @@ import pytest
 import kinengine
 from kinengine.errors import FrameNotFoundError, KinematicsError, RepresentationSingularityError
 from kinengine.parameterizations import ROTATION_PARAMETERIZATIONS
-from kinengine.parameterizations.rotation_vector import JLOG3_MAX_ANGLE
-
-PINOCCHIO_RATES = ("euler_zyx", "rotation_vector")
-"""Rotations whose ``pose_rate`` (the looked-up path's E_R) comes from Pinocchio's C++ helpers."""
 
 
 @pytest.fixture(scope="module")
@@ -31,11 +26,7 @@ def test_the_looked_up_path_equals_the_general_path(robot, position, rotation):
     q = np.array([0.1, -0.3, 0.2, 0.5, 0.4, 0.6])
     fast = [robot.analytic_jacobian(q, "tool0", position, rotation) for _ in range(2)]  # made, then looked up
     general = robot.analytic_jacobian(q.tolist(), "tool0", position, rotation)  # a list: the general path
-    assert np.array_equal(fast[0], fast[1])
-    if rotation in PINOCCHIO_RATES and position in (None, "cartesian"):  # E_R from Pinocchio's C++ helpers
-        np.testing.assert_allclose(fast[0], general, rtol=0, atol=1e-14 * np.abs(general).max())
-    else:
-        assert np.array_equal(fast[0], general)
+    assert np.array_equal(fast[0], fast[1]) and np.array_equal(fast[0], general)
 
 
 def test_rows_as_tuple_and_as_list_agree_and_options_do_not_mix(robot):
@@ -102,26 +93,3 @@ def test_threads_evaluate_their_own_configurations(robot):
     for thread in threads:
         thread.join()
     assert len(errors) == 300 * len(Q) and max(errors) == 0.0
-
-
-@pytest.mark.parametrize("position", ["cartesian", None])
-@pytest.mark.parametrize("rotation", PINOCCHIO_RATES)
-def test_pinocchio_rotation_rows_equal_the_scalar_formulas_everywhere(robot, rotation, position):
-    """Random q (rotation vectors of every length up to π, so both sides of JLOG3_MAX_ANGLE) and q walked into
-    ZYX gimbal lock: within 1e-14 of the general path relative to J_A's size, or the same error."""
-    kin = robot.engine
-    home = np.zeros(6)  # tool0's ZYX angles at gimbal lock (χ2 = -π/2); q5 tilts the tool out of it
-    walk = [home + np.array([0, 0, 0, 0, d, 0]) for d in (1e-9, 1e-7, 1e-6, 1e-5, 1e-3, 0.1)]
-    thetas = []
-    for q in [*robot.random_configuration(8, 400), *walk]:
-        T = robot.frame_pose(q)
-        thetas.append(float(np.linalg.norm(kinengine.pose_error(np.eye(4), T, "local")[3:])))
-        try:
-            general = robot.analytic_jacobian(q.tolist(), "tool0", position, rotation)
-        except RepresentationSingularityError:
-            with pytest.raises(RepresentationSingularityError):
-                robot.analytic_jacobian(q, "tool0", position, rotation)
-            continue
-        fast = robot.analytic_jacobian(q, "tool0", position, rotation)
-        np.testing.assert_allclose(fast, general, rtol=0, atol=1e-14 * np.abs(general).max())
-    assert kin.dof == 6 and min(thetas) < JLOG3_MAX_ANGLE < max(thetas)

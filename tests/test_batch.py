@@ -303,14 +303,14 @@ def test_robot_batch_routing_takes_the_fast_path_for_each_size(monkeypatch):
 
     spy(batch, "run_chain", "chain")
     spy(batch, "_pinocchio_loop", "loop")
-    spy(evaluate_module, "_analytic_loop", "analytic loop")
+    spy(evaluate_module, "analytic_single", "analytic row")
     for n in (1, 2, 1000):
         Q = robot.random_configuration(n, size=n)
         robot.frame_pose(Q)
         robot.jacobian(Q)
         robot.analytic_jacobian(Q, rotation="quaternion")
     two = ["chain", "chain"] if compiler.KERNEL is not None else ["loop", "loop"]
-    assert used == ["loop", "loop", "analytic loop", *two, "analytic loop"] + ["chain"] * 3
+    assert used == ["loop", "loop", "analytic row", *two, "analytic row", "analytic row"] + ["chain"] * 3
 
 
 def test_empty_robot_batch_is_refused():

@@ -462,19 +462,20 @@ def test_unknown_euler_sequence_is_a_parameterization_error():
 @pytest.mark.parametrize("name", ROTATIONS)
 @PROPERTY
 @given(seed=seeds, theta=st.sampled_from([1e-3, 0.5, 1.0, 2.0, 2.8, 3.0]) | st.floats(1e-3, 3.0))
-def test_pose_rate_is_the_rate_of_chi_by_central_differences(name, seed, theta):
-    """``pose_rate(C)`` (the analytic Jacobian's single-pose E_R, Pinocchio's for euler_zyx and rotation_vector)
-    maps ω to χ̇: (χ(exp([ω]x h) C) − χ(exp(−[ω]x h) C)) / 2h, and its distance is that of χ."""
+def test_chart_is_the_rate_of_chi_by_central_differences(name, seed, theta):
+    """``chart(C)`` (the analytic Jacobian's and the Task's single-pose χ, distance and E_R) gives χ of
+    from_rotation, its distance, and an E_R that maps ω to χ̇: (χ(exp([ω]x h) C) − χ(exp(−[ω]x h) C)) / 2h."""
     param = ROTATION_PARAMETERIZATIONS[name]
     rng = np.random.default_rng(seed)
     axis = rng.normal(size=3)
     C = Rotation.from_rotvec(theta * axis / np.linalg.norm(axis)).as_matrix()
-    found = param.pose_rate(C)
+    found = param.chart(*C.ravel().tolist())
     chi = param.from_rotation(C, warn=False)
     if found is None:  # only at gimbal lock or where E has no finite value
         assert param.singularity_distance(chi) < 1e-6
         return
-    distance, E = found[0], np.reshape(found[1], (param.size, 3))
+    assert_close_relative(np.array(found[0]), chi, 1e-14)
+    distance, E = found[1], np.reshape(found[2], (param.size, 3))
     assume(distance > 1e-2)  # E's entries ~ 1/distance: keep the difference quotient accurate
     assert distance == pytest.approx(param.singularity_distance(chi), rel=1e-12, abs=1e-15)
     omega, h = rng.normal(size=3), 1e-6

@@ -17,54 +17,30 @@ from ..kinematics.engine import Kinematics
 from ..kinematics.handle import FrameHandle
 from .pose_map import PoseMap
 
+LWA = pin.LOCAL_WORLD_ALIGNED
 ANALYTIC_CALLS = 100
 """numpy calls for χ, E and E·J_e0 over a chunk (about; they vary with the parameterization). A row
 of the analytic single-call loop costs about twice a row of Pinocchio's pose and Jacobian loop."""
 
 
-def frame_views(data: pin.Data, fid: int) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
-    """(C_IF (3, 3), p (3,)) as live views of ``data.oMf[fid]``: every placement update shows in them.
-
-    Valid as long as ``data`` lives; reading them costs a third of building ``.homogeneous``.
-    """
-    placement = data.oMf[fid]
-    return placement.rotation, placement.translation
-
-
-def analytic_at(
+def analytic_single(
     kin: Kinematics,
     q: np.ndarray,
     fid: int,
-    views: tuple[np.ndarray, np.ndarray],
     pmap: PoseMap,
     threshold: float,
-    row: int | None = None,
     nan: bool = False,
+    row: int | None = None,
 ) -> npt.NDArray[np.float64]:
-    """J_A (m, dof) at one checked q (dof,). ``views``: :func:`frame_views` of this thread's Data and frame.
-    ``nan``: NaN rows for a parameterization within ``threshold`` of its singular set instead of the error."""
+    """J_A (m, dof) at one checked q, with this thread's views of the frame's placement and its unchecked
+    handle (which writes and folds only the mimic joints that move the frame). ``nan``: NaN rows for a
+    parameterization within ``threshold`` of its singular set instead of the error; ``row`` (a batch row)
+    only goes into the error message."""
+    (C, p), jacobian, pose = kin.per_thread(("analytic", fid), lambda: _single_path(kin, fid))
+    J = jacobian(q, "local_world_aligned")  # places the frame too (but a 0-dof Jacobian is zeros)
     if kin.dof == 0:
-        kin.pose(q, fid)  # places the frame for the views; a 0-dof Jacobian is (6, 0)
-        J = np.zeros((6, 0))
-    else:  # in LOCAL_WORLD_ALIGNED, computeFrameJacobian also places the frame (data.oMf[fid])
-        J = pin.computeFrameJacobian(
-            kin.model, kin.data(), kin.coordinates.to_pinocchio(q), fid, pin.LOCAL_WORLD_ALIGNED
-        )
-        J = kin.coordinates.fold(J.reshape(6, -1))  # eigenpy returns a (6, 1) matrix as (6,)
-    return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, row, nan)
-
-
-def analytic_single(
-    kin: Kinematics, q: np.ndarray, fid: int, pmap: PoseMap, threshold: float, nan: bool = False
-) -> npt.NDArray[np.float64]:
-    """J_A (m, dof) at one checked q, with this thread's cached views of the frame and the frame's unchecked
-    handle (which writes and folds only the mimic joints that move the frame)."""
-    if kin.dof == 0:
-        views = kin.per_thread(("frame views", fid), lambda: frame_views(kin.data(), fid))
-        return analytic_at(kin, q, fid, views, pmap, threshold, nan=nan)
-    views, jacobian = kin.per_thread(("analytic", fid), lambda: _single_path(kin, fid))
-    J = jacobian(q, "local_world_aligned")  # also places the frame: the views show T_IF at q
-    return pmap.jacobian_single(views[0].tolist(), views[1].tolist(), J, threshold, None, nan)
+        pose(q)
+    return pmap.jacobian_single(C.tolist(), p.tolist(), J, threshold, row, nan)
 
 
 def analytic_function(
@@ -76,20 +52,19 @@ def analytic_function(
     if kin.dof == 0:
         return lambda q: analytic_single(kin, q, fid, pmap, threshold)
     local = threading.local()
-    jacobian_single, rotation = pmap.jacobian_single, pmap.rotation
-    plain = pmap.rows is None and (pmap.position is None or pmap.position.name == "cartesian")
-    rate = None if rotation is None or not plain else rotation.pose_rate
-    _, _, _, template, pack_into, offset, shape = pmap.layout.fast
-    first = shape[0] - (0 if rotation is None else rotation.size)  # E_R's first row in E
+    jacobian_single, template, shape = pmap.jacobian_single, pmap.layout.template, pmap.layout.shape
+    pack_into, offset = pmap.layout.pack_into, pmap.layout.offset
+    plain = pmap.rows is None and pmap.formula_parts == (pmap.rotation,)  # E = blockdiag(I or none, E_R)
+    chart = pmap.rotation.chart if plain and pmap.rotation is not None else None
 
     def thread_path() -> tuple[np.ndarray, np.ndarray, Callable[..., np.ndarray], np.ndarray]:
         """This thread's (C, p) views, unchecked frame Jacobian and E = blockdiag(I, E_R) (m, 6) buffer."""
-        (C, p), jacobian = _single_path(kin, fid)
+        (C, p), jacobian, _ = _single_path(kin, fid)
         local.path = C, p, jacobian, np.frombuffer(bytearray(template)).reshape(shape)
         return local.path
 
     def evaluate(q: np.ndarray) -> npt.NDArray[np.float64]:
-        """J_A = E·J_e0 with E_R from the rotation's :meth:`pose_rate` at regular poses (written into this
+        """J_A = E·J_e0 with E_R from the rotation's :meth:`chart` at regular poses (written into this
         thread's E); any other pose map or pose takes :meth:`PoseMap.jacobian_single` (the error, or
         position formulas and row selections)."""
         try:
@@ -97,25 +72,22 @@ def analytic_function(
         except AttributeError:
             C, p, jacobian, E = thread_path()
         J = jacobian(q, "local_world_aligned")  # also places the frame: C and p show T_IF at q
-        found = None if rate is None else rate(C)
-        if found is None or not found[0] >= threshold:
-            return jacobian_single(C.tolist(), p.tolist(), J, threshold)
-        E_R = found[1]
-        if type(E_R) is tuple:  # the formulas' entries
-            pack_into(E, offset, *E_R)
-        else:
-            E[first:, 3:] = E_R
+        rows = C.tolist()
+        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = rows
+        found = None if chart is None else chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        if found is None or not found[1] >= threshold:  # (chart gives None at distance 0)
+            return jacobian_single(rows, p.tolist(), J, threshold)
+        pack_into(E, offset, *found[2])
         return E.dot(J)
 
     return evaluate
 
 
-def _single_path(
-    kin: Kinematics, fid: int
-) -> tuple[tuple[np.ndarray, np.ndarray], Callable[[np.ndarray, str], npt.NDArray[np.float64]]]:
+def _single_path(kin: Kinematics, fid: int) -> tuple[tuple[np.ndarray, np.ndarray], Callable, Callable]:
+    """((C_IF, p) views, J_e0(q, reference), T_IF(q)) of the frame's unchecked handle in this thread."""
     name = next(n for n, i in kin.frame_ids.items() if i == fid)
     handle = FrameHandle(kin, name, check_inputs=False)
-    return handle.placement(), handle.jacobian  # views of the Data the handle's Jacobian places
+    return handle.placement(), handle.jacobian, handle.pose  # views of the Data the handle's calls place
 
 
 def analytic_batch(
@@ -136,24 +108,13 @@ def analytic_batch(
         else batch.compiled_chain(kin, fid)
     )
     if chain is None:
-        return _analytic_loop(kin, Q, fid, pmap, threshold, out, nan)
+        for i, qi in enumerate(Q):
+            out[i] = analytic_single(kin, qi, fid, pmap, threshold, nan, i)
+        return out
     distances = np.empty((n, len(pmap.parts)))
     batch.run_chain(chain, Q, None, None, pin.LOCAL_WORLD_ALIGNED, (pmap, out, distances))
-    if nan:
-        pmap.nan_where_singular(distances, threshold, out)
-        return out
-
-    def pose(row: int) -> npt.NDArray[np.float64]:
-        T, _ = batch.evaluate(kin, Q[row : row + 1], fid, None, jacobian=False)
-        assert T is not None  # pose=True (the default): the poses are computed
-        return T[0]
-
-    pmap.raise_if_singular(
-        distances,
-        threshold,
-        pose,
-        lambda row: kin.jacobian(Q[row], fid, pin.LOCAL_WORLD_ALIGNED),
-    )
+    pose, jacobian = (lambda row: kin.pose(Q[row], fid)), (lambda row: kin.jacobian(Q[row], fid, LWA))
+    pmap.singular_rows(distances, threshold, out, nan, pose, jacobian)
     return out
 
 
@@ -174,33 +135,14 @@ def analytic_relative(
     for k, distance in enumerate(pmap.fill_columns(p, C, np.ascontiguousarray(J.transpose(1, 2, 0)), out)):
         distances[:, k] = distance
     out = np.ascontiguousarray(out.transpose(2, 0, 1))
-    if nan:
-        pmap.nan_where_singular(distances, threshold, out)
-    else:
-        pmap.raise_if_singular(distances, threshold, lambda row: T[row], lambda row: J[row])
-    return out
-
-
-def _analytic_loop(
-    kin: Kinematics,
-    Q: np.ndarray,
-    fid: int,
-    pmap: PoseMap,
-    threshold: float,
-    out: np.ndarray,
-    nan: bool = False,
-) -> npt.NDArray[np.float64]:
-    views = frame_views(kin.data(), fid)
-    for i, qi in enumerate(Q):
-        out[i] = analytic_at(kin, qi, fid, views, pmap, threshold, i, nan)
+    pmap.singular_rows(distances, threshold, out, nan, lambda row: T[row], lambda row: J[row])
     return out
 
 
 __all__ = [
     "ANALYTIC_CALLS",
-    "analytic_at",
     "analytic_batch",
+    "analytic_function",
     "analytic_relative",
     "analytic_single",
-    "frame_views",
 ]

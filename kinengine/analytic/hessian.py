@@ -6,13 +6,14 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
 from ..kinematics.derivatives import kinematic_hessian
 from ..kinematics.engine import Kinematics
-from ..parameterizations.base import PositionParameterization
 from .pose_map import PoseMap
 
 
@@ -25,18 +26,14 @@ def analytic_hessian(
     pmap.jacobian(T, J, threshold)  # raises at a representation singularity
     H = kinematic_hessian(kin, q, fid, pin.LOCAL_WORLD_ALIGNED)
     blocks = []
-    parts = ((pmap.position, slice(0, 3), T[:3, 3]), (pmap.rotation, slice(3, 6), T[:3, :3]))
-    for param, block, value in parts:
+    p, C = T[:3, 3].tolist(), T[:3, :3].ravel().tolist()
+    for param, block in ((pmap.position, slice(0, 3)), (pmap.rotation, slice(3, 6))):
         if param is None:
             continue
         if param.name == "cartesian":
             blocks.append(H[block])
             continue
-        chi = (
-            param.from_position(value)
-            if isinstance(param, PositionParameterization)
-            else param.from_rotation(value, warn=False)
-        )
+        chi = np.array(param._coordinates(math, p, C))
         Edot = param.E_dot(np.broadcast_to(chi, (kin.dof, chi.size)), J[block].T)  # (dof, m, 3): one per k
         blocks.append(
             np.einsum("kmi,ij->mjk", Edot, J[block]) + np.einsum("mi,ijk->mjk", param.E(chi), H[block])

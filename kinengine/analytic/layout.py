@@ -11,50 +11,28 @@ import numpy.typing as npt
 
 from ..parameterizations.base import PositionParameterization, RotationParameterization
 
-Fast = tuple[
-    bool,
-    PositionParameterization | None,
-    RotationParameterization | None,
-    bytes,
-    Callable[..., None],
-    int,
-    tuple[int, int],
-]
-"""Layout.fast: (position_formula, position, rotation, template, pack_into, offset, shape)."""
-
 
 class Layout:
     """Where E's computed entries go in the (m, 6) matrix E = blockdiag(E_P, E_R) of one PoseMap.
 
-    A template holds the constant entries (zeros, the identity of Cartesian rows); one struct writes
-    the computed ones: E_P entries in columns 0-2 of the position rows, E_R in columns 3-5.
+    A template holds the constant entries (zeros, the identity of Cartesian rows); one struct writes the
+    computed ones in native byte order (the template is a float64 ndarray of this process): E_P's entries
+    in columns 0-2 of the position rows (unless Cartesian), then E_R's in columns 3-5 of the rotation rows.
     """
 
     def __init__(
         self, position: PositionParameterization | None, rotation: RotationParameterization | None
     ) -> None:
-        self.position_formula = position is not None and position.name != "cartesian"
-        rows = (position.size if position is not None else 0) + (rotation.size if rotation is not None else 0)
-        self.shape: tuple[int, int] = (rows, 6)
+        cartesian = position is not None and position.name == "cartesian"
+        m_P, m_R = (0 if part is None else part.size for part in (position, rotation))
+        self.shape: tuple[int, int] = (m_P + m_R, 6)
         template = np.zeros(self.shape)
-        if position is not None and not self.position_formula:
+        if cartesian:
             template[:3, :3] = np.eye(3)
         self.template = template.tobytes()
-        self.offset = 0 if self.position_formula else 48 * (rows - (rotation.size if rotation else 0))
-        self.pack_into: Callable[..., None] = struct.Struct(
-            "="  # native byte order: the template is a float64 ndarray of this process
-            + "3d24x" * (position.size if position is not None and self.position_formula else 0)
-            + "24x3d" * (rotation.size if rotation is not None else 0)
-        ).pack_into
-        self.fast: Fast = (
-            self.position_formula,
-            position,
-            rotation,
-            self.template,
-            self.pack_into,
-            self.offset,
-            self.shape,
-        )  # what jacobian_single reads, in one attribute lookup
+        self.offset = 48 * m_P if cartesian else 0  # 48 bytes: one row of 6 float64
+        rows = "24x3d" * m_R if cartesian else "3d24x" * m_P + "24x3d" * m_R
+        self.pack_into: Callable[..., None] = struct.Struct("=" + rows).pack_into
 
 
 def combine(

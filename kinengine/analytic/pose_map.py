@@ -21,7 +21,6 @@ import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -33,9 +32,11 @@ from ..parameterizations.base import (
     Parameterization,
     PositionParameterization,
     RotationParameterization,
+    is_singular,
+    singular_where,
 )
 from .layout import Layout, combine
-from .singular import check_on_singularity, pose_of, singularity_error  # noqa: F401 (re-exported)
+from .singular import pose_of, singularity_error
 
 DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 """analytic_jacobian raises RepresentationSingularityError when the distance to the singular set
@@ -54,6 +55,8 @@ class PoseMap:
     layout: Layout = field(init=False, repr=False, compare=False)
     part_rows: tuple[tuple[int, ...], ...] = field(init=False, repr=False, compare=False)
     """Per part (in :attr:`parts` order), the indices of its rows among the selected rows."""
+    formula_parts: tuple[Parameterization, ...] = field(init=False, repr=False, compare=False)
+    """The parts whose E is computed (in :attr:`parts` order): all but Cartesian, whose E = I is constant."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layout", Layout(self.position, self.rotation))
@@ -64,6 +67,7 @@ class PoseMap:
             spans.append(tuple(i for i, r in enumerate(selected) if start <= r < start + part.size))
             start += part.size
         object.__setattr__(self, "part_rows", tuple(spans))
+        object.__setattr__(self, "formula_parts", tuple(p for p in self.parts if p.name != "cartesian"))
 
     @property
     def size(self) -> int:
@@ -88,7 +92,6 @@ class PoseMap:
         ``J(row)`` gives that pose's geometric Jacobian for the message) or gets NaN in that part's rows.
         """
         parts: list[npt.NDArray[np.float64]] = []
-        distances: list[npt.NDArray[np.float64]] = []
         with warnings.catch_warnings():
             if threshold is not None:
                 warnings.simplefilter("ignore", UserWarning)
@@ -96,28 +99,18 @@ class PoseMap:
                 parts.append(self.position.from_position(T[..., :3, 3]))
             if self.rotation is not None:
                 parts.append(self.rotation.from_rotation(T[..., :3, :3]))
-        chi = parts[0] if len(parts) == 1 else np.concatenate(parts, axis=-1)
+        chi = np.concatenate(parts, axis=-1)
         chi = chi if self.rows is None else chi[..., self.rows]
         if threshold is None:
             return chi
-        for param, values in zip(self.parts, parts, strict=False):
-            distances.append(np.asarray(param.singularity_distance(values), dtype=np.float64))
-        distance = np.stack(distances, axis=-1)
-        if nan:
-            below = ~(distance >= threshold) | (distance == 0.0)
-            for k, rows in enumerate(self.part_rows):
-                chi[..., list(rows)] = np.where(below[..., k : k + 1], np.nan, chi[..., list(rows)])
-            return chi
-        if T.ndim == 2:
-            self.raise_if_singular(
-                distance[None],
-                threshold,
-                lambda row: T,
-                None if J is None else (lambda row: J(None)),
-                single=True,
-            )
-        else:
-            self.raise_if_singular(distance, threshold, lambda row: T[row], J)
+        distances = [
+            np.asarray(param.singularity_distance(x)) for param, x in zip(self.parts, parts, strict=True)
+        ]
+        distance = np.stack(distances, axis=-1).reshape(-1, len(parts))  # (N, parts), N = 1 for one pose
+        single, poses = T.ndim == 2, T.reshape(-1, 4, 4)
+        jacobian = None if J is None else (lambda row: J(None if single else row))
+        out = chi.reshape(-1, self.size)  # a view: NaN rows go into chi
+        self.singular_rows(distance, threshold, out, nan, lambda row: poses[row], jacobian, single)
         return chi
 
     def jacobian(
@@ -133,10 +126,8 @@ class PoseMap:
         (``nan``: NaN in that parameterization's rows instead).
         Batches: :func:`kinengine.batch.analytic_jacobian` (with :meth:`fill_columns`).
         """
-        (c0, c1, c2, px), (c3, c4, c5, py), (c6, c7, c8, pz), _ = T.tolist()
-        return self.jacobian_single(
-            ((c0, c1, c2), (c3, c4, c5), (c6, c7, c8)), (px, py, pz), J, threshold, nan=nan
-        )
+        rows = T.tolist()[:3]
+        return self.jacobian_single([r[:3] for r in rows], [r[3] for r in rows], J, threshold, nan=nan)
 
     def jacobian_single(
         self,
@@ -154,38 +145,24 @@ class PoseMap:
         only goes into the error message. ``nan``: a part within ``threshold`` of its singular set gets NaN
         entries in E, hence NaN rows in J_A (no error). The error message states J_e0's rank.
         """
-        position_formula, position, rotation, template, pack_into, offset, shape = self.layout.fast
+        layout = self.layout
+        flat = (*C[0], *C[1], *C[2])
         entries: tuple[float, ...] = ()
-        param: Parameterization | None = position
-        try:
-            if position_formula and position is not None:
-                chi = position._from_position(math, *p)
-                distance = position._distance(math, *chi)
-                if not distance >= threshold or distance == 0.0:
-                    if not nan:
-                        raise singularity_error(position, distance, threshold, pose_of(C, p), row, J)
-                    entries = (math.nan,) * (3 * position.size)
-                else:
-                    entries = position._E(math, *chi)
-            param = rotation
-            if rotation is not None:
-                (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
-                chi = rotation._from_rotation(math, False, c00, c01, c02, c10, c11, c12, c20, c21, c22)
-                distance = rotation._distance(math, *chi)
-                if not distance >= threshold or distance == 0.0:
-                    if not nan:
-                        raise singularity_error(rotation, distance, threshold, pose_of(C, p), row, J)
-                    entries += (math.nan,) * (3 * rotation.size)
-                else:
-                    entries += rotation._E(math, *chi)
-        except ZeroDivisionError:  # exactly on the singular set with threshold 0 (distance rounds above 0)
-            if nan:
-                return np.full((self.size, J.shape[1]), np.nan)
-            assert param is not None  # the parameterization whose formula divided by zero
-            raise singularity_error(param, 0.0, threshold, pose_of(C, p), row, J) from None
-        buffer = bytearray(template)
-        pack_into(buffer, offset, *entries)
-        JA = np.ndarray(shape, _F64, buffer).dot(J)
+        for param in self.formula_parts:
+            try:
+                chi = param._coordinates(math, p, flat)
+                distance = param._distance(math, *chi)
+                E = None if is_singular(distance, threshold) else param._E(math, *chi)
+            except ZeroDivisionError:  # on the singular set with threshold 0 (the distance rounded above 0)
+                distance, E = 0.0, None
+            if E is None:
+                if not nan:
+                    raise singularity_error(param, distance, threshold, pose_of(C, p), row, J)
+                E = (math.nan,) * (3 * param.size)
+            entries += E
+        buffer = bytearray(layout.template)
+        layout.pack_into(buffer, layout.offset, *entries)
+        JA = np.ndarray(layout.shape, _F64, buffer).dot(J)
         return JA if self.rows is None else JA[self.rows, :]
 
     def fill_columns(
@@ -196,18 +173,14 @@ class PoseMap:
         p: 3 arrays (n,) [m]; C: the 9 entries of C_IF row-major, arrays (n,); J: J_e0 (6, dof, n) in
         "local_world_aligned"; out: (m, dof, n) receives J_A. The formulas are the parameterizations'
         own, evaluated with numpy. Returns each parameterization's distance to its singular set,
-        (n,) or a float, in χ's order; the caller decides (see :meth:`raise_if_singular`).
+        (n,) or a float, in χ's order; the caller decides (see :meth:`singular_rows`).
         """
         E_rows: list[tuple[Entries, npt.NDArray[np.float64]]] = []
         distances: list[npt.NDArray[np.float64] | float] = []
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             blocks = (J[:3], J[3:]) if self.position is not None else (J[3:],)
             for param, block in zip(self.parts, blocks, strict=False):  # no rotation: J[3:] unused
-                if isinstance(param, PositionParameterization):
-                    chi = param._from_position(np, *p)
-                else:
-                    assert isinstance(param, RotationParameterization)  # parts: position, then rotation
-                    chi = param._from_rotation(np, False, *C)
+                chi = param._coordinates(np, p, C)
                 distances.append(param._distance(np, *chi))
                 E = param._E(np, *chi)
                 E_rows += [(E[k : k + 3], block) for k in range(0, len(E), 3)]
@@ -216,22 +189,30 @@ class PoseMap:
                 combine(*E_rows[source], out[target], scratch)
         return distances
 
-    def raise_if_singular(
+    def singular_rows(
         self,
         distances: np.ndarray,
         threshold: float,
+        out: np.ndarray,
+        nan: bool,
         pose: Callable[[int], np.ndarray],
         jacobian: Callable[[int], np.ndarray] | None = None,
         single: bool = False,
     ) -> None:
-        """RepresentationSingularityError for the first batch row closer than ``threshold`` to a singular set.
+        """What the batch rows closer than ``threshold`` to a part's singular set get: NaN in that part's rows
+        of out (N, m, ...) (``nan``), or the RepresentationSingularityError one call at the first such row
+        raises (position checked before rotation; ``single``: not named as a batch row).
 
         distances: (N, len(parts)) from :meth:`fill_columns`; pose(row) gives that row's T_IF (4, 4) and
-        jacobian(row) its J_e0 (6, dof) (for the robot's rank in the message). The error is the one a
-        single call at that row raises (position checked before rotation).
+        jacobian(row) its J_e0 (6, dof) (for the robot's rank in the message).
         """
-        below = ~(distances >= threshold) | (distances == 0.0)  # NaN and exact zero: E had no finite value
-        if below.any():
+        below = singular_where(distances, threshold)
+        if nan:
+            for k, rows in enumerate(self.part_rows):
+                hit = np.flatnonzero(below[:, k])
+                if hit.size and rows:
+                    out[np.ix_(hit, np.array(rows, dtype=np.intp))] = np.nan
+        elif below.any():
             row = int(np.argmax(below.any(axis=1)))
             part = int(np.argmax(below[row]))
             raise singularity_error(
@@ -243,17 +224,8 @@ class PoseMap:
                 None if jacobian is None else jacobian(row),
             )
 
-    def nan_where_singular(self, distances: np.ndarray, threshold: float, out: np.ndarray) -> None:
-        """NaN in out (N, m, dof)'s rows of every part within ``threshold`` of its singular set, per row."""
-        below = ~(distances >= threshold) | (distances == 0.0)
-        for k, rows in enumerate(self.part_rows):
-            hit = np.flatnonzero(below[:, k])
-            if hit.size and rows:
-                out[np.ix_(hit, np.array(rows, dtype=np.intp))] = np.nan
-
 
 _F64 = np.dtype(np.float64)
-_P = TypeVar("_P", bound=Parameterization)
 
 
 @lru_cache(maxsize=256)
@@ -266,8 +238,8 @@ def pose_map(
             "position and rotation are both None: choose at least one, e.g. "
             "position='cartesian' or rotation='quaternion'"
         )
-    p = None if position is None else _lookup(get_position, position)
-    r = None if rotation is None else _lookup(get_rotation, rotation)
+    p = None if position is None else get_position(position)
+    r = None if rotation is None else get_rotation(rotation)
     labels = (tuple(p.labels) if p else ()) + (tuple(r.labels) if r else ())
     if rows is None:
         return PoseMap(p, r, labels, None)
@@ -286,12 +258,6 @@ def pose_map(
     if len(set(index)) != len(index):
         raise ParameterizationError(f"rows {rows} select a row twice")
     return PoseMap(p, r, tuple(labels[i] for i in index), tuple(index))
-
-
-def _lookup(getter: Callable[[str], _P], name: object) -> _P:
-    if not isinstance(name, str):
-        raise ParameterizationError(f"parameterization names are strings, got {name!r}")
-    return getter(name)
 
 
 def as_rows(rows: Sequence[str | int] | str | None) -> tuple[str | int, ...] | None:

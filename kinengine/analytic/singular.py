@@ -10,6 +10,7 @@ geometric Jacobian that E(χ) multiplies (J_e0, or a relative Jacobian).
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 
@@ -62,20 +63,13 @@ def singularity_error(
 ) -> RepresentationSingularityError:
     """The error at pose T (4, 4), with the parameterizations that are regular at the same pose and
     (given the geometric Jacobian J (6, dof)) whether the robot itself is singular there."""
+    family = POSITION_PARAMETERIZATIONS if param.kind == "position" else ROTATION_PARAMETERIZATIONS
+    p, C = T[:3, 3].tolist(), T[:3, :3].ravel().tolist()
     with warnings.catch_warnings():  # "on the z axis" from the other position parameterizations
         warnings.simplefilter("ignore", UserWarning)
-        if param.kind == "position":
-            regular = [
-                name
-                for name, other in POSITION_PARAMETERIZATIONS.items()
-                if float(other.singularity_distance(other.from_position(T[:3, 3]))) > 0.1
-            ]
-        else:
-            regular = [
-                name
-                for name, other in ROTATION_PARAMETERIZATIONS.items()
-                if float(other.singularity_distance(other.from_rotation(T[:3, :3], warn=False))) > 0.1
-            ]
+        regular = [
+            n for n, other in family.items() if other._distance(math, *other._coordinates(math, p, C)) > 0.1
+        ]
     preferred = [
         n for n in ("quaternion", "rotation_matrix", "euler_zyz", "euler_xyz", "cartesian") if n in regular
     ]

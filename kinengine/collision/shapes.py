@@ -11,7 +11,7 @@ import os
 from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import coal
 import numpy as np
@@ -71,11 +71,16 @@ class Obstacle:
 
     pose: tuple[tuple[float, ...], ...]
     name: str | None
+    _lengths: ClassVar[tuple[str, ...]] = ()
+    """The fields that are one length [m] each, checked to be finite and > 0."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "pose", _pose(self.pose))
         if self.name is not None and (not isinstance(self.name, str) or not self.name):
             raise OptionError(f"an obstacle's name is a non-empty string, got {self.name!r}")
+        for field in self._lengths:
+            value = _positive(f"{type(self).__name__} {field}", getattr(self, field))
+            object.__setattr__(self, field, value)
 
     def shape(self) -> coal.CollisionGeometry:
         raise NotImplementedError
@@ -117,10 +122,7 @@ class Sphere(Obstacle):
     radius: float = 0.05
     pose: Any = None
     name: str | None = None
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "radius", _positive("Sphere radius", self.radius))
+    _lengths = ("radius",)
 
     def shape(self) -> coal.CollisionGeometry:
         return coal.Sphere(self.radius)
@@ -135,11 +137,7 @@ class Capsule(Obstacle):
     length: float = 0.1
     pose: Any = None
     name: str | None = None
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        object.__setattr__(self, "radius", _positive("Capsule radius", self.radius))
-        object.__setattr__(self, "length", _positive("Capsule length", self.length))
+    _lengths = ("radius", "length")
 
     def shape(self) -> coal.CollisionGeometry:
         return coal.Capsule(self.radius, self.length)

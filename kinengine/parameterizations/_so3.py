@@ -13,44 +13,27 @@ import numpy as np
 from .base import SMALL_ANGLE_SQ, Component, Entries, Namespace
 
 
-def quaternion_from_matrix(
-    xp: Namespace,
-    c00: Component,
-    c01: Component,
-    c02: Component,
-    c10: Component,
-    c11: Component,
-    c12: Component,
-    c20: Component,
-    c21: Component,
-    c22: Component,
-) -> tuple[Component, Component, Component, Component]:
-    """Unit quaternion (w, x, y, z) of C_IE, canonical like scipy's ``as_quat(canonical=True)``.
+def quaternion_from_matrix(xp: Namespace, *C: Component) -> tuple[Component, Component, Component, Component]:
+    """Unit quaternion (w, x, y, z) of C_IE (9 entries, row-major), like scipy's ``as_quat(canonical=True)``.
 
     Canonical: w > 0, or w = 0 and the first nonzero of (x, y, z) > 0. The case split on the largest
     of (C00, C11, C22, trace) is scipy's (Shepperd's method), so results match scipy to rounding.
     """
+    c00, c01, c02, c10, c11, c12, c20, c21, c22 = C
     trace = c00 + c11 + c22
-    if xp is math:
-        best = max(c00, c11, c22, trace)  # the first maximum, like numpy's argmax
-        if best == c00:
-            x, y, z, w = 1.0 - trace + 2.0 * c00, c10 + c01, c20 + c02, c21 - c12
-        elif best == c11:
-            x, y, z, w = c10 + c01, 1.0 - trace + 2.0 * c11, c21 + c12, c02 - c20
-        elif best == c22:
-            x, y, z, w = c20 + c02, c21 + c12, 1.0 - trace + 2.0 * c22, c10 - c01
-        else:
-            x, y, z, w = c21 - c12, c02 - c20, c10 - c01, 1.0 + trace
-        norm = math.sqrt(x * x + y * y + z * z + w * w)
-        if w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0))))):
-            norm = -norm
-        return w / norm, x / norm, y / norm, z / norm
-    cases = (
+    cases = (  # 4x·(x, y, z, w), 4y·(...), 4z·(...), 4w·(...): Shepperd's case for C00, C11, C22, trace
         (1.0 - trace + 2.0 * c00, c10 + c01, c20 + c02, c21 - c12),
         (c10 + c01, 1.0 - trace + 2.0 * c11, c21 + c12, c02 - c20),
         (c20 + c02, c21 + c12, 1.0 - trace + 2.0 * c22, c10 - c01),
         (c21 - c12, c02 - c20, c10 - c01, 1.0 + trace),
     )
+    if xp is math:
+        diagonal = (c00, c11, c22, trace)
+        x, y, z, w = cases[diagonal.index(max(diagonal))]  # the first maximum, like numpy's argmax
+        norm = math.sqrt(x * x + y * y + z * z + w * w)
+        if w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0))))):
+            norm = -norm
+        return w / norm, x / norm, y / norm, z / norm
     choice = np.argmax(np.stack([c00, c11, c22, trace], axis=-1), axis=-1)
     x, y, z, w = (np.choose(choice, [case[k] for case in cases]) for k in range(4))
     norm = np.sqrt(x * x + y * y + z * z + w * w)
@@ -61,20 +44,14 @@ def quaternion_from_matrix(
 
 def rotation_entries(alpha: Component, beta: Component, x: Component, y: Component, z: Component) -> Entries:
     """Row-major entries of I + α[u]x + β[u]x² for u = (x, y, z) ([u]x² = u u^T − |u|² I)."""
-    u2 = x * x + y * y + z * z
-    bxy, bxz, byz = beta * x * y, beta * x * z, beta * y * z
+    bx, by, bz = beta * x, beta * y, beta * z
+    bxx, byy, bzz, bxy, bxz, byz = bx * x, by * y, bz * z, bx * y, bx * z, by * z
     ax, ay, az = alpha * x, alpha * y, alpha * z
     return (
-        1.0 + beta * (x * x - u2),
-        bxy - az,
-        bxz + ay,
-        bxy + az,
-        1.0 + beta * (y * y - u2),
-        byz - ax,
-        bxz - ay,
-        byz + ax,
-        1.0 + beta * (z * z - u2),
-    )
+        1.0 - byy - bzz, bxy - az, bxz + ay,
+        bxy + az, 1.0 - bxx - bzz, byz - ax,
+        bxz - ay, byz + ax, 1.0 - bxx - byy,
+    )  # fmt: skip
 
 
 def matrix_from_quaternion(w: Component, x: Component, y: Component, z: Component) -> Entries:
@@ -88,11 +65,12 @@ def series_or_closed(
     t: Component,
     series: Callable[[Component], Component],
     closed: Callable[[Namespace, Component], Component],
+    below: float = SMALL_ANGLE_SQ,
 ) -> Component:
-    """series(θ²) where θ² = t < SMALL_ANGLE_SQ, else closed(xp, θ²) (jaxlie's small-angle branch, on θ²)."""
+    """series(t) where t < ``below``, else closed(xp, t) (jaxlie's small-angle branch, decided on t = θ²)."""
     if xp is math:
-        return series(t) if t < SMALL_ANGLE_SQ else closed(math, t)
-    small = t < SMALL_ANGLE_SQ
+        return series(t) if t < below else closed(math, t)
+    small = t < below
     return np.where(small, series(t), closed(np, np.where(small, 1.0, t)))
 
 

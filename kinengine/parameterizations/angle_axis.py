@@ -19,24 +19,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import numpy.typing as npt
-import pinocchio as pin
 
 from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries
-from .base import (
-    Component,
-    Entries,
-    FloatArray,
-    Namespace,
-    RotationParameterization,
-    Values,
-    is_single,
-    warn_where,
-)
+from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where
 from .euler import GIMBAL_LOCK_TOLERANCE
-from .rotation_vector import PIN_LOG3_MAX_SQ
-
-_TINY_SQ = GIMBAL_LOCK_TOLERANCE**2
 
 
 class AngleAxis(RotationParameterization):
@@ -46,16 +32,6 @@ class AngleAxis(RotationParameterization):
     labels = ("angle", "axis_x", "axis_y", "axis_z")
     singular_set = "θ = 0, the identity rotation (axis undefined)"
     alternatives: tuple[str, ...] = ("quaternion", "rotation_vector", "rotation_matrix")
-
-    def from_rotation(self, C: npt.ArrayLike, *, warn: bool = True) -> FloatArray:
-        # One sample with 1e-7 < θ < 2: from Pinocchio's log3 (measured ~2x faster); else the generic path
-        if is_single(C, (3, 3)):
-            x, y, z = pin.log3(C).tolist()
-            t = x * x + y * y + z * z
-            if _TINY_SQ < t < PIN_LOG3_MAX_SQ:
-                theta = math.sqrt(t)
-                return np.array((theta, x / theta, y / theta, z / theta))
-        return super().from_rotation(C, warn=warn)
 
     def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
         w, x, y, z = quaternion_from_matrix(xp, *C)
@@ -92,19 +68,10 @@ class AngleAxis(RotationParameterization):
         s, half = xp.sin(theta), xp.sin(0.5 * theta)
         v = 2.0 * half * half  # 1 − cos θ
         return (
-            nx,
-            s * (1.0 - nx * nx),
-            -s * nx * ny - v * nz,
-            -s * nx * nz + v * ny,
-            ny,
-            -s * nx * ny + v * nz,
-            s * (1.0 - ny * ny),
-            -s * ny * nz - v * nx,
-            nz,
-            -s * nx * nz - v * ny,
-            -s * ny * nz + v * nx,
-            s * (1.0 - nz * nz),
-        )
+            nx, s * (1.0 - nx * nx), -s * nx * ny - v * nz, -s * nx * nz + v * ny,
+            ny, -s * nx * ny + v * nz, s * (1.0 - ny * ny), -s * ny * nz - v * nx,
+            nz, -s * nx * nz - v * ny, -s * ny * nz + v * nx, s * (1.0 - nz * nz),
+        )  # fmt: skip
 
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         theta, nx, ny, nz = chi

@@ -15,13 +15,12 @@ from __future__ import annotations
 
 import math
 import os
-import struct
 import sys
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Sequence
 from types import FrameType, ModuleType
-from typing import Any, TypeAlias, TypeGuard
+from typing import Any, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
@@ -45,15 +44,7 @@ Values: TypeAlias = Sequence[Component]
 """The components of χ or of u given to a formula as one sequence (a tuple or list of Components)."""
 FloatArray: TypeAlias = npt.NDArray[np.float64]
 
-_ND = np.ndarray
-_F8 = np.dtype(np.float64)
-_PACK9 = struct.Struct("9d")
 _KINENGINE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
-
-
-def is_single(value: object, shape: tuple[int, ...]) -> TypeGuard[FloatArray]:
-    """True for one float64 sample of exactly ``shape`` (the fast path: its .tolist() gives floats)."""
-    return type(value) is _ND and value.dtype is _F8 and value.shape == shape
 
 
 def as_float_array(value: npt.ArrayLike, tail: tuple[int, ...], what: str) -> FloatArray:
@@ -82,6 +73,26 @@ def stack(entries: Entries, batch: tuple[int, ...], shape: tuple[int, ...]) -> F
     return out.reshape(batch + shape)
 
 
+def apply(formula: Callable[..., Entries], values: FloatArray, shape: tuple[int, ...]) -> FloatArray:
+    """A formula of the components of the last axis of ``values``: one sample (n,) -> ``shape`` (on Python
+    floats, ``xp`` = math), a batch (..., n) -> (..., *shape) (on arrays, ``xp`` = numpy)."""
+    if values.ndim == 1:
+        return np.array(formula(math, *values.tolist())).reshape(shape)
+    return stack(formula(np, *columns(values, values.shape[-1])), values.shape[:-1], shape)
+
+
+def is_singular(distance: float, threshold: float) -> bool:
+    """True where a distance to a singular set counts as singular: below ``threshold``, NaN, or exactly 0
+    (E has no finite value there, whatever the threshold)."""
+    return not distance >= threshold or distance == 0.0
+
+
+def singular_where(distance: npt.ArrayLike, threshold: float) -> npt.NDArray[np.bool_]:
+    """:func:`is_singular` of every entry of an array of distances."""
+    distance = np.asarray(distance)
+    return ~(distance >= threshold) | (distance == 0.0)
+
+
 def warn_where(xp: Namespace, condition: Component, message: str) -> None:
     """UserWarning if ``condition`` holds for any sample, attributed to the first caller outside kinengine."""
     if condition if xp is math else bool(np.any(condition)):
@@ -95,8 +106,8 @@ def warn_where(xp: Namespace, condition: Component, message: str) -> None:
 class Parameterization(ABC):
     """χ ∈ R^m and its rate map E(χ): χ̇ = E(χ)·u with u = v (position) or ω (rotation) in I.
 
-    One sample is built as ndarray(shape, float64, bytearray(struct.pack(*floats))): measured about half
-    the cost of np.array(floats).reshape(shape) for 9 to 27 entries.
+    A family writes five formulas over ``xp`` (:meth:`_E`, :meth:`_E_inverse`, :meth:`_E_dot`,
+    :meth:`_distance` and χ from the pose); this class gives them their checks, batches and errors.
     """
 
     name: str
@@ -105,11 +116,6 @@ class Parameterization(ABC):
     singular_set: str
     alternatives: tuple[str, ...]
     """Parameterizations regular wherever this one is singular (for error messages)."""
-
-    def __init__(self) -> None:
-        m = len(self.labels)
-        self._one, self._E_shape, self._E_inverse_shape = (m,), (m, 3), (3, m)
-        self._pack = struct.Struct(f"{3 * m}d").pack  # E, E_inverse and E_dot all have 3m entries
 
     @property
     def size(self) -> int:
@@ -124,73 +130,52 @@ class Parameterization(ABC):
 
         Raises RepresentationSingularityError where E has no finite value (distance exactly 0).
         """
-        if type(chi) is _ND and chi.dtype is _F8 and chi.shape == self._one:
-            try:
-                return _ND(self._E_shape, _F8, bytearray(self._pack(*self._E(math, *chi.tolist()))))
-            except ZeroDivisionError:
-                raise self._singular_error() from None
-        return self._general(self._E, chi, self._E_shape)
+        return self._evaluate(self._E, (self.size, 3), as_float_array(chi, (self.size,), "chi"))
 
     def E_inverse(self, chi: npt.ArrayLike) -> FloatArray:
         """(m,) -> (3, m), batched (..., 3, m): u = E_inverse(χ)·χ̇, with E_inverse(χ)·E(χ) = I_3."""
-        if type(chi) is _ND and chi.dtype is _F8 and chi.shape == self._one:
-            entries = self._E_inverse(math, *chi.tolist())
-            return _ND(self._E_inverse_shape, _F8, bytearray(self._pack(*entries)))
-        return self._general(self._E_inverse, chi, self._E_inverse_shape)
+        return self._evaluate(self._E_inverse, (3, self.size), as_float_array(chi, (self.size,), "chi"))
 
     def E_dot(self, chi: npt.ArrayLike, velocity: npt.ArrayLike) -> FloatArray:
         """dE/dt along the motion with u = velocity (v [m/s] or ω [rad/s] in I): (m,), (3,) -> (m, 3).
 
         Batched: (..., m) and (..., 3) broadcast to (..., m, 3). J̇_A = Ė·J_e0 + E·J̇_e0.
         """
-        m = len(self.labels)
+        m = self.size
         chi = as_float_array(chi, (m,), "chi")
         u = as_float_array(velocity, (3,), "velocity")
-        if chi.ndim == 1 and u.ndim == 1:
-            try:
-                entries = self._E_dot(math, chi.tolist(), u.tolist())
-                return _ND(self._E_shape, _F8, bytearray(self._pack(*entries)))
-            except ZeroDivisionError:
-                raise self._singular_error() from None
         batch = np.broadcast_shapes(chi.shape[:-1], u.shape[:-1])
-        chi = np.broadcast_to(chi, batch + (m,))
-        u = np.broadcast_to(u, batch + (3,))
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            entries = self._E_dot(np, columns(chi, m), columns(u, 3))
-        return self._finite(stack(entries, batch, (m, 3)))
+        both = np.concatenate((np.broadcast_to(chi, batch + (m,)), np.broadcast_to(u, batch + (3,))), axis=-1)
+        return self._evaluate(lambda xp, *c: self._E_dot(xp, c[:m], c[m:]), (m, 3), both)
 
     def singularity_distance(self, chi: npt.ArrayLike) -> float | FloatArray:
         """(m,) -> float, (..., m) -> (...,): >= 0, zero exactly on the singular set, ~ the vanishing
         sine/cosine/radius there (E's entries grow like 1/distance); ``inf`` if never singular."""
-        if type(chi) is _ND and chi.dtype is _F8 and chi.shape == self._one:
-            return float(self._distance(math, *chi.tolist()))
-        chi = as_float_array(chi, self._one, "chi")
-        if chi.ndim == 1:
-            return float(self._distance(math, *chi.tolist()))
-        return np.broadcast_to(self._distance(np, *columns(chi, chi.shape[-1])), chi.shape[:-1]).copy()
+        distance = apply(
+            lambda xp, *c: (self._distance(xp, *c),), as_float_array(chi, (self.size,), "chi"), ()
+        )
+        return float(distance) if distance.ndim == 0 else distance
 
-    def _general(
-        self, formula: Callable[..., Entries], chi: npt.ArrayLike, shape: tuple[int, int]
+    def _evaluate(
+        self, formula: Callable[..., Entries], shape: tuple[int, int], values: FloatArray
     ) -> FloatArray:
-        """formula for any input: a single sample of another type, or a batch (..., m) -> (..., *shape)."""
-        m = len(self.labels)
-        chi = as_float_array(chi, (m,), "chi")
-        if chi.ndim == 1:
-            try:
-                return np.array(formula(math, *chi.tolist())).reshape(shape)
-            except ZeroDivisionError:
-                raise self._singular_error() from None
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            entries = formula(np, *columns(chi, m))
-        return self._finite(stack(entries, chi.shape[:-1], shape))
-
-    def _finite(self, out: np.ndarray) -> FloatArray:
-        if not np.isfinite(out).all():
+        """:func:`apply` of a rate formula; RepresentationSingularityError where an entry has no finite value
+        (the sample is on the singular set)."""
+        try:
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                out = apply(formula, values, shape)
+        except ZeroDivisionError:
+            raise self._singular_error() from None
+        if values.ndim > 1 and not np.isfinite(out).all():
             raise self._singular_error()
         return out
 
     def _singular_error(self) -> RepresentationSingularityError:
         return RepresentationSingularityError(self.name, 0.0, 0.0, self.alternatives, self.singular_set)
+
+    @abstractmethod
+    def _coordinates(self, xp: Namespace, p: Values, C: Values) -> Entries:
+        """χ at the pose with origin p (3 components) and C_IE (9, row-major), without warnings."""
 
     @abstractmethod
     def _E(self, xp: Namespace, *chi: Component) -> Entries: ...
@@ -213,18 +198,21 @@ class PositionParameterization(Parameterization):
 
     def from_position(self, pos: npt.ArrayLike) -> FloatArray:
         """χ_P from p [m] in I: (3,) -> (m,), (..., 3) -> (..., m)."""
-        if not is_single(pos, (3,)):
-            pos = as_float_array(pos, (3,), "pos")
-            if pos.ndim > 1:
-                return stack(self._from_position(np, *columns(pos, 3)), pos.shape[:-1], self._one)
-        return np.array(self._from_position(math, *pos.tolist()))
+        return apply(self._from_position, as_float_array(pos, (3,), "pos"), (self.size,))
 
     def to_position(self, chi: npt.ArrayLike) -> FloatArray:
         """p [m] in I from χ_P: (m,) -> (3,), (..., m) -> (..., 3)."""
-        chi = as_float_array(chi, self._one, "chi")
-        if chi.ndim == 1:
-            return np.array(self._to_position(math, *chi.tolist()))
-        return stack(self._to_position(np, *columns(chi, self.size)), chi.shape[:-1], (3,))
+        return apply(self._to_position, as_float_array(chi, (self.size,), "chi"), (3,))
+
+    def _coordinates(self, xp: Namespace, p: Values, C: Values) -> Entries:
+        return self._from_position(xp, *p)
+
+    def _azimuth(self, xp: Namespace, x: Component, y: Component) -> tuple[Component, Component]:
+        """(ρ, θ) = (√(x² + y²), atan2(y, x)) [m, rad] of a point; a UserWarning on the z axis (ρ = 0), where
+        the azimuth θ is undefined (atan2(0, 0) = 0)."""
+        rho = xp.sqrt(x * x + y * y)
+        warn_where(xp, rho == 0.0, f"{self.name}: point on the z axis (ρ = 0); azimuth θ undefined, set to 0")
+        return rho, xp.atan2(y, x)
 
     @abstractmethod
     def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries: ...
@@ -245,13 +233,13 @@ class RotationParameterization(Parameterization):
         Where χ_R is not unique (a singular set) a documented choice is returned and, if ``warn``,
         a UserWarning is issued.
         """
-        if not (type(C) is _ND and C.dtype is _F8 and C.shape == (3, 3)):
-            C = as_float_array(C, (3, 3), "C")
-            if C.ndim > 2:
-                entries = self._from_rotation(np, warn, *columns(C.reshape(C.shape[:-2] + (9,)), 9))
-                return stack(entries, C.shape[:-2], self._one)
-        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
-        return np.array(self._from_rotation(math, warn, c00, c01, c02, c10, c11, c12, c20, c21, c22))
+        C = as_float_array(C, (3, 3), "C")
+        rows = C.reshape(C.shape[:-2] + (9,))
+        return apply(lambda xp, *c: self._from_rotation(xp, warn, *c), rows, (self.size,))
+
+    def to_rotation(self, chi: npt.ArrayLike) -> FloatArray:
+        """C_IE from χ_R: (m,) -> (3, 3), (..., m) -> (..., 3, 3)."""
+        return apply(self._to_rotation, as_float_array(chi, (self.size,), "chi"), (3, 3))
 
     def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
         """(χ, its distance to the singular set, E(χ)'s row-major entries) at one pose C_IE given by its 9
@@ -268,20 +256,8 @@ class RotationParameterization(Parameterization):
         except ZeroDivisionError:
             return None
 
-    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
-        """(distance to the singular set, E_R) at one pose C_IE (3, 3) float64: χ̇_R = E_R·ω with ω [rad/s]
-        in I. E_R is :meth:`chart`'s row-major entries (Python floats), or an (m, 3) array where Pinocchio
-        computes it (euler_zyx; rotation_vector below JLOG3_MAX_ANGLE). None as for :meth:`chart`."""
-        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
-        found = self.chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
-        return None if found is None else (found[1], found[2])
-
-    def to_rotation(self, chi: npt.ArrayLike) -> FloatArray:
-        """C_IE from χ_R: (m,) -> (3, 3), (..., m) -> (..., 3, 3)."""
-        chi = as_float_array(chi, self._one, "chi")
-        if chi.ndim == 1:
-            return _ND((3, 3), _F8, bytearray(_PACK9.pack(*self._to_rotation(math, *chi.tolist()))))
-        return stack(self._to_rotation(np, *columns(chi, self.size)), chi.shape[:-1], (3, 3))
+    def _coordinates(self, xp: Namespace, p: Values, C: Values) -> Entries:
+        return self._from_rotation(xp, False, *C)
 
     @abstractmethod
     def _from_rotation(self, xp: Namespace, warn: bool, *c: Component) -> Entries: ...

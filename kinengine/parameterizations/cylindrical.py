@@ -9,7 +9,7 @@ Singular on the z axis (ρ = 0), where θ is undefined (from_position returns θ
 
 from __future__ import annotations
 
-from .base import Component, Entries, Namespace, PositionParameterization, Values, warn_where
+from .base import Component, Entries, Namespace, PositionParameterization, Values
 
 
 class Cylindrical(PositionParameterization):
@@ -20,9 +20,7 @@ class Cylindrical(PositionParameterization):
     singular_set = "the z axis, ρ = 0 (azimuth θ undefined)"
 
     def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
-        rho = xp.sqrt(x * x + y * y)
-        warn_where(xp, rho == 0.0, "cylindrical: point on the z axis (ρ = 0); azimuth θ undefined, set to 0")
-        return rho, xp.atan2(y, x), z
+        return (*self._azimuth(xp, x, y), z)
 
     def _to_position(self, xp: Namespace, rho: Component, theta: Component, z: Component) -> Entries:
         return rho * xp.cos(theta), rho * xp.sin(theta), z
@@ -42,16 +40,10 @@ class Cylindrical(PositionParameterization):
         rho_dot = c * vx + s * vy
         theta_dot = (c * vy - s * vx) / rho
         return (
-            -s * theta_dot,
-            c * theta_dot,
-            0.0,
-            (s * rho_dot / rho - c * theta_dot) / rho,
-            (-s * theta_dot - c * rho_dot / rho) / rho,
-            0.0,
-            0.0,
-            0.0,
-            0.0,
-        )
+            -s * theta_dot, c * theta_dot, 0.0,
+            (s * rho_dot / rho - c * theta_dot) / rho, (-s * theta_dot - c * rho_dot / rho) / rho, 0.0,
+            0.0, 0.0, 0.0,
+        )  # fmt: skip
 
     def _distance(self, xp: Namespace, rho: Component, theta: Component, z: Component) -> Component:
         return abs(rho)

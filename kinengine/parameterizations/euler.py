@@ -23,20 +23,9 @@ import math
 from operator import itemgetter
 
 import numpy as np
-import numpy.typing as npt
-import pinocchio as pin
 
 from ..errors import ParameterizationError
-from .base import (
-    Component,
-    Entries,
-    FloatArray,
-    Namespace,
-    RotationParameterization,
-    Values,
-    is_single,
-    warn_where,
-)
+from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where
 
 EULER_SEQUENCES = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz")
 GIMBAL_LOCK_TOLERANCE = 1e-7
@@ -55,18 +44,10 @@ def _elementary(xp: Namespace, axis: int, angle: Component) -> Entries:
 
 def _matmul(A: Entries, B: Entries) -> Entries:
     """Row-major entries of A·B for 3x3 matrices given by row-major entries."""
-    a0, a1, a2, a3, a4, a5, a6, a7, a8 = A
-    b0, b1, b2, b3, b4, b5, b6, b7, b8 = B
-    return (
-        a0 * b0 + a1 * b3 + a2 * b6,
-        a0 * b1 + a1 * b4 + a2 * b7,
-        a0 * b2 + a1 * b5 + a2 * b8,
-        a3 * b0 + a4 * b3 + a5 * b6,
-        a3 * b1 + a4 * b4 + a5 * b7,
-        a3 * b2 + a4 * b5 + a5 * b8,
-        a6 * b0 + a7 * b3 + a8 * b6,
-        a6 * b1 + a7 * b4 + a8 * b7,
-        a6 * b2 + a7 * b5 + a8 * b8,
+    return tuple(
+        A[3 * i] * B[j] + A[3 * i + 1] * B[3 + j] + A[3 * i + 2] * B[6 + j]
+        for i in range(3)
+        for j in range(3)
     )
 
 
@@ -99,7 +80,6 @@ class EulerAngles(RotationParameterization):
         else:
             self.singular_set = f"χ2 = ±π/2, cos χ2 = 0 (gimbal lock: axes {seq[0]} and {seq[2]} aligned)"
             self.alternatives = ("quaternion", f"euler_{seq[0]}{seq[1]}{seq[0]}", "rotation_matrix")
-        super().__init__()
 
     def _leading(self, xp: Namespace, C: Values) -> tuple[Component, Component, Component]:
         """(χ1, χ2, locked) off C's row-major entries by atan2; ``locked``: χ2 within GIMBAL_LOCK_TOLERANCE
@@ -161,16 +141,6 @@ class EulerAngles(RotationParameterization):
         chi = [chi1, chi2, self._third(math, c1, s1, C)]
         return chi, distance, self._rate_entries(c1, s1, c2, s2)
 
-    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
-        # chart without χ3: E does not depend on it
-        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
-        chi1, chi2, locked = self._leading(math, (c00, c01, c02, c10, c11, c12, c20, c21, c22))
-        if locked:
-            return None
-        c1, s1, c2, s2 = math.cos(chi1), math.sin(chi1), math.cos(chi2), math.sin(chi2)
-        distance = abs(s2) if self._proper else abs(c2)
-        return (distance, self._rate_entries(c1, s1, c2, s2)) if distance != 0.0 else None
-
     def _to_rotation(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         a, b, c = self._axes
         return _matmul(_matmul(_elementary(xp, a, chi1), _elementary(xp, b, chi2)), _elementary(xp, c, chi3))
@@ -204,69 +174,26 @@ class EulerAngles(RotationParameterization):
             r = 1.0 / s2
             k = c2 * r
             d1 = wa - s1 * k * wb + e * c1 * k * wt  # χ̇1
-            return self._to_columns(
-                (
-                    0.0,
-                    -c1 * k * d1 + s1 * r * r * d2,
-                    -e * (s1 * k * d1 + c1 * r * r * d2),
-                    0.0,
-                    -s1 * d1,
-                    e * c1 * d1,
-                    0.0,
-                    c1 * r * d1 - s1 * k * r * d2,
-                    e * (s1 * r * d1 + c1 * k * r * d2),
-                )
-            )
+            return self._to_columns((
+                0.0, -c1 * k * d1 + s1 * r * r * d2, -e * (s1 * k * d1 + c1 * r * r * d2),
+                0.0, -s1 * d1, e * c1 * d1,
+                0.0, c1 * r * d1 - s1 * k * r * d2, e * (s1 * r * d1 + c1 * k * r * d2),
+            ))  # fmt: skip
         r = 1.0 / c2
         t = s2 * r
         d1 = wa + s1 * t * wb - e * c1 * t * wt
-        return self._to_columns(
-            (
-                0.0,
-                c1 * t * d1 + s1 * r * r * d2,
-                e * (s1 * t * d1 - c1 * r * r * d2),
-                0.0,
-                -s1 * d1,
-                e * c1 * d1,
-                0.0,
-                -e * (c1 * r * d1 + s1 * t * r * d2),
-                -s1 * r * d1 + c1 * t * r * d2,
-            )
-        )
+        return self._to_columns((
+            0.0, c1 * t * d1 + s1 * r * r * d2, e * (s1 * t * d1 - c1 * r * r * d2),
+            0.0, -s1 * d1, e * c1 * d1,
+            0.0, -e * (c1 * r * d1 + s1 * t * r * d2), -s1 * r * d1 + c1 * t * r * d2,
+        ))  # fmt: skip
 
     def _distance(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Component:
         return abs(xp.sin(chi2)) if self._proper else abs(xp.cos(chi2))
 
 
 class EulerZYX(EulerAngles):
-    """euler_zyx = (yaw, pitch, roll), reversed (roll, pitch, yaw) of Pinocchio's rpy module: one sample runs
-    in Pinocchio's C++ (measured 2-3x faster); batches and gimbal lock take the generic path."""
+    """euler_zyx = (yaw, pitch, roll) [rad], the reverse of Pinocchio's ``rpy`` (roll, pitch, yaw)."""
 
     def __init__(self) -> None:
         super().__init__("zyx")
-
-    def from_rotation(self, C: npt.ArrayLike, *, warn: bool = True) -> FloatArray:
-        if is_single(C, (3, 3)):
-            rpy = pin.rpy.matrixToRpy(C)
-            if abs(abs(rpy[1]) - 0.5 * math.pi) > GIMBAL_LOCK_TOLERANCE:
-                return rpy[::-1]
-        return super().from_rotation(C, warn=warn)
-
-    def E(self, chi: npt.ArrayLike) -> FloatArray:
-        # rpẏ = computeRpyJacobianInverse(rpy, WORLD)·ω (ω in I); χ = rpy reversed, so are E's rows
-        if is_single(chi, (3,)):
-            return pin.rpy.computeRpyJacobianInverse(chi[::-1], pin.WORLD)[::-1]
-        return super().E(chi)
-
-    def E_inverse(self, chi: npt.ArrayLike) -> FloatArray:
-        if is_single(chi, (3,)):
-            return pin.rpy.computeRpyJacobian(chi[::-1], pin.WORLD)[:, ::-1]
-        return super().E_inverse(chi)
-
-    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
-        # (roll, pitch, yaw) = matrixToRpy(C); E = computeRpyJacobianInverse(rpy, WORLD), rows reversed
-        rpy = pin.rpy.matrixToRpy(C)
-        pitch = float(rpy[1])
-        if abs(abs(pitch) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE:
-            return None
-        return abs(math.cos(pitch)), pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD)[::-1]

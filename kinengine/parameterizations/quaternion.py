@@ -48,14 +48,8 @@ class Quaternion(RotationParameterization):
 
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         a, b, c = u
-        w, x, y, z = chi
-        q_dot = (
-            0.5 * (-x * a - y * b - z * c),
-            0.5 * (w * a + z * b - y * c),
-            0.5 * (-z * a + w * b + x * c),
-            0.5 * (y * a - x * b + w * c),
-        )
-        return _half_H(*q_dot)
+        E = _half_H(*chi)
+        return _half_H(*(E[k] * a + E[k + 1] * b + E[k + 2] * c for k in range(0, 12, 3)))  # ½ H(q̇), q̇ = E·ω
 
     def _distance(self, xp: Namespace, w: Component, x: Component, y: Component, z: Component) -> Component:
         return math.inf

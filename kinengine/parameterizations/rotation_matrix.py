@@ -13,47 +13,14 @@ import math
 from .base import Component, Entries, Namespace, RotationParameterization, Values
 
 
-def _rate_map(
-    c00: Component,
-    c01: Component,
-    c02: Component,
-    c10: Component,
-    c11: Component,
-    c12: Component,
-    c20: Component,
-    c21: Component,
-    c22: Component,
-) -> Entries:
+def _rate_map(*C: Component) -> Entries:
     """Row-major entries of the 9x3 E with vec(Ċ) = E·ω (row 3i + j is row i of −[C[:, j]]x)."""
+    c00, c01, c02, c10, c11, c12, c20, c21, c22 = C
     return (
-        0.0,
-        c20,
-        -c10,
-        0.0,
-        c21,
-        -c11,
-        0.0,
-        c22,
-        -c12,
-        -c20,
-        0.0,
-        c00,
-        -c21,
-        0.0,
-        c01,
-        -c22,
-        0.0,
-        c02,
-        c10,
-        -c00,
-        0.0,
-        c11,
-        -c01,
-        0.0,
-        c12,
-        -c02,
-        0.0,
-    )
+        0.0, c20, -c10,  0.0, c21, -c11,  0.0, c22, -c12,
+        -c20, 0.0, c00,  -c21, 0.0, c01,  -c22, 0.0, c02,
+        c10, -c00, 0.0,  c11, -c01, 0.0,  c12, -c02, 0.0,
+    )  # fmt: skip
 
 
 class RotationMatrix(RotationParameterization):
@@ -74,36 +41,8 @@ class RotationMatrix(RotationParameterization):
         return _rate_map(*chi)
 
     def _E_inverse(self, xp: Namespace, *chi: Component) -> Entries:
-        c00, c01, c02, c10, c11, c12, c20, c21, c22 = (0.5 * c for c in chi)
-        return (
-            0.0,
-            0.0,
-            0.0,
-            -c20,
-            -c21,
-            -c22,
-            c10,
-            c11,
-            c12,
-            c20,
-            c21,
-            c22,
-            0.0,
-            0.0,
-            0.0,
-            -c00,
-            -c01,
-            -c02,
-            -c10,
-            -c11,
-            -c12,
-            c00,
-            c01,
-            c02,
-            0.0,
-            0.0,
-            0.0,
-        )
+        E = _rate_map(*chi)  # ½ E^T: the 3x9 transpose of the 9x3 map, halved
+        return tuple(0.5 * E[3 * row + column] for column in range(3) for row in range(9))
 
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         a, b, c = u

@@ -17,29 +17,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import numpy.typing as npt
-import pinocchio as pin
 
 from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries, series_or_closed
-from .base import (
-    Component,
-    Entries,
-    FloatArray,
-    Namespace,
-    RotationParameterization,
-    Values,
-    is_single,
-)
+from .base import Component, Entries, Namespace, RotationParameterization, Values
 
-PIN_LOG3_MAX_SQ = 4.0
-"""θ² below which one sample takes φ from pin.log3 (as accurate as the quaternion route there: ~5e-16 in C(φ);
-measured to degrade to 4e-13 at θ = 3.1). Above, the canonical quaternion (scipy's sign rule at θ = π)."""
 _TWO_PI = 2.0 * math.pi
-JLOG3_MAX_ANGLE = 2.9
-"""θ [rad] below which :meth:`RotationVector.pose_rate` takes E_R from Pinocchio's Jlog3: against a 40-digit
-mpmath evaluation of E_R at random axes, Jlog3 is within 2.8e-15 (relative) up to θ = 2.9, 1.4e-14 at 3.0 and
-1.7e-13 at 3.1, where the scalar formulas below stay within 3.2e-15."""
-_JLOG3_MIN_COS = math.cos(JLOG3_MAX_ANGLE)
 _TINY_SIN2 = 1e-12
 """sin²(θ/2) below which θ/sin(θ/2) uses its Taylor series in from_rotation (truncation O(1e-24))."""
 
@@ -85,9 +67,8 @@ def _b_prime_over_theta_series(t: Component) -> Component:  # b'(θ)/θ
     return 1.0 / 360.0 + t * (1.0 / 7560.0 + t * (1.0 / 201600.0 + t / 5987520.0))
 
 
-def _b_prime_over_theta_closed(
-    xp: Namespace, t: Component
-) -> Component:  # −2/θ⁴ + 1/(4θ² sin²(θ/2)) + cot(θ/2)/(2θ³)
+def _b_prime_over_theta_closed(xp: Namespace, t: Component) -> Component:
+    # −2/θ⁴ + 1/(4θ² sin²(θ/2)) + cot(θ/2)/(2θ³)
     theta = xp.sqrt(t)
     half = xp.sin(0.5 * theta)
     return -2.0 / (t * t) + 0.25 / (t * half * half) + 0.5 / (xp.tan(0.5 * theta) * t * theta)
@@ -97,31 +78,37 @@ NEAR_PI_COS = -0.988
 """cos θ below which (θ > 171°) the closed form's axis, from 2 sin θ n, loses digits: the quaternion route."""
 
 
+def _inverse_left_jacobian(xp: Namespace, t: Component, x: Component, y: Component, z: Component) -> Entries:
+    """E(φ) = J_l(φ)⁻¹ = I − ½ [φ]x + b(θ) [φ]x² for φ = (x, y, z), t = θ² = |φ|²."""
+    return rotation_entries(-0.5, series_or_closed(xp, t, _b_series, _b_closed), x, y, z)
+
+
 def _log_by_quaternion(xp: Namespace, *C: Component) -> Entries:
     """φ from the canonical quaternion of C (scipy's ``as_rotvec``, θ <= π, its sign rule at θ = π)."""
     w, x, y, z = quaternion_from_matrix(xp, *C)
-    s2 = x * x + y * y + z * z  # sin²(θ/2)
-    if xp is math:
-        scale = (
-            2.0 / w * (1.0 - s2 / (3.0 * w * w))
-            if s2 < _TINY_SIN2
-            else 2.0 * math.atan2(math.sqrt(s2), w) / math.sqrt(s2)
-        )
-    else:
-        small = s2 < _TINY_SIN2
-        s = np.sqrt(np.where(small, 1.0, s2))
-        scale = np.where(small, 2.0 / w * (1.0 - s2 / (3.0 * w * w)), 2.0 * np.arctan2(s, w) / s)
+    scale = series_or_closed(  # θ / sin(θ/2) of s2 = sin²(θ/2)
+        xp,
+        x * x + y * y + z * z,
+        lambda s2: 2.0 / w * (1.0 - s2 / (3.0 * w * w)),
+        lambda xp, s2: 2.0 * xp.atan2(xp.sqrt(s2), w) / xp.sqrt(s2),
+        _TINY_SIN2,
+    )
     return scale * x, scale * y, scale * z
 
 
-def _log_closed_form(*C: Component) -> Entries:
-    """φ of arrays of C's 9 entries: with w = vee(C − Cᵀ) = 2 sin θ n and cos θ = (tr C − 1)/2,
-    θ = atan2(|w|/2, cos θ) and φ = (θ/|w|) w (→ w/2 as θ → 0); where cos θ < NEAR_PI_COS, the quaternion
-    route (a third of the numpy passes: the batched IK's log, where C is mostly near I)."""
+def _log(xp: Namespace, *C: Component) -> Entries:
+    """φ of C's 9 entries: with w = vee(C − Cᵀ) = 2 sin θ n and cos θ = (tr C − 1)/2, θ = atan2(|w|/2, cos θ)
+    and φ = (θ/|w|) w (→ w/2 as θ → 0); where cos θ < NEAR_PI_COS, the quaternion route (in a batch only for
+    those samples: the batched IK's log, where C is mostly near I)."""
     c00, c01, c02, c10, c11, c12, c20, c21, c22 = C
     w0, w1, w2 = c21 - c12, c02 - c20, c10 - c01
-    norm = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    norm = xp.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
     cos = 0.5 * (c00 + c11 + c22 - 1.0)
+    if xp is math:
+        if cos < NEAR_PI_COS:
+            return _log_by_quaternion(math, *C)
+        scale = math.atan2(0.5 * norm, cos) / norm if norm > 1e-300 else 0.5
+        return scale * w0, scale * w1, scale * w2
     with np.errstate(divide="ignore", invalid="ignore"):
         scale = np.where(norm > 1e-300, np.arctan2(0.5 * norm, cos) / norm, 0.5)
     phi = (scale * w0, scale * w1, scale * w2)
@@ -140,35 +127,14 @@ class RotationVector(RotationParameterization):
     singular_set = "θ = |φ| = 2π k, k >= 1 (never reached by from_rotation, which keeps θ <= π)"
     alternatives: tuple[str, ...] = ("quaternion", "rotation_matrix")
 
-    def from_rotation(self, C: npt.ArrayLike, *, warn: bool = True) -> FloatArray:
-        # One sample with θ < 2: Pinocchio's log3 (measured ~3x faster); otherwise the generic path.
-        if is_single(C, (3, 3)):
-            phi = pin.log3(C)
-            x, y, z = phi.tolist()
-            if x * x + y * y + z * z < PIN_LOG3_MAX_SQ:
-                return phi
-        return super().from_rotation(C, warn=warn)
-
     def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
-        if xp is not math:  # arrays: the closed form, the quaternion route only near θ = π
-            return _log_closed_form(*C)
-        return _log_by_quaternion(xp, *C)
-
-    def pose_rate(self, C: FloatArray) -> tuple[float, FloatArray | Entries] | None:
-        # θ < JLOG3_MAX_ANGLE: E_R = Jlog3(C)·Cᵀ (Jlog3 maps the angular velocity in the frame's own axes to
-        # φ̇; Cᵀ takes ω from I's axes to them), θ from cos θ = (tr C − 1)/2, distance 2π − θ. Towards π the
-        # scalar formulas (see JLOG3_MAX_ANGLE).
-        (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C.tolist()
-        cos_theta = 0.5 * (c00 + c11 + c22 - 1.0)
-        if cos_theta > _JLOG3_MIN_COS:
-            return _TWO_PI - math.acos(min(cos_theta, 1.0)), pin.Jlog3(C).dot(C.T)
-        found = self.chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
-        return None if found is None else (found[1], found[2])
+        return _log(xp, *C)
 
     def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
         # _from_rotation keeps θ <= π (+ rounding): _distance's nearest 2πk is 2π, so the distance is 2π − θ
-        x, y, z = self._from_rotation(math, False, *C)
-        return [x, y, z], _TWO_PI - math.sqrt(x * x + y * y + z * z), self._E(math, x, y, z)
+        x, y, z = _log(math, *C)
+        t = x * x + y * y + z * z
+        return [x, y, z], _TWO_PI - math.sqrt(t), _inverse_left_jacobian(math, t, x, y, z)
 
     def _to_rotation(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z
@@ -181,8 +147,7 @@ class RotationVector(RotationParameterization):
         )
 
     def _E(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
-        b = series_or_closed(xp, x * x + y * y + z * z, _b_series, _b_closed)
-        return rotation_entries(-0.5, b, x, y, z)
+        return _inverse_left_jacobian(xp, x * x + y * y + z * z, x, y, z)
 
     def _E_inverse(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z

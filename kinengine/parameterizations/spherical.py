@@ -11,7 +11,7 @@ from_position returns atan2(0, 0) = 0 for it.
 
 from __future__ import annotations
 
-from .base import Component, Entries, Namespace, PositionParameterization, Values, warn_where
+from .base import Component, Entries, Namespace, PositionParameterization, Values
 
 
 class Spherical(PositionParameterization):
@@ -22,9 +22,8 @@ class Spherical(PositionParameterization):
     singular_set = "the z axis, r·sin φ = 0 (azimuth θ undefined; at r = 0 also φ)"
 
     def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
-        rho = xp.sqrt(x * x + y * y)
-        warn_where(xp, rho == 0.0, "spherical: the point is on the z axis; azimuth θ is undefined, set to 0")
-        return xp.sqrt(x * x + y * y + z * z), xp.atan2(y, x), xp.atan2(rho, z)
+        rho, theta = self._azimuth(xp, x, y)
+        return xp.sqrt(x * x + y * y + z * z), theta, xp.atan2(rho, z)
 
     def _to_position(self, xp: Namespace, r: Component, theta: Component, phi: Component) -> Entries:
         r_sin = r * xp.sin(phi)
