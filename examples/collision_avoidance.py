@@ -76,7 +76,7 @@ def plot(free: Run, avoided: Run, path: str) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> tuple[Run, Run]:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     parser.add_argument("--output", help="write the PNG here")
     args = parser.parse_args(argv)
     robot, T0 = scene()

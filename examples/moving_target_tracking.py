@@ -117,7 +117,7 @@ def plot(runs: dict[str, tuple[np.ndarray, np.ndarray, str]], path: str) -> None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     parser.add_argument("--output", default="moving_target_tracking.png", help="PNG file to write")
     args = parser.parse_args(argv)
     runs = {

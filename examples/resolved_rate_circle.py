@@ -99,7 +99,7 @@ def plot(run: Run, path: str) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=" ".join(__doc__.split("\n\n")[0].split()))
     parser.add_argument("--output", default="resolved_rate_circle.png", help="PNG file to write")
     parser.add_argument("--gain", type=float, default=20.0, help="feedback gain K [1/s]")
     args = parser.parse_args(argv)

@@ -94,6 +94,15 @@ def assert_one_error_line(code: int, out: str, err: str, fragment: str = "") -> 
             "argument --json: cannot write '/dev/full'",
         ),
         (["show", "abb_irb120", "-o", "/dev/full"], "cannot write '/dev/full': not a regular file"),
+        (["ik", "abb_irb120", "--xyz", "0.4,0,0.5", "--rpy", "0,1.2,inf"], "--rpy: expected three finite"),
+        (
+            ["ik", "abb_irb120", "--xyz", "0.4,nan,0.5"],
+            "--xyz: expected three finite comma-separated numbers",
+        ),
+        (
+            ["ik", "abb_irb120", "--xyz", "0.4,0,0.5", "--near", "0,0,0"],
+            "--near: Expected `q` to have shape (6,)",
+        ),
     ],
 )
 def test_bad_arguments_are_one_line_and_status_2(capsys, argv, fragment):

@@ -256,8 +256,8 @@ def load_robot(args: argparse.Namespace, target: str | None = None) -> Robot:
 
 
 def summary(doc: str | None) -> str:
-    """A module docstring's first line without reST markup, for --help."""
-    return doc.splitlines()[0].replace("``", "") if doc else ""
+    """A module docstring's first paragraph on one line, without reST markup, for --help."""
+    return " ".join(doc.split("\n\n")[0].split()).replace("``", "") if doc else ""
 
 
 _PENDING: list[str] = []  # warnings of the running command, printed when it succeeds (flush_warnings)

@@ -7,14 +7,15 @@ import json
 
 import numpy as np
 
+from ..errors import ConfigurationError
 from ..parameterizations import get_rotation
 from .arguments import add_frame_argument, load_robot, parse_vector, printable, robot_command
 
 
 def _triple(text: str) -> list[float]:
     values = parse_vector(text)
-    if len(values) != 3:
-        raise argparse.ArgumentTypeError(f"expected three comma-separated numbers, got {len(values)}")
+    if len(values) != 3 or not np.isfinite(values).all():
+        raise argparse.ArgumentTypeError(f"expected three finite comma-separated numbers, got {text!r:.60}")
     return values
 
 
@@ -26,9 +27,14 @@ def _run(args: argparse.Namespace) -> int:
     T = np.eye(4)
     T[:3, :3] = get_rotation("euler_zyx").to_rotation(np.array([yaw, pitch, roll]))  # URDF rpy
     T[:3, 3] = args.xyz
-    near = (
-        None if args.near is None else robot.check_configuration(args.near, check_limits=False, batch=False)
-    )
+    try:
+        near = (
+            None
+            if args.near is None
+            else robot.check_configuration(args.near, check_limits=False, batch=False)
+        )
+    except ConfigurationError as exc:
+        raise ConfigurationError(f"--near: {exc}") from None
     found = robot.ik_solutions(T, frame, q_near=near, within_limits=not args.all, all_turns=args.all)
     if args.json:
         report = {
@@ -48,7 +54,12 @@ def _run(args: argparse.Namespace) -> int:
     print(f"robot {name} ({robot.dof} dof), frame {where!r}: {found.count} solution(s)", end="")
     print(", singular pose (a representative set of a continuum)" if found.singular else "")
     if not found.count:
-        print("no solution within the joint limits" if not args.all else "the pose is out of reach")
+        outside = 0 if args.all else robot.ik_solutions(T, frame, within_limits=False).count
+        print(
+            f"{outside} solution(s) outside the joint limits (--all lists them)"
+            if outside
+            else "the pose is out of reach"
+        )
         return 0
     names = [printable(n) for n in robot.joint_names]
     width = max(9, *(len(n) for n in names))

@@ -55,9 +55,12 @@ def _run_place(args: argparse.Namespace) -> int:
     rmap = ReachabilityMap.load(args.map)
     try:
         targets = np.load(args.targets, allow_pickle=False)
-    except (OSError, ValueError) as exc:
+    except OSError as exc:
+        raise OptionError(f"cannot read task poses from {args.targets!r}: {exc.strerror or exc}") from None
+    except ValueError:  # numpy's text advises unpickling, which kinengine never does with a user's file
         raise OptionError(
-            f"cannot read task poses from {args.targets!r} (a .npy of shape (N, 4, 4)): {exc}"
+            f"{args.targets!r} is not a .npy array of numbers: task poses are a .npy of shape (N, 4, 4) [m] "
+            "(np.save('poses.npy', T))"
         ) from None
     result = base_placements(rmap, targets, xy=args.step, yaws=args.yaws, z=args.z, top=args.top)
     print(f"{'rank':>4} {'x [m]':>8} {'y [m]':>8} {'yaw [deg]':>9} {'score':>6} {'IK-verified':>11}")

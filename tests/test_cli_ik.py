@@ -1,0 +1,30 @@
+"""``kinengine ik`` on poses without a solution in the joint limits (bad input: test_cli_errors.py; the
+closed-form IK itself: test_closed_form_ik.py)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import kinengine
+from kinengine.cli import main
+
+pytest.importorskip("eaik")
+
+
+def test_a_pose_with_solutions_only_outside_the_limits_says_so(capsys):
+    robot = kinengine.load("abb_irb120")
+    q = np.array([0.78, -0.563, 1.71, 3.166, 0.963, 2.251])  # joint_4 beyond its 2.79 rad limit
+    T = robot.frame_pose(q)
+    assert robot.ik_solutions(T).count == 0 and robot.ik_solutions(T, within_limits=False).count == 8
+    yaw, pitch, roll = robot.pose_parameters(q, rotation="euler_zyx")[3:]
+    pose = [
+        "--xyz",
+        ",".join(repr(float(v)) for v in T[:3, 3]),
+        "--rpy",
+        f"{roll:.17g},{pitch:.17g},{yaw:.17g}",
+    ]
+    assert main(["ik", "abb_irb120", *pose]) == 0
+    assert "8 solution(s) outside the joint limits (--all lists them)" in capsys.readouterr().out
+    assert main(["ik", "abb_irb120", "--xyz", "2,0,0.5"]) == 0
+    assert capsys.readouterr().out.splitlines()[-1] == "the pose is out of reach"
