@@ -75,7 +75,7 @@ def candidates_to_solutions(
     poses: np.ndarray,
     row: np.ndarray,
     q: np.ndarray,
-    ls: np.ndarray,
+    ls: np.ndarray | None,
     near: np.ndarray,
     has_near: bool,
     *,
@@ -85,77 +85,67 @@ def candidates_to_solutions(
     workers: int | None = None,
 ) -> IKSolutions:
     """IKSolutions of poses (N, 4, 4) from the solver's raw answers, flat and sorted by pose: ``row`` (M,)
-    the pose of each, ``q`` (M, n) the chain's angles [rad], ``ls`` (M,) its least-squares flags;
+    the pose of each, ``q`` (M, n) the chain's angles [rad], ``ls`` (M,) its least-squares flags (None:
+    none is);
     ``near`` (dof,) or (N, dof) the reference q (its other coordinates fill the result); ``workers``: the
-    forward kinematics' threads."""
+    forward kinematics' threads. One pose (``single``) and a batch take the same steps."""
     robot, columns, frame = chain.robot, chain.columns, chain.frame
-    n_poses, dof = len(poses), robot.dof
-    wrapped = _wrap_pi(q)
-    ref = None
-    if has_near:  # (M, n) the reference's angles of each candidate's pose
-        ref = (
-            near[row][:, columns]
-            if near.ndim == 2
-            else np.broadcast_to(near[columns], (len(row), len(columns)))
-        )
-    # 0. into the joint ranges first (the shift nearest the reference); what cannot be a solution within
-    # the limits is not checked (a least-squares answer is: it may be repaired into them)
-    angles, inside, turns = _turns(chain, wrapped, ref, all_turns)
-    if within_limits:
-        keep = np.flatnonzero(inside | ls)
-        row, wrapped, angles, inside, ls = row[keep], wrapped[keep], angles[keep], inside[keep], ls[keep]
-        ref = None if ref is None else ref[keep]
-        turns = None if turns is None else (turns[0][keep], turns[1][keep], turns[2][keep])
-    if chain.whole:  # the chain's joints are q's coordinates, in order
-        full = angles
-    else:
-        full = near[row] if near.ndim == 2 else np.repeat(near[None], len(row), axis=0)
-        full[:, columns] = angles
-    # 1. the frame's pose at every candidate against its target; degenerate answers repaired, an
-    # idealized chain's polished
-    err_p, err_r = residuals(robot, frame, full, poses, row, workers)
-    exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
-    singular = np.zeros(n_poses, dtype=bool)
-    fix = np.zeros(0, dtype=np.intp)
-    if ls.any() or chain.approximate:
+    n_poses, dof = len(poses), chain.dof
+    base = near if near.ndim == 2 else near[None]
+    shifts = all_turns and len(chain.many_turns) > 0
+    # 0.-2. into the joint ranges, checked against the targets, deduplicated
+    out, turns = placed(chain, poses, row, q, base, has_near, within_limits, shifts, workers)
+    e = dof + len(columns)  # out's columns: full q, the chain's wrapped angles, kept, inside, errors
+    singular = None
+    if ls is not None or chain.approximate:  # degenerate answers repaired, an idealized chain's polished
+        ls = np.zeros(len(row), dtype=bool) if ls is None else ls
+        err_p, err_r = out[:, e + 2], out[:, e + 3]
+        exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
         degenerate = ls & (err_p <= DEGENERATE)
+        singular = np.zeros(n_poses, dtype=bool)
         singular[row[degenerate]] = True
         polish = (err_p <= POLISH) & (err_r <= POLISH) if chain.approximate else degenerate
-        fix = np.flatnonzero((degenerate | polish) & ~exact)
-    if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
-        start = full[fix]
-        start[:, columns] = _turns(chain, wrapped[fix], None, False)[0]
-        repaired = _repaired(robot, frame, start, poses[row[fix]])
-        err_p, err_r = residuals(robot, frame, repaired, poses, row[fix])
-        exact[fix] = (err_p <= ACCEPT) & (err_r <= ACCEPT)
-        wrapped[fix] = _wrap_pi(repaired[:, columns])
-        fixed = _turns(chain, wrapped[fix], None if ref is None else ref[fix], all_turns)
-        angles[fix], inside[fix] = fixed[0], fixed[1]
-        if turns is not None and fixed[2] is not None:
-            for k, k_fix in zip(turns, fixed[2], strict=True):
-                k[fix] = k_fix
-        if not chain.whole:
-            full[np.ix_(fix, columns)] = fixed[0]
-    # 2. duplicates (modulo 2π) among the exact candidates of a pose; 3. the limit filter: one selection
-    e = np.flatnonzero(exact)
-    keep = e[~_duplicates(row[e], wrapped[e])]
-    if within_limits:
-        keep = keep[inside[keep]]
-    row, full, inside = row[keep], full[keep], inside[keep]
-    if all_turns and turns is not None:
+        to_fix = (degenerate | polish) & ~exact
+        if within_limits:  # what cannot be a solution within the limits is not polished (a degenerate is)
+            to_fix &= (out[:, e + 1] != 0) | ls
+        fix = np.flatnonzero(to_fix)
+        if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
+            start = out[fix, :dof]
+            start[:, columns] = _turns(chain, out[fix, dof:e], None, False)[0]
+            repaired = _repaired(robot, frame, start, poses[row[fix]])
+            q = out[:, dof:e].copy()
+            q[fix] = repaired[:, columns]
+            out, turns = placed(chain, poses, row, q, base, has_near, within_limits, shifts, workers)
+    keep = out[:, e].nonzero()[0]
+    full = out[keep, :dof]
+    inside = np.ones(len(keep), dtype=bool) if within_limits else out[keep, e + 1] != 0
+    if single and turns is None:  # one pose: its rows need no pose index
+        if has_near and len(full) > 1:
+            order = np.lexsort((np.linalg.norm(full - base[0], axis=1), ~inside))
+            full, inside = full[order], inside[order]
+        elif not within_limits and len(full) > 1:
+            order = np.argsort(~inside, kind="stable")
+            full, inside = full[order], inside[order]
+        c = len(full)
+        return IKSolutions(
+            full, c, c > 0, singular is not None and bool(singular[0]), inside, frame, chain.joints
+        )
+    row = row[keep]
+    if turns is not None:
         row, inside, full = _all_turns(chain, row, inside, full, *(k[keep] for k in turns))
-    # 4. within the limits first, then by distance to q_near, within each pose; padded with NaN
-    if has_near:
-        distance = np.linalg.norm(full - (near[row] if near.ndim == 2 else near), axis=1)
+    # 3. within the limits first, then by distance to q_near, within each pose; padded with NaN
+    if has_near and len(row) > 1:
+        distance = np.linalg.norm(full - base[0 if len(base) == 1 else row], axis=1)
         order = np.lexsort((distance, ~inside, row))
         row, full, inside = row[order], full[order], inside[order]
-    elif not within_limits:
+    elif not within_limits and len(row) > 1:
         order = np.lexsort((~inside, row))
         row, full, inside = row[order], full[order], inside[order]
-    count = np.bincount(row, minlength=n_poses)
+    singular = np.zeros(n_poses, dtype=bool) if singular is None else singular
     if single:
-        c = int(count[0])
+        c = len(row)
         return IKSolutions(full, c, c > 0, bool(singular[0]), inside, frame, chain.joints)
+    count = np.bincount(row, minlength=n_poses)
     K = int(count.max(initial=0))
     out = np.full((n_poses, K, dof), np.nan)
     limits = np.zeros((n_poses, K), dtype=bool)
@@ -163,6 +153,54 @@ def candidates_to_solutions(
     out[row, slot] = full
     limits[row, slot] = inside
     return IKSolutions(out, count, count > 0, singular, limits, frame, chain.joints)
+
+
+def placed(
+    chain: Chain,
+    poses: np.ndarray,
+    row: np.ndarray,
+    q: np.ndarray,
+    base: np.ndarray,
+    has_near: bool,
+    within_limits: bool,
+    shifts: bool,
+    workers: int | None = None,
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
+    """Steps 0-2 for raw angles q (M, n) of poses[row] (rows sorted): out (M, dof + n + 4) = (each
+    candidate's q within the ranges (base's (1 or N, dof) other coordinates), its chain angles wrapped into
+    (−π, π], kept, inside, position [m] and rotation [rad] errors), kept: exact, within the limits unless
+    not ``within_limits``, and no earlier kept candidate of its pose the same to SAME modulo 2π (flags 1.0
+    or 0.0); with ``shifts`` the 2π shifts (k_min, k_max, k_best) (M, n) each. The C kernel
+    (kinengine/kinematics/chainkernel.c, ``Kernel.candidates``) when built, else its numpy twin below."""
+    (M, n), dof = q.shape, chain.dof
+    out = np.empty((M, dof + n + 4))
+    kernel = chain.kernel
+    if kernel is not None:
+        k = np.empty((M, n, 3)) if shifts else None
+        kernel.candidates(
+            q, row, poses, base, chain.table, out, k, has_near, within_limits, ACCEPT, SAME, TURN_TOL
+        )
+        return out, None if k is None else (k[:, :, 0], k[:, :, 1], k[:, :, 2])
+    wrapped = _wrap_pi(q)
+    whole = base[row if len(base) > 1 else np.zeros_like(row)]
+    angles, inside, turns = _turns(chain, wrapped, whole[:, chain.columns] if has_near else None, shifts)
+    full, e = out[:, :dof], dof + n
+    full[:] = whole
+    full[:, chain.columns] = angles
+    err_p, err_r = residuals(chain.robot, chain.frame, full, poses, row, workers)
+    keep = (err_p <= ACCEPT) & (err_r <= ACCEPT)
+    if within_limits:
+        keep &= inside
+    kept = np.flatnonzero(keep)
+    keep[kept[_duplicates(row[kept], wrapped[kept])]] = False
+    out[:, dof:e], out[:, e], out[:, e + 1], out[:, e + 2], out[:, e + 3] = (
+        wrapped,
+        keep,
+        inside,
+        err_p,
+        err_r,
+    )
+    return out, turns
 
 
 def _duplicates(row: np.ndarray, wrapped: np.ndarray) -> np.ndarray:
