@@ -44,6 +44,10 @@ from .ik_solutions import (
 if TYPE_CHECKING:
     from .robot_like import RobotLike
 
+LIMIT_MARGIN = 0.1
+"""[rad] an idealized chain's answer up to this far outside a joint's limits is polished too: next to a
+singular set the real chain's solution can lie inside them where the ideal chain's does not (xArm7,
+joint2 at its limit: 0.005 rad)."""
 POSES_PER_WORKER = 1000
 """A batch's post-processing is shared among threads only when each gets at least this many poses."""
 FEW = 64
@@ -105,16 +109,21 @@ def candidates_to_solutions(
         singular = np.zeros(n_poses, dtype=bool)
         singular[row[degenerate]] = True
         polish = (err_p <= POLISH) & (err_r <= POLISH) if chain.approximate else degenerate
-        to_fix = (degenerate | polish) & ~exact
+        fix = np.flatnonzero((degenerate | polish) & ~exact)
+        angles = _turns(chain, out[fix, dof:e], None, False)[0]  # the 2π shifts into the limits
         if within_limits:  # what cannot be a solution within the limits is not polished (a degenerate is)
-            to_fix &= (out[:, e + 1] != 0) | ls
-        fix = np.flatnonzero(to_fix)
+            outside = np.maximum(chain.lower - angles, angles - chain.upper).max(axis=1, initial=0.0)
+            near = outside <= (LIMIT_MARGIN if chain.approximate else 0.0)
+            chosen = (out[fix, e + 1] != 0) | ls[fix] | near
+            fix, angles = fix[chosen], angles[chosen]
         if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
             start = out[fix, :dof]
-            start[:, columns] = _turns(chain, out[fix, dof:e], None, False)[0]
+            start[:, columns] = angles
             repaired = _repaired(robot, frame, start, poses[row[fix]])
             q = out[:, dof:e].copy()
             q[fix] = repaired[:, columns]
+            if chain.approximate:  # the ideal chain's least-squares answers: two real branches about to merge
+                row, q = _with_mirrors(chain, poses, row, q, out[:, dof:e], fix[ls[fix]], start[ls[fix]])
             out, turns = placed(chain, poses, row, q, base, has_near, within_limits, shifts, workers)
     keep = out[:, e].nonzero()[0]
     full = out[keep, :dof]
@@ -324,11 +333,34 @@ _SPLIT[3::4, 0] = 1.0  # the position entries of a row-major 3 × 4 block
 _SPLIT[[0, 1, 2, 4, 5, 6, 8, 9, 10], 1] = 0.5  # the rotation entries, halved: |C − C_d|_F² / 2
 
 
+def _with_mirrors(
+    chain: Chain,
+    poses: np.ndarray,
+    row: np.ndarray,
+    q: np.ndarray,
+    ideal: np.ndarray,
+    fold: np.ndarray,
+    start: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Near a fold of the real chain its two solutions q± ≈ q_f ± δ lie on either side of the ideal chain's
+    least-squares answer q_f (wrapped angles ``ideal`` of candidates ``fold``), of which the polish found
+    one (q): the other is polished from its mirror 2 q_f − q and added to the candidates (rows sorted).
+    ``start`` (len(fold), dof): the polish's start rows of those candidates (their other coordinates)."""
+    if not len(fold):
+        return row, q
+    d = _wrap_pi(q[fold] - ideal[fold])
+    begin = start.copy()  # the polish's start rows of the fold candidates (their other coordinates)
+    begin[:, chain.columns] = _turns(chain, _wrap_pi(ideal[fold] - d), None, False)[0]
+    mirrored = _repaired(chain.robot, chain.frame, begin, poses[row[fold]])[:, chain.columns]
+    order = np.argsort(np.concatenate((row, row[fold])), kind="stable")
+    return np.concatenate((row, row[fold]))[order], np.concatenate((q, mirrored))[order]
+
+
 def _repaired(robot: RobotLike, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:
     """Degenerate answers (the position met, the rotation about a line of aligned joint axes not) and
     an idealized chain's answers: a few damped least-squares iterations from each."""
     result = robot.inverse_kinematics(
-        T_d, frame, q, tol_position=ACCEPT / 10, tol_rotation=ACCEPT / 10, restarts=0, method="numeric"
+        T_d, frame, q, tol_position=ACCEPT / 1000, tol_rotation=ACCEPT / 1000, restarts=0, method="numeric"
     )
     return np.asarray(result.q)
 

@@ -526,7 +526,8 @@ typedef struct {
     Py_buffer Q, row, T, base, table, out, shifts;
 } CandidateViews;
 
-/* The work of Kernel.candidates without the GIL; scratch: (7 + 3 BLOCK) m doubles. */
+/* The work of Kernel.candidates without the GIL, in blocks of BLOCK candidates as run_rows (their sines and
+ * cosines together); scratch: (6 + 3 BLOCK) m doubles. */
 static void
 candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int within, double accept, double same,
                 double turn_tol, double *scratch)
@@ -534,56 +535,62 @@ candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int withi
     const Py_ssize_t M = v->Q.shape[0], n = v->Q.shape[1], dof = k->dof, m = k->m;
     const Py_ssize_t B = v->base.shape[0];
     const double *table = (const double *)v->table.buf;
-    double *zp = scratch, *theta = scratch + 6 * m, *sines = theta + m, *cosines = sines + m;
+    double *zp = scratch, *theta = scratch + 6 * m, *sines = theta + BLOCK * m, *cosines = sines + BLOCK * m;
     double q[64], pose[16];
     Py_ssize_t strides[3] = {16 * sizeof(double), 4 * sizeof(double), sizeof(double)};
     Py_buffer Tout = {0}, none = {0};
     Tout.buf = pose;
     Tout.strides = strides;
-    Py_ssize_t start = 0; /* the first candidate of the current pose */
-    for (Py_ssize_t i = 0; i < M; i++) {
-        Py_ssize_t p = *(const int64_t *)((const char *)v->row.buf + i * v->row.strides[0]);
-        if (i > 0 && p != *(const int64_t *)((const char *)v->row.buf + (i - 1) * v->row.strides[0])) {
-            start = i;
+#define ROW(i) (*(const int64_t *)((const char *)v->row.buf + (i) * v->row.strides[0]))
+    Py_ssize_t first = 0; /* the first candidate of the current pose */
+    for (Py_ssize_t start = 0; start < M; start += BLOCK) {
+        Py_ssize_t rows = M - start < BLOCK ? M - start : BLOCK;
+        for (Py_ssize_t b = 0; b < rows; b++) { /* into the ranges: the full rows and their joint angles */
+            Py_ssize_t i = start + b, p = ROW(i);
+            double *full = &AT2(v->out, i, 0), *wrapped = &AT2(v->out, i, dof);
+            for (Py_ssize_t c = 0; c < dof; c++) {
+                full[c] = AT2(v->base, B == 1 ? 0 : p, c);
+            }
+            for (Py_ssize_t j = 0; j < n; j++) {
+                q[j] = AT2(v->Q, i, j);
+            }
+            /* the reference of joint j is full[column_j] (base's), read by place() before it writes it */
+            AT2(v->out, i, dof + n + 1) = place(n, q, table, has_ref ? full : NULL, turn_tol, wrapped, full,
+                                                v->shifts.buf != NULL ? &AT3(v->shifts, i, 0, 0) : NULL);
+            for (Py_ssize_t j = 0; j < m; j++) {
+                const Step *s = &k->steps[j];
+                double a = full[s->coordinate];
+                theta[b * m + j] = s->plain ? a : a * s->scaling + s->offset;
+            }
         }
-        Py_ssize_t b = B == 1 ? 0 : p;
-        double *full = &AT2(v->out, i, 0), *wrapped = &AT2(v->out, i, dof), *result = &AT2(v->out, i, dof + n);
-        for (Py_ssize_t c = 0; c < dof; c++) {
-            full[c] = AT2(v->base, b, c);
-        }
-        for (Py_ssize_t j = 0; j < n; j++) {
-            q[j] = AT2(v->Q, i, j);
-        }
-        /* the reference of joint j is full[column_j] (base's), read by place() before it writes it */
-        int inside = place(n, q, table, has_ref ? full : NULL, turn_tol, wrapped, full,
-                           v->shifts.buf != NULL ? &AT3(v->shifts, i, 0, 0) : NULL);
-        for (Py_ssize_t j = 0; j < m; j++) {
-            const Step *s = &k->steps[j];
-            theta[j] = s->plain ? full[s->coordinate] : full[s->coordinate] * s->scaling + s->offset;
-        }
-        sin_cos(theta, sines, cosines, m);
-        run_row(k, 0, theta, sines, cosines, &Tout, &none, 0, zp);
-        double dp = 0, dr = 0;
-        for (int r = 0; r < 3; r++) {
-            for (int c = 0; c < 4; c++) {
-                double d = pose[4 * r + c] - AT3(v->T, p, r, c);
-                if (c == 3) {
-                    dp += d * d;
-                }
-                else {
+        sin_cos(theta, sines, cosines, rows * m);
+        for (Py_ssize_t b = 0; b < rows; b++) { /* the pose at each against its target; duplicates */
+            Py_ssize_t i = start + b, p = ROW(i);
+            if (i > 0 && p != ROW(i - 1)) {
+                first = i;
+            }
+            double *wrapped = &AT2(v->out, i, dof), *result = &AT2(v->out, i, dof + n);
+            run_row(k, 0, theta + b * m, sines + b * m, cosines + b * m, &Tout, &none, 0, zp);
+            double dp = 0, dr = 0;
+            for (int r = 0; r < 3; r++) {
+                for (int c = 0; c < 3; c++) {
+                    double d = pose[4 * r + c] - AT3(v->T, p, r, c);
                     dr += d * d;
                 }
+                double d = pose[4 * r + 3] - AT3(v->T, p, r, 3);
+                dp += d * d;
             }
-        }
-        dp = sqrt(dp), dr = sqrt(0.5 * dr);
-        int keep = dp <= accept && dr <= accept && (inside || !within);
-        for (Py_ssize_t e = start; keep && e < i; e++) {
-            if (AT2(v->out, e, dof + n) != 0.0 && same_angles(n, wrapped, &AT2(v->out, e, dof), same)) {
-                keep = 0;
+            dp = sqrt(dp), dr = sqrt(0.5 * dr);
+            int keep = dp <= accept && dr <= accept && (result[1] != 0.0 || !within);
+            for (Py_ssize_t e = first; keep && e < i; e++) {
+                if (AT2(v->out, e, dof + n) != 0.0 && same_angles(n, wrapped, &AT2(v->out, e, dof), same)) {
+                    keep = 0;
+                }
             }
+            result[0] = keep, result[2] = dp, result[3] = dr;
         }
-        result[0] = keep, result[1] = inside, result[2] = dp, result[3] = dr;
     }
+#undef ROW
 }
 
 static PyObject *
@@ -634,7 +641,7 @@ kernel_candidates(Kernel *self, PyObject *args)
                         "shifts None or (M, n, 3) rows contiguous");
         goto done;
     }
-    scratch = PyMem_RawMalloc(sizeof(double) * 9 * (self->m ? self->m : 1));
+    scratch = PyMem_RawMalloc(sizeof(double) * (6 + 3 * BLOCK) * (self->m ? self->m : 1));
     if (scratch == NULL) {
         PyErr_NoMemory();
         goto done;
