@@ -114,9 +114,9 @@ def test_every_solution_reproduces_the_pose_and_the_generating_q_is_among_them(c
         for i, s in zip(misses, near_singular, strict=True)
     )
     assert rate >= CASES[case], f"{case}: {rate:.2%} complete; missed {named}"
-    # the misses lie at (or next to) singular sets: the Jacobian there loses rank to 1e-3 (measured: at
-    # most 2.3e-4, the xArm's; 5e-6 and 2e-9 on the others)
-    assert (near_singular < 1e-3).all(), f"{case}: missed {named}"
+    # the misses lie at (or next to) singular sets: the Jacobian there loses rank to 1e-4 (measured: the
+    # tilted arm's 5.2e-6, the Panda's 2.3e-9; the xArm's with seeds 8 and 9 4.6e-6 and 2.5e-7)
+    assert (near_singular < 1e-4).all(), f"{case}: missed {named}"
 
 
 @pytest.mark.parametrize("case", ["abb_irb120", "ur5", "panda_arm:panda_joint7", "tilted_arm"])
