@@ -425,7 +425,7 @@ def test_the_c_kernel_refuses_malformed_candidates(abb):
         pytest.skip("the C chain is not built")
     q, T, base = np.zeros((2, 6)), np.tile(np.eye(4), (2, 1, 1)), np.zeros((1, 6))
     out = np.empty((2, 16))
-    args = (False, True, 1e-9, 1e-7, 1e-12)
+    args = (False, True, False, 1e-9, 1e-7, 1e-12)
     chain.kernel.candidates(q, np.array([0, 1]), T, base, chain.table, out, None, *args)  # well formed
     for row in (np.array([1, 0]), np.array([0, 2]), np.array([0, 1], dtype=np.int32)):  # unsorted, beyond T
         with pytest.raises(ValueError, match="row"):

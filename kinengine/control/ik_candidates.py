@@ -1,17 +1,21 @@
-"""The vectorized post-processing of a closed-form solver's raw answers into :class:`.IKSolutions`.
+"""The post-processing of a closed-form solver's raw answers into :class:`.IKSolutions`, one pose or a
+batch alike.
 
-From raw joint angles (N, K, n) of the n chain joints to :class:`IKSolutions`, every step a numpy pass
-over all candidates of all poses at once (flat (M,) arrays, M = number of raw answers):
+From raw joint angles of the n chain joints, flat over all candidates of all poses (M answers, sorted by
+pose), steps 0–2 in one pass per candidate (:func:`placed`: the C chain's ``Kernel.candidates`` in
+kinengine/kinematics/chainkernel.c, or its numpy twin where the extension is not built):
 
-1. check: the frame's pose at each candidate (the batch chain) against the target; a candidate further
-   than ``ACCEPT`` [m, rad] from it is dropped (the solver's least-squares answers of unreachable poses),
-   unless it is polished to it first (a degenerate answer, or one of an idealized chain: damped least
-   squares from it);
+0. wrap into the joint ranges: continuous joints (no limits) into (−π, π]; a limited joint takes the
+   2π shift inside [lower, upper] nearest the reference (``q_near``, else 0); outside every shift: not
+   within the limits (dropped, or kept and flagged with ``within_limits=False``);
+1. check: the frame's pose at each candidate against the target; a candidate further than ``ACCEPT``
+   [m, rad] from it is dropped (the solver's least-squares answers of unreachable poses), unless it is
+   polished to it first (a degenerate answer, or one of an idealized chain: damped least squares from
+   it, then steps 0–2 again);
 2. deduplicate: candidates of one pose closer than ``SAME`` [rad] (angles compared modulo 2π) are one;
-3. wrap into the joint ranges: continuous joints (no limits) into (−π, π]; a limited joint takes the
-   2π shift inside [lower, upper] nearest the reference (``q_near``, else 0); ``all_turns`` adds every
-   other shift that stays inside; outside every shift: dropped, or kept and flagged (``within_limits=False``);
-4. sort each pose's solutions by distance |q − q_near| (within-limits first), and pad with NaN.
+
+then ``all_turns`` adds every other shift that stays inside, each pose's solutions are sorted by
+distance |q − q_near| (within-limits first), and a batch is padded with NaN.
 
 ``singular``: the solver met a degenerate subproblem (its least-squares answer meets the target's
 position): joint axes line up, and the solutions there form a continuum (e.g. a spherical wrist at
@@ -98,10 +102,11 @@ def candidates_to_solutions(
     base = near if near.ndim == 2 else near[None]
     shifts = all_turns and len(chain.many_turns) > 0
     # 0.-2. into the joint ranges, checked against the targets, deduplicated
-    out, turns = placed(chain, poses, row, q, base, has_near, within_limits, shifts, workers)
+    repair = ls is not None or chain.approximate
+    out, turns = placed(chain, poses, row, q, base, has_near, within_limits, shifts, workers, not repair)
     e = dof + len(columns)  # out's columns: full q, the chain's wrapped angles, kept, inside, errors
     singular = None
-    if ls is not None or chain.approximate:  # degenerate answers repaired, an idealized chain's polished
+    if repair:  # degenerate answers repaired, an idealized chain's polished
         ls = np.zeros(len(row), dtype=bool) if ls is None else ls
         err_p, err_r = out[:, e + 2], out[:, e + 3]
         exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
@@ -174,12 +179,14 @@ def placed(
     within_limits: bool,
     shifts: bool,
     workers: int | None = None,
+    skip: bool = False,
 ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
     """Steps 0-2 for raw angles q (M, n) of poses[row] (rows sorted): out (M, dof + n + 4) = (each
     candidate's q within the ranges (base's (1 or N, dof) other coordinates), its chain angles wrapped into
     (−π, π], kept, inside, position [m] and rotation [rad] errors), kept: exact, within the limits unless
     not ``within_limits``, and no earlier kept candidate of its pose the same to SAME modulo 2π (flags 1.0
-    or 0.0); with ``shifts`` the 2π shifts (k_min, k_max, k_best) (M, n) each. The C kernel
+    or 0.0); with ``shifts`` the 2π shifts (k_min, k_max, k_best) (M, n) each; with ``skip`` and
+    ``within_limits`` a candidate outside the limits is not checked (its errors inf). The C kernel
     (kinengine/kinematics/chainkernel.c, ``Kernel.candidates``) when built, else its numpy twin below."""
     (M, n), dof = q.shape, chain.dof
     out = np.empty((M, dof + n + 4))
@@ -187,7 +194,7 @@ def placed(
     if kernel is not None:
         k = np.empty((M, n, 3)) if shifts else None
         kernel.candidates(
-            q, row, poses, base, chain.table, out, k, has_near, within_limits, ACCEPT, SAME, TURN_TOL
+            q, row, poses, base, chain.table, out, k, has_near, within_limits, skip, ACCEPT, SAME, TURN_TOL
         )
         return out, None if k is None else (k[:, :, 0], k[:, :, 1], k[:, :, 2])
     wrapped = _wrap_pi(q)
@@ -196,7 +203,11 @@ def placed(
     full, e = out[:, :dof], dof + n
     full[:] = whole
     full[:, chain.columns] = angles
-    err_p, err_r = residuals(chain.robot, chain.frame, full, poses, row, workers)
+    err_p, err_r = np.full(len(q), np.inf), np.full(len(q), np.inf)
+    checked = np.flatnonzero(inside) if skip and within_limits else slice(None)
+    err_p[checked], err_r[checked] = residuals(
+        chain.robot, chain.frame, full[checked], poses, row[checked], workers
+    )
     keep = (err_p <= ACCEPT) & (err_r <= ACCEPT)
     if within_limits:
         keep &= inside

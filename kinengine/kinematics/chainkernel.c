@@ -6,7 +6,7 @@
  *                            angular], reference 0 "local_world_aligned", 1 "world", 2 "local"; T or J may
  *                            be None. Any strides that are multiples of 8 on 8-byte aligned data (the caller
  *                            copies other layouts); the GIL is released while it runs.
- *   kernel.candidates(Q, row, T, base, table, out, shifts, has_ref, within, accept, same, turn_tol)
+ *   kernel.candidates(Q, row, T, base, table, out, shifts, has_ref, within, skip, accept, same, turn_tol)
  *                            a closed-form IK solver's raw answers Q (M, n) of poses T (N, 4, 4), sorted by pose
  *                            (row (M,) int64), into the joint ranges and checked (kinengine/control/
  *                            ik_candidates.py, whose numpy twin it is): per candidate the angles wrapped into
@@ -16,7 +16,8 @@
  *                            out (M, dof + n + 4) = (full row, wrapped, kept, within the limits, position error
  *                            [m], rotation error |C - C_d|_F / sqrt 2 [rad]); kept: both errors <= accept, within
  *                            the limits unless not within, no earlier kept candidate of its pose equal to same
- *                            modulo 2 pi. table (n, 4): per joint its column in q, kind (0 continuous, 1 a range
+ *                            modulo 2 pi; skip: a candidate outside the limits is not checked (errors inf).
+ *                            table (n, 4): per joint its column in q, kind (0 continuous, 1 a range
  *                            within (-pi, pi], 2 any other), lower, upper.
  *   sin_check(angles)        the kernel's sin_cos on a buffer of float64 angles (sines, then cosines): checked
  *                            against libm at import (kinengine/kinematics/compiler.py), which falls back to the
@@ -529,8 +530,8 @@ typedef struct {
 /* The work of Kernel.candidates without the GIL, in blocks of BLOCK candidates as run_rows (their sines and
  * cosines together); scratch: (6 + 3 BLOCK) m doubles. */
 static void
-candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int within, double accept, double same,
-                double turn_tol, double *scratch)
+candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int within, int skip, double accept,
+                double same, double turn_tol, double *scratch)
 {
     const Py_ssize_t M = v->Q.shape[0], n = v->Q.shape[1], dof = k->dof, m = k->m;
     const Py_ssize_t B = v->base.shape[0];
@@ -570,6 +571,10 @@ candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int withi
                 first = i;
             }
             double *wrapped = &AT2(v->out, i, dof), *result = &AT2(v->out, i, dof + n);
+            if (skip && within && result[1] == 0.0) { /* outside the limits: no solution asked for, not checked */
+                result[0] = 0.0, result[2] = INFINITY, result[3] = INFINITY;
+                continue;
+            }
             run_row(k, 0, theta + b * m, sines + b * m, cosines + b * m, &Tout, &none, 0, zp);
             double dp = 0, dr = 0;
             for (int r = 0; r < 3; r++) {
@@ -597,10 +602,10 @@ static PyObject *
 kernel_candidates(Kernel *self, PyObject *args)
 {
     PyObject *q_obj, *row_obj, *t_obj, *base_obj, *table_obj, *out_obj, *shifts_obj;
-    int has_ref, within;
+    int has_ref, within, skip;
     double accept, same, turn_tol;
-    if (!PyArg_ParseTuple(args, "OOOOOOOppddd", &q_obj, &row_obj, &t_obj, &base_obj, &table_obj, &out_obj,
-                          &shifts_obj, &has_ref, &within, &accept, &same, &turn_tol)) {
+    if (!PyArg_ParseTuple(args, "OOOOOOOpppddd", &q_obj, &row_obj, &t_obj, &base_obj, &table_obj, &out_obj,
+                          &shifts_obj, &has_ref, &within, &skip, &accept, &same, &turn_tol)) {
         return NULL;
     }
     CandidateViews v;
@@ -647,11 +652,11 @@ kernel_candidates(Kernel *self, PyObject *args)
         goto done;
     }
     if (M < BLOCK) { /* a few candidates (one pose): handing the GIL over would cost more than the work */
-        candidates_rows(self, &v, has_ref, within, accept, same, turn_tol, scratch);
+        candidates_rows(self, &v, has_ref, within, skip, accept, same, turn_tol, scratch);
     }
     else {
         Py_BEGIN_ALLOW_THREADS
-        candidates_rows(self, &v, has_ref, within, accept, same, turn_tol, scratch);
+        candidates_rows(self, &v, has_ref, within, skip, accept, same, turn_tol, scratch);
         Py_END_ALLOW_THREADS
     }
     result = Py_NewRef(Py_None);
@@ -670,7 +675,7 @@ static PyMethodDef kernel_methods[] = {
     {"run", (PyCFunction)kernel_run, METH_VARARGS,
      "run(Q, T, J, reference): fill T (N, 4, 4) and/or J (N, 6, dof) for Q (N, dof); None skips one."},
     {"candidates", (PyCFunction)kernel_candidates, METH_VARARGS,
-     "candidates(Q, row, T, base, table, out, shifts, has_ref, within, accept, same, turn_tol): closed-form IK answers into the joint ranges, checked against their poses, deduplicated."},
+     "candidates(Q, row, T, base, table, out, shifts, has_ref, within, skip, accept, same, turn_tol): closed-form IK answers into the joint ranges, checked against their poses, deduplicated."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -16,6 +16,7 @@ class Kernel:
         shifts: Any,
         has_ref: bool,
         within: bool,
+        skip: bool,
         accept: float,
         same: float,
         turn_tol: float,
