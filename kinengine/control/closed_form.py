@@ -241,7 +241,7 @@ def ik_solutions(
             poses,
             np.zeros(len(ls), dtype=np.intp),
             Q if len(Q) else np.zeros((0, len(chain.joints))),
-            np.array(ls, dtype=bool) if any(ls) else None,
+            np.array(ls, dtype=bool) if np.count_nonzero(ls) else None,
             reference,
             near is not None,
             within_limits=bool(within_limits),

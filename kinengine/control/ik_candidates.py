@@ -194,7 +194,19 @@ def placed(
     if kernel is not None:
         k = np.empty((M, n, 3)) if shifts else None
         kernel.candidates(
-            q, row, poses, base, chain.table, out, k, has_near, within_limits, skip, ACCEPT, SAME, TURN_TOL
+            q,
+            None if len(poses) == 1 else row,
+            poses,
+            base,
+            chain.table,
+            out,
+            k,
+            has_near,
+            within_limits,
+            skip,
+            ACCEPT,
+            SAME,
+            TURN_TOL,
         )
         return out, None if k is None else (k[:, :, 0], k[:, :, 1], k[:, :, 2])
     wrapped = _wrap_pi(q)

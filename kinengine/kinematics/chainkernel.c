@@ -8,7 +8,7 @@
  *                            copies other layouts); the GIL is released while it runs.
  *   kernel.candidates(Q, row, T, base, table, out, shifts, has_ref, within, skip, accept, same, turn_tol)
  *                            a closed-form IK solver's raw answers Q (M, n) of poses T (N, 4, 4), sorted by pose
- *                            (row (M,) int64), into the joint ranges and checked (kinengine/control/
+ *                            (row (M,) int64, or None for one pose), into the joint ranges and checked (kinengine/control/
  *                            ik_candidates.py, whose numpy twin it is): per candidate the angles wrapped into
  *                            (-pi, pi] (wrapped), each joint's 2 pi shift into its range nearest the reference
  *                            (base's row if has_ref, else 0; shifts (M, n, 3) k_min, k_max, k_best unless None),
@@ -542,7 +542,7 @@ candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int withi
     Py_buffer Tout = {0}, none = {0};
     Tout.buf = pose;
     Tout.strides = strides;
-#define ROW(i) (*(const int64_t *)((const char *)v->row.buf + (i) * v->row.strides[0]))
+#define ROW(i) (v->row.buf == NULL ? 0 : *(const int64_t *)((const char *)v->row.buf + (i) * v->row.strides[0]))
     Py_ssize_t first = 0; /* the first candidate of the current pose */
     for (Py_ssize_t start = 0; start < M; start += BLOCK) {
         Py_ssize_t rows = M - start < BLOCK ? M - start : BLOCK;
@@ -616,14 +616,14 @@ kernel_candidates(Kernel *self, PyObject *args)
         return NULL;
     }
     const Py_ssize_t M = v.Q.shape[0], n = v.Q.shape[1];
-    if (get_index(row_obj, &v.row) < 0 || get_array(t_obj, &v.T, 3, 0, "T") < 0 ||
+    if ((row_obj != Py_None && get_index(row_obj, &v.row) < 0) || get_array(t_obj, &v.T, 3, 0, "T") < 0 ||
         get_array(base_obj, &v.base, 2, 0, "base") < 0 || get_array(table_obj, &v.table, 2, 0, "table") < 0 ||
         get_array(out_obj, &v.out, 2, 1, "out") < 0 ||
         (shifts_obj != Py_None && get_array(shifts_obj, &v.shifts, 3, 1, "shifts") < 0)) {
         goto done;
     }
     const Py_ssize_t N = v.T.shape[0], B = v.base.shape[0];
-    int ok = n <= 64 && v.row.shape[0] == M && v.T.shape[1] == 4 && v.T.shape[2] == 4 && (B == 1 || B == N) &&
+    int ok = n <= 64 && (v.row.buf == NULL ? N == 1 : v.row.shape[0] == M) && v.T.shape[1] == 4 && v.T.shape[2] == 4 && (B == 1 || B == N) &&
              v.base.shape[1] == self->dof && v.table.shape[0] == n && v.table.shape[1] == 4 &&
              PyBuffer_IsContiguous(&v.table, 'C') && v.out.shape[0] == M && v.out.shape[1] == self->dof + n + 4 &&
              v.out.strides[1] == sizeof(double) &&
@@ -634,7 +634,7 @@ kernel_candidates(Kernel *self, PyObject *args)
         const double *t = (const double *)v.table.buf + 4 * j;
         ok = t[0] >= 0 && t[0] < (double)self->dof && t[0] == floor(t[0]) && (t[1] == 0 || t[1] == 1 || t[1] == 2);
     }
-    for (Py_ssize_t i = 0; ok && i < M; i++) {
+    for (Py_ssize_t i = 0; ok && v.row.buf != NULL && i < M; i++) {
         int64_t p = *(const int64_t *)((const char *)v.row.buf + i * v.row.strides[0]);
         ok = p >= 0 && p < N &&
              (i == 0 || p >= *(const int64_t *)((const char *)v.row.buf + (i - 1) * v.row.strides[0]));
