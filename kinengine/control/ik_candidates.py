@@ -33,6 +33,7 @@ import numpy as np
 
 from ..kinematics import batch, compiler
 from ..kinematics.compiler import compiled_chain
+from .ik_ranges import all_turns_of, shifted_into_ranges, wrap_pi
 from .ik_solutions import (
     ACCEPT,
     DEGENERATE,
@@ -115,7 +116,7 @@ def candidates_to_solutions(
         singular[row[degenerate]] = True
         polish = (err_p <= POLISH) & (err_r <= POLISH) if chain.approximate else degenerate
         fix = np.flatnonzero((degenerate | polish) & ~exact)
-        angles = _turns(chain, out[fix, dof:e], None, False)[0]  # the 2π shifts into the limits
+        angles = shifted_into_ranges(chain, out[fix, dof:e], None, False)[0]  # the 2π shifts into the limits
         if within_limits:  # what cannot be a solution within the limits is not polished (a degenerate is)
             outside = np.maximum(chain.lower - angles, angles - chain.upper).max(axis=1, initial=0.0)
             near = outside <= (LIMIT_MARGIN if chain.approximate else 0.0)
@@ -146,7 +147,7 @@ def candidates_to_solutions(
         )
     row = row[keep]
     if turns is not None:
-        row, inside, full = _all_turns(chain, row, inside, full, *(k[keep] for k in turns))
+        row, inside, full = all_turns_of(chain, row, inside, full, *(k[keep] for k in turns))
     # 3. within the limits first, then by distance to q_near, within each pose; padded with NaN
     if has_near and len(row) > 1:
         distance = np.linalg.norm(full - base[0 if len(base) == 1 else row], axis=1)
@@ -209,9 +210,11 @@ def placed(
             TURN_TOL,
         )
         return out, None if k is None else (k[:, :, 0], k[:, :, 1], k[:, :, 2])
-    wrapped = _wrap_pi(q)
+    wrapped = wrap_pi(q)
     whole = base[row if len(base) > 1 else np.zeros_like(row)]
-    angles, inside, turns = _turns(chain, wrapped, whole[:, chain.columns] if has_near else None, shifts)
+    angles, inside, turns = shifted_into_ranges(
+        chain, wrapped, whole[:, chain.columns] if has_near else None, shifts
+    )
     full, e = out[:, :dof], dof + n
     full[:] = whole
     full[:, chain.columns] = angles
@@ -244,79 +247,6 @@ def _duplicates(row: np.ndarray, wrapped: np.ndarray) -> np.ndarray:
         d = np.abs(wrapped[later] - wrapped[later - back])  # both in (−π, π]: |d| < 2π
         duplicate[later[(np.minimum(d, TWO_PI - d) <= SAME).all(axis=1)]] = True
     return duplicate
-
-
-def _wrap_pi(a: np.ndarray) -> np.ndarray:
-    """Angles into (−π, π] (the solver's are in [−π, π] already: then only −π moves)."""
-    if len(a) and np.abs(a).max() <= np.pi:
-        return np.where(a == -np.pi, np.pi, a)
-    return np.pi - np.mod(np.pi - a, TWO_PI)
-
-
-def _turns(
-    chain: Chain, wrapped: np.ndarray, ref: np.ndarray | None, shifts: bool
-) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
-    """Angles (M, n) in (−π, π] shifted by 2π·k into the joint ranges: k nearest (ref − angle)/2π (ref None:
-    0) among k_min..k_max (the shifts inside [lower, upper], a limit met to TURN_TOL: on it); continuous
-    joints unshifted; a joint no shift puts inside keeps the shift nearest ref. A range within (−π, π]
-    (``chain.one_turn``) has only k = 0. Returns (angles, inside (M,), and with ``shifts`` (k_min, k_max,
-    k_best) (M, n), 0 for continuous and one-turn joints)."""
-    angles = wrapped.copy()
-    inside = np.ones(len(wrapped), dtype=bool)
-    one, many = chain.one_turn, chain.many_turns
-    if len(one):
-        w, lo, hi = wrapped[:, one], chain.lower[one], chain.upper[one]
-        fits = (w >= lo - TURN_TOL) & (w <= hi + TURN_TOL)
-        inside &= fits.all(axis=1)
-        on = np.minimum(np.maximum(w, lo), hi)
-        if ref is not None:  # no shift fits: the one nearest the reference
-            w = w + TWO_PI * np.rint((ref[:, one] - w) / TWO_PI)
-        angles[:, one] = np.where(fits, on, w)
-    k = None
-    if len(many):
-        w, lo, hi = wrapped[:, many], chain.lower[many], chain.upper[many]
-        k_min = np.ceil((lo - w) / TWO_PI - 1e-12)
-        k_max = np.floor((hi - w) / TWO_PI + 1e-12)
-        k_near = np.zeros_like(w) if ref is None else np.rint((ref[:, many] - w) / TWO_PI)
-        fits = k_min <= k_max
-        inside &= fits.all(axis=1)
-        k_best = np.where(fits, np.minimum(np.maximum(k_near, k_min), k_max), k_near)
-        a = w + TWO_PI * k_best
-        angles[:, many] = np.where(fits, np.minimum(np.maximum(a, lo), hi), a)
-        k = (k_min, k_max, k_best)
-    if not shifts:
-        return angles, inside, None
-    full = tuple(np.zeros_like(wrapped) for _ in range(3))
-    if k is not None:
-        for f, part in zip(full, k, strict=True):
-            f[:, many] = part
-    return angles, inside, full  # type: ignore[return-value]
-
-
-def _all_turns(
-    chain: Chain,
-    row: np.ndarray,
-    inside: np.ndarray,
-    full: np.ndarray,
-    k_min: np.ndarray,
-    k_max: np.ndarray,
-    k_best: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every 2π shift of each within-limits solution's joints whose range holds several (``many_turns``)
-    that stays within the limits (the chosen one first), joint by joint: each solution repeated once per
-    shift of that joint."""
-    for j in chain.many_turns:
-        shifts = np.where(inside, np.maximum(k_max[:, j] - k_min[:, j] + 1, 1), 1).astype(np.intp)
-        source = np.repeat(np.arange(len(row)), shifts)
-        step = np.arange(len(source)) - np.repeat(np.cumsum(shifts) - shifts, shifts)
-        k = np.where(inside[source], k_min[source, j] + step, k_best[source, j])
-        chosen = k == k_best[source, j]
-        order = np.lexsort((~chosen, source))  # the chosen shift first within each solution
-        source, k = source[order], k[order]
-        row, inside, full = row[source], inside[source], full[source]
-        k_min, k_max, k_best = k_min[source], k_max[source], k_best[source]
-        full[:, chain.columns[j]] += TWO_PI * (k - k_best[:, j])
-    return row, inside, full
 
 
 def residuals(
@@ -371,9 +301,9 @@ def _with_mirrors(
     ``start`` (len(fold), dof): the polish's start rows of those candidates (their other coordinates)."""
     if not len(fold):
         return row, q
-    d = _wrap_pi(q[fold] - ideal[fold])
+    d = wrap_pi(q[fold] - ideal[fold])
     begin = start.copy()  # the polish's start rows of the fold candidates (their other coordinates)
-    begin[:, chain.columns] = _turns(chain, _wrap_pi(ideal[fold] - d), None, False)[0]
+    begin[:, chain.columns] = shifted_into_ranges(chain, wrap_pi(ideal[fold] - d), None, False)[0]
     mirrored = _repaired(chain.robot, chain.frame, begin, poses[row[fold]])[:, chain.columns]
     order = np.argsort(np.concatenate((row, row[fold])), kind="stable")
     return np.concatenate((row, row[fold]))[order], np.concatenate((q, mirrored))[order]
