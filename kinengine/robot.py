@@ -789,9 +789,11 @@ class Robot:
         ``within_limits=False``: solutions outside the limits too, flagged. Sorted by distance to
         ``q_near`` (dof,) or (N, dof) when given; ``avoid_collisions``: the solutions in collision
         (:meth:`in_collision`, obstacles included) dropped. See :mod:`kinengine.control.closed_form`."""
-        from .control.closed_form import ik_solutions
+        import kinengine.control.closed_form as _closed_form  # absolute: a third of the relative form's cost
 
-        found = ik_solutions(self, T, frame, q_near=q_near, within_limits=within_limits, all_turns=all_turns)
+        found = _closed_form.ik_solutions(
+            self, T, frame, q_near=q_near, within_limits=within_limits, all_turns=all_turns
+        )
         if checked_flag(avoid_collisions, "avoid_collisions"):
             from .control.ik_repair import without_collisions
 

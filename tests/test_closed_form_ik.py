@@ -81,8 +81,9 @@ CASES = {  # robot (name:locked joint) -> completeness floor
     "panda_arm:panda_joint4": 0.999,
     "tilted_arm": 0.999,
     # xArm7's URDF writes its right angles as 1.5708: its axes are 4e-6 to 1.1e-5 rad off, so the ideal
-    # chain is solved and its answers polished; near singular sets of the ideal chain that can miss
-    "xarm7:joint7": 0.997,
+    # chain is solved and its answers polished on the real one (to 1e-12; next to a fold, from the mirror
+    # of the polished answer too; next to a limit, from outside it): measured 100.00 % (seed 7)
+    "xarm7:joint7": 0.999,
 }
 
 
@@ -113,9 +114,9 @@ def test_every_solution_reproduces_the_pose_and_the_generating_q_is_among_them(c
         for i, s in zip(misses, near_singular, strict=True)
     )
     assert rate >= CASES[case], f"{case}: {rate:.2%} complete; missed {named}"
-    # the misses lie at (or next to) singular sets: the Jacobian there loses rank to 1e-3 (measured: at
-    # most 2.3e-4, the xArm's; 5e-6 and 2e-9 on the others)
-    assert (near_singular < 1e-3).all(), f"{case}: missed {named}"
+    # the misses lie at (or next to) singular sets: the Jacobian there loses rank to 1e-4 (measured: the
+    # tilted arm's 5.2e-6, the Panda's 2.3e-9; the xArm's with seeds 8 and 9 4.6e-6 and 2.5e-7)
+    assert (near_singular < 1e-4).all(), f"{case}: missed {named}"
 
 
 @pytest.mark.parametrize("case", ["abb_irb120", "ur5", "panda_arm:panda_joint7", "tilted_arm"])
@@ -385,3 +386,53 @@ def test_closed_form_refuses_a_mapping_and_measures_the_errors_of_an_unreachable
     reached = abb.frame_pose(result.q)
     assert result.position_error == pytest.approx(np.linalg.norm(reached[:3, 3] - far[:3, 3]), rel=1e-12)
     assert np.isfinite(result.rotation_error)
+
+
+@pytest.mark.parametrize("case", ["abb_irb120", "ur5", "tilted_arm", "xarm7:joint7"])
+def test_the_c_kernel_and_its_numpy_twin_give_the_same_solutions(case, monkeypatch):
+    """Kernel.candidates (kinengine/kinematics/chainkernel.c) against the numpy steps of
+    kinengine/control/ik_candidates.py, on reachable, singular and unreachable poses, every option."""
+    from kinengine.control.closed_form import solver_of
+
+    robot = _load(case)
+    chain = solver_of(robot, None)
+    if chain.kernel is None:
+        pytest.skip("the C chain is not built")
+    Q = robot.random_configuration(rng=11, size=300)
+    Q[:20, robot.dof - 2] = 0.0  # wrist-singular rows (the chains here end in a wrist)
+    T = robot.frame_pose(Q)
+    T[-10:, :3, 3] *= 10.0  # out of reach
+    near = robot.random_configuration(rng=12, size=len(T))
+    options = [{}, {"q_near": near, "all_turns": True}, {"within_limits": False, "q_near": near[0]}]
+    for option in options:
+        for poses in (T, T[25], T[5]):
+            single = {k: (v[25] if np.ndim(v) == 2 else v) for k, v in option.items()}
+            c = robot.ik_solutions(poses, **(option if poses.ndim == 3 else single))
+            with monkeypatch.context() as patch:
+                patch.setattr(chain, "kernel", None)
+                twin = robot.ik_solutions(poses, **(option if poses.ndim == 3 else single))
+            np.testing.assert_array_equal(c.count, twin.count)
+            np.testing.assert_array_equal(c.singular, twin.singular)
+            np.testing.assert_array_equal(c.within_limits, twin.within_limits)
+            np.testing.assert_allclose(c.q, twin.q, rtol=0, atol=1e-12)  # NaN padding in the same places
+
+
+def test_the_c_kernel_refuses_malformed_candidates(abb):
+    from kinengine.control.closed_form import solver_of
+
+    chain = solver_of(abb, None)
+    if chain.kernel is None:
+        pytest.skip("the C chain is not built")
+    q, T, base = np.zeros((2, 6)), np.tile(np.eye(4), (2, 1, 1)), np.zeros((1, 6))
+    out = np.empty((2, 16))
+    args = (False, True, False, 1e-9, 1e-7, 1e-12)
+    chain.kernel.candidates(q, np.array([0, 1]), T, base, chain.table, out, None, *args)  # well formed
+    for row in (np.array([1, 0]), np.array([0, 2]), np.array([0, 1], dtype=np.int32)):  # unsorted, beyond T
+        with pytest.raises(ValueError, match="row"):
+            chain.kernel.candidates(q, row, T, base, chain.table, out, None, *args)
+    with pytest.raises(ValueError, match="out"):
+        chain.kernel.candidates(q, np.array([0, 1]), T, base, chain.table, out[:, :15], None, *args)
+    table = chain.table.copy()
+    table[0, 0] = 6.0  # column beyond q
+    with pytest.raises(ValueError, match="table"):
+        chain.kernel.candidates(q, np.array([0, 1]), T, base, table, out, None, *args)

@@ -29,8 +29,9 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import KinematicsError, OptionError
+from ..kinematics.compiler import compiled_chain
 from .ik_candidates import candidates_to_solutions, shared_by_poses
-from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined, one_pose
+from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined
 from .ik_target import batch_targets, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
@@ -148,15 +149,13 @@ class ClosedFormChain:
         self.many_turns = np.flatnonzero(~self.continuous & ~within)
         kinds = np.full(n, MANY_TURNS)
         kinds[self.one_turn], kinds[self.continuous] = ONE_TURN, CONTINUOUS
-        self.scalar_joints = [  # one_pose's: the one-turn joints first (the cheapest test drops most)
-            (int(j), int(g.columns[j]), int(kinds[j]), float(self.lower[j]), float(self.upper[j]))
-            for j in np.argsort(kinds != ONE_TURN, kind="stable")
-        ]
-        self.robot = robot
-        self.pose = robot.frame(frame, check_inputs=False).pose
+        self.table = np.column_stack((g.columns, kinds, self.lower, self.upper)).astype(np.float64)
+        """(n, 4) per joint: its column in q, kind of range, lower, upper [rad] (the C kernel's table)."""
+        self.robot, self.dof = robot, robot.dof
         self.neutral = robot.neutral()
-        self.whole = bool(np.array_equal(g.columns, np.arange(robot.dof)))
         self.neutral.flags.writeable = False
+        self.kernel = compiled_chain(robot.engine, robot.engine.frame_id(frame)).kernel
+        """The C chain of the frame (``Kernel.candidates`` checks the answers), None without the extension."""
 
     def solve_one(self, T: np.ndarray) -> Any:
         """EAIK's answer object for one pose T (4, 4): ``.Q`` (k, 6) [rad], ``.is_LS`` (k,)."""
@@ -190,12 +189,14 @@ def chain_of(robot: RobotLike, frame: str | None) -> ClosedFormChain | Kinematic
     """The robot's closed-form solver of ``frame`` (default: end effector), built once and kept; the error
     that says why there is none, kept likewise."""
     name = robot.end_effector if frame is None else frame
-    robot.engine.frame_id(name)  # FrameNotFoundError with suggestions first
-    _eaik()
+    if not isinstance(name, str):
+        robot.engine.frame_id(name)  # FrameNotFoundError (not a key to keep)
     return robot.engine.memoized(("closed-form IK", name), lambda: _built(robot, name))
 
 
 def _built(robot: RobotLike, frame: str) -> ClosedFormChain | KinematicsError:
+    robot.engine.frame_id(frame)  # FrameNotFoundError with suggestions first, not kept
+    _eaik()  # likewise the missing extra
     try:
         return ClosedFormChain(robot, frame)
     except KinematicsError as exc:  # kept too: the answer "no closed form" is as costly to find
@@ -232,14 +233,26 @@ def ik_solutions(
                 f"`q_near` must be (dof,) or one row per pose ({len(poses)}), got {len(near)} rows"
             )
     reference = chain.neutral if near is None else near
-    if single and within_limits and not all_turns and not chain.approximate:
+    if single:  # the solver's answer object as it comes: no batch gathering
         answer = chain.solve_one(poses[0])
-        if not any(answer.is_LS):  # exact answers only: the scalar path
-            return one_pose(chain, poses[0], answer.Q, reference, near is not None)
+        Q, ls = answer.Q, answer.is_LS
+        return candidates_to_solutions(
+            chain,
+            poses,
+            np.zeros(len(ls), dtype=np.intp),
+            Q if len(Q) else np.zeros((0, len(chain.joints))),
+            np.array(ls, dtype=bool) if np.count_nonzero(ls) else None,
+            reference,
+            near is not None,
+            within_limits=bool(within_limits),
+            all_turns=bool(all_turns),
+            single=True,
+        )
 
     def solve(a: int, b: int) -> IKSolutions:
         """Poses a..b: the solver's answers (its threads), then their post-processing."""
         row, Q, LS = chain.raw(poses[a:b])
+        has_ls = bool(LS.any())
 
         def post(c0: int, c1: int, i0: int, i1: int, workers: int | None) -> IKSolutions:
             return candidates_to_solutions(
@@ -247,7 +260,7 @@ def ik_solutions(
                 poses[a + c0 : a + c1],
                 row[i0:i1] - c0,
                 Q[i0:i1],
-                LS[i0:i1],
+                LS[i0:i1] if has_ls else None,
                 reference[a + c0 : a + c1] if reference.ndim == 2 else reference,
                 near is not None,
                 within_limits=bool(within_limits),
@@ -269,6 +282,8 @@ def _checked_poses(T: object) -> np.ndarray:
         batch_targets(T)
     else:
         single_target(T, None, None)
+    if type(T) is np.ndarray and T.dtype == np.float64 and T.flags.c_contiguous:
+        return T
     return np.ascontiguousarray(T, dtype=np.float64)
 
 

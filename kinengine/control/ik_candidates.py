@@ -1,17 +1,21 @@
-"""The vectorized post-processing of a closed-form solver's raw answers into :class:`.IKSolutions`.
+"""The post-processing of a closed-form solver's raw answers into :class:`.IKSolutions`, one pose or a
+batch alike.
 
-From raw joint angles (N, K, n) of the n chain joints to :class:`IKSolutions`, every step a numpy pass
-over all candidates of all poses at once (flat (M,) arrays, M = number of raw answers):
+From raw joint angles of the n chain joints, flat over all candidates of all poses (M answers, sorted by
+pose), steps 0–2 in one pass per candidate (:func:`placed`: the C chain's ``Kernel.candidates`` in
+kinengine/kinematics/chainkernel.c, or its numpy twin where the extension is not built):
 
-1. check: the frame's pose at each candidate (the batch chain) against the target; a candidate further
-   than ``ACCEPT`` [m, rad] from it is dropped (the solver's least-squares answers of unreachable poses),
-   unless it is polished to it first (a degenerate answer, or one of an idealized chain: damped least
-   squares from it);
+0. wrap into the joint ranges: continuous joints (no limits) into (−π, π]; a limited joint takes the
+   2π shift inside [lower, upper] nearest the reference (``q_near``, else 0); outside every shift: not
+   within the limits (dropped, or kept and flagged with ``within_limits=False``);
+1. check: the frame's pose at each candidate against the target; a candidate further than ``ACCEPT``
+   [m, rad] from it is dropped (the solver's least-squares answers of unreachable poses), unless it is
+   polished to it first (a degenerate answer, or one of an idealized chain: damped least squares from
+   it, then steps 0–2 again);
 2. deduplicate: candidates of one pose closer than ``SAME`` [rad] (angles compared modulo 2π) are one;
-3. wrap into the joint ranges: continuous joints (no limits) into (−π, π]; a limited joint takes the
-   2π shift inside [lower, upper] nearest the reference (``q_near``, else 0); ``all_turns`` adds every
-   other shift that stays inside; outside every shift: dropped, or kept and flagged (``within_limits=False``);
-4. sort each pose's solutions by distance |q − q_near| (within-limits first), and pad with NaN.
+
+then ``all_turns`` adds every other shift that stays inside, each pose's solutions are sorted by
+distance |q − q_near| (within-limits first), and a batch is padded with NaN.
 
 ``singular``: the solver met a degenerate subproblem (its least-squares answer meets the target's
 position): joint axes line up, and the solutions there form a continuum (e.g. a spherical wrist at
@@ -29,6 +33,7 @@ import numpy as np
 
 from ..kinematics import batch, compiler
 from ..kinematics.compiler import compiled_chain
+from .ik_ranges import all_turns_of, shifted_into_ranges, wrap_pi
 from .ik_solutions import (
     ACCEPT,
     DEGENERATE,
@@ -44,6 +49,10 @@ from .ik_solutions import (
 if TYPE_CHECKING:
     from .robot_like import RobotLike
 
+LIMIT_MARGIN = 0.1
+"""[rad] an idealized chain's answer up to this far outside a joint's limits is polished too: next to a
+singular set the real chain's solution can lie inside them where the ideal chain's does not (xArm7,
+joint2 at its limit: 0.005 rad)."""
 POSES_PER_WORKER = 1000
 """A batch's post-processing is shared among threads only when each gets at least this many poses."""
 FEW = 64
@@ -75,7 +84,7 @@ def candidates_to_solutions(
     poses: np.ndarray,
     row: np.ndarray,
     q: np.ndarray,
-    ls: np.ndarray,
+    ls: np.ndarray | None,
     near: np.ndarray,
     has_near: bool,
     *,
@@ -85,77 +94,73 @@ def candidates_to_solutions(
     workers: int | None = None,
 ) -> IKSolutions:
     """IKSolutions of poses (N, 4, 4) from the solver's raw answers, flat and sorted by pose: ``row`` (M,)
-    the pose of each, ``q`` (M, n) the chain's angles [rad], ``ls`` (M,) its least-squares flags;
+    the pose of each, ``q`` (M, n) the chain's angles [rad], ``ls`` (M,) its least-squares flags (None:
+    none is);
     ``near`` (dof,) or (N, dof) the reference q (its other coordinates fill the result); ``workers``: the
-    forward kinematics' threads."""
+    forward kinematics' threads. One pose (``single``) and a batch take the same steps."""
     robot, columns, frame = chain.robot, chain.columns, chain.frame
-    n_poses, dof = len(poses), robot.dof
-    wrapped = _wrap_pi(q)
-    ref = None
-    if has_near:  # (M, n) the reference's angles of each candidate's pose
-        ref = (
-            near[row][:, columns]
-            if near.ndim == 2
-            else np.broadcast_to(near[columns], (len(row), len(columns)))
-        )
-    # 0. into the joint ranges first (the shift nearest the reference); what cannot be a solution within
-    # the limits is not checked (a least-squares answer is: it may be repaired into them)
-    angles, inside, turns = _turns(chain, wrapped, ref, all_turns)
-    if within_limits:
-        keep = np.flatnonzero(inside | ls)
-        row, wrapped, angles, inside, ls = row[keep], wrapped[keep], angles[keep], inside[keep], ls[keep]
-        ref = None if ref is None else ref[keep]
-        turns = None if turns is None else (turns[0][keep], turns[1][keep], turns[2][keep])
-    if chain.whole:  # the chain's joints are q's coordinates, in order
-        full = angles
-    else:
-        full = near[row] if near.ndim == 2 else np.repeat(near[None], len(row), axis=0)
-        full[:, columns] = angles
-    # 1. the frame's pose at every candidate against its target; degenerate answers repaired, an
-    # idealized chain's polished
-    err_p, err_r = residuals(robot, frame, full, poses, row, workers)
-    exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
-    singular = np.zeros(n_poses, dtype=bool)
-    fix = np.zeros(0, dtype=np.intp)
-    if ls.any() or chain.approximate:
+    n_poses, dof = len(poses), chain.dof
+    base = near if near.ndim == 2 else near[None]
+    shifts = all_turns and len(chain.many_turns) > 0
+    # 0.-2. into the joint ranges, checked against the targets, deduplicated
+    repair = ls is not None or chain.approximate
+    out, turns = placed(chain, poses, row, q, base, has_near, within_limits, shifts, workers, not repair)
+    e = dof + len(columns)  # out's columns: full q, the chain's wrapped angles, kept, inside, errors
+    singular = None
+    if repair:  # degenerate answers repaired, an idealized chain's polished
+        ls = np.zeros(len(row), dtype=bool) if ls is None else ls
+        err_p, err_r = out[:, e + 2], out[:, e + 3]
+        exact = (err_p <= ACCEPT) & (err_r <= ACCEPT)
         degenerate = ls & (err_p <= DEGENERATE)
+        singular = np.zeros(n_poses, dtype=bool)
         singular[row[degenerate]] = True
         polish = (err_p <= POLISH) & (err_r <= POLISH) if chain.approximate else degenerate
         fix = np.flatnonzero((degenerate | polish) & ~exact)
-    if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
-        start = full[fix]
-        start[:, columns] = _turns(chain, wrapped[fix], None, False)[0]
-        repaired = _repaired(robot, frame, start, poses[row[fix]])
-        err_p, err_r = residuals(robot, frame, repaired, poses, row[fix])
-        exact[fix] = (err_p <= ACCEPT) & (err_r <= ACCEPT)
-        wrapped[fix] = _wrap_pi(repaired[:, columns])
-        fixed = _turns(chain, wrapped[fix], None if ref is None else ref[fix], all_turns)
-        angles[fix], inside[fix] = fixed[0], fixed[1]
-        if turns is not None and fixed[2] is not None:
-            for k, k_fix in zip(turns, fixed[2], strict=True):
-                k[fix] = k_fix
-        if not chain.whole:
-            full[np.ix_(fix, columns)] = fixed[0]
-    # 2. duplicates (modulo 2π) among the exact candidates of a pose; 3. the limit filter: one selection
-    e = np.flatnonzero(exact)
-    keep = e[~_duplicates(row[e], wrapped[e])]
-    if within_limits:
-        keep = keep[inside[keep]]
-    row, full, inside = row[keep], full[keep], inside[keep]
-    if all_turns and turns is not None:
-        row, inside, full = _all_turns(chain, row, inside, full, *(k[keep] for k in turns))
-    # 4. within the limits first, then by distance to q_near, within each pose; padded with NaN
-    if has_near:
-        distance = np.linalg.norm(full - (near[row] if near.ndim == 2 else near), axis=1)
+        angles = shifted_into_ranges(chain, out[fix, dof:e], None, False)[0]  # the 2π shifts into the limits
+        if within_limits:  # what cannot be a solution within the limits is not polished (a degenerate is)
+            outside = np.maximum(chain.lower - angles, angles - chain.upper).max(axis=1, initial=0.0)
+            near = outside <= (LIMIT_MARGIN if chain.approximate else 0.0)
+            chosen = (out[fix, e + 1] != 0) | ls[fix] | near
+            fix, angles = fix[chosen], angles[chosen]
+        if len(fix):  # from the angles shifted into the limits (the iterations stay within them)
+            start = out[fix, :dof]
+            start[:, columns] = angles
+            repaired = _repaired(robot, frame, start, poses[row[fix]])
+            q = out[:, dof:e].copy()
+            q[fix] = repaired[:, columns]
+            if chain.approximate:  # the ideal chain's least-squares answers: two real branches about to merge
+                row, q = _with_mirrors(chain, poses, row, q, out[:, dof:e], fix[ls[fix]], start[ls[fix]])
+            out, turns = placed(chain, poses, row, q, base, has_near, within_limits, shifts, workers)
+    keep = out[:, e].nonzero()[0]
+    full = out[keep, :dof]
+    inside = np.ones(len(keep), dtype=bool) if within_limits else out[keep, e + 1] != 0
+    if single and turns is None:  # one pose: its rows need no pose index
+        if has_near and len(full) > 1:
+            order = np.lexsort((np.linalg.norm(full - base[0], axis=1), ~inside))
+            full, inside = full[order], inside[order]
+        elif not within_limits and len(full) > 1:
+            order = np.argsort(~inside, kind="stable")
+            full, inside = full[order], inside[order]
+        c = len(full)
+        return IKSolutions(
+            full, c, c > 0, singular is not None and bool(singular[0]), inside, frame, chain.joints
+        )
+    row = row[keep]
+    if turns is not None:
+        row, inside, full = all_turns_of(chain, row, inside, full, *(k[keep] for k in turns))
+    # 3. within the limits first, then by distance to q_near, within each pose; padded with NaN
+    if has_near and len(row) > 1:
+        distance = np.linalg.norm(full - base[0 if len(base) == 1 else row], axis=1)
         order = np.lexsort((distance, ~inside, row))
         row, full, inside = row[order], full[order], inside[order]
-    elif not within_limits:
+    elif not within_limits and len(row) > 1:
         order = np.lexsort((~inside, row))
         row, full, inside = row[order], full[order], inside[order]
-    count = np.bincount(row, minlength=n_poses)
+    singular = np.zeros(n_poses, dtype=bool) if singular is None else singular
     if single:
-        c = int(count[0])
+        c = len(row)
         return IKSolutions(full, c, c > 0, bool(singular[0]), inside, frame, chain.joints)
+    count = np.bincount(row, minlength=n_poses)
     K = int(count.max(initial=0))
     out = np.full((n_poses, K, dof), np.nan)
     limits = np.zeros((n_poses, K), dtype=bool)
@@ -163,6 +168,74 @@ def candidates_to_solutions(
     out[row, slot] = full
     limits[row, slot] = inside
     return IKSolutions(out, count, count > 0, singular, limits, frame, chain.joints)
+
+
+def placed(
+    chain: Chain,
+    poses: np.ndarray,
+    row: np.ndarray,
+    q: np.ndarray,
+    base: np.ndarray,
+    has_near: bool,
+    within_limits: bool,
+    shifts: bool,
+    workers: int | None = None,
+    skip: bool = False,
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
+    """Steps 0-2 for raw angles q (M, n) of poses[row] (rows sorted): out (M, dof + n + 4) = (each
+    candidate's q within the ranges (base's (1 or N, dof) other coordinates), its chain angles wrapped into
+    (−π, π], kept, inside, position [m] and rotation [rad] errors), kept: exact, within the limits unless
+    not ``within_limits``, and no earlier kept candidate of its pose the same to SAME modulo 2π (flags 1.0
+    or 0.0); with ``shifts`` the 2π shifts (k_min, k_max, k_best) (M, n) each; with ``skip`` and
+    ``within_limits`` a candidate outside the limits is not checked (its errors inf). The C kernel
+    (kinengine/kinematics/chainkernel.c, ``Kernel.candidates``) when built, else its numpy twin below."""
+    (M, n), dof = q.shape, chain.dof
+    out = np.empty((M, dof + n + 4))
+    kernel = chain.kernel
+    if kernel is not None:
+        k = np.empty((M, n, 3)) if shifts else None
+        kernel.candidates(
+            q,
+            None if len(poses) == 1 else row,
+            poses,
+            base,
+            chain.table,
+            out,
+            k,
+            has_near,
+            within_limits,
+            skip,
+            ACCEPT,
+            SAME,
+            TURN_TOL,
+        )
+        return out, None if k is None else (k[:, :, 0], k[:, :, 1], k[:, :, 2])
+    wrapped = wrap_pi(q)
+    whole = base[row if len(base) > 1 else np.zeros_like(row)]
+    angles, inside, turns = shifted_into_ranges(
+        chain, wrapped, whole[:, chain.columns] if has_near else None, shifts
+    )
+    full, e = out[:, :dof], dof + n
+    full[:] = whole
+    full[:, chain.columns] = angles
+    err_p, err_r = np.full(len(q), np.inf), np.full(len(q), np.inf)
+    checked = np.flatnonzero(inside) if skip and within_limits else slice(None)
+    err_p[checked], err_r[checked] = residuals(
+        chain.robot, chain.frame, full[checked], poses, row[checked], workers
+    )
+    keep = (err_p <= ACCEPT) & (err_r <= ACCEPT)
+    if within_limits:
+        keep &= inside
+    kept = np.flatnonzero(keep)
+    keep[kept[_duplicates(row[kept], wrapped[kept])]] = False
+    out[:, dof:e], out[:, e], out[:, e + 1], out[:, e + 2], out[:, e + 3] = (
+        wrapped,
+        keep,
+        inside,
+        err_p,
+        err_r,
+    )
+    return out, turns
 
 
 def _duplicates(row: np.ndarray, wrapped: np.ndarray) -> np.ndarray:
@@ -174,79 +247,6 @@ def _duplicates(row: np.ndarray, wrapped: np.ndarray) -> np.ndarray:
         d = np.abs(wrapped[later] - wrapped[later - back])  # both in (−π, π]: |d| < 2π
         duplicate[later[(np.minimum(d, TWO_PI - d) <= SAME).all(axis=1)]] = True
     return duplicate
-
-
-def _wrap_pi(a: np.ndarray) -> np.ndarray:
-    """Angles into (−π, π] (the solver's are in [−π, π] already: then only −π moves)."""
-    if len(a) and np.abs(a).max() <= np.pi:
-        return np.where(a == -np.pi, np.pi, a)
-    return np.pi - np.mod(np.pi - a, TWO_PI)
-
-
-def _turns(
-    chain: Chain, wrapped: np.ndarray, ref: np.ndarray | None, shifts: bool
-) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
-    """Angles (M, n) in (−π, π] shifted by 2π·k into the joint ranges: k nearest (ref − angle)/2π (ref None:
-    0) among k_min..k_max (the shifts inside [lower, upper], a limit met to TURN_TOL: on it); continuous
-    joints unshifted; a joint no shift puts inside keeps the shift nearest ref. A range within (−π, π]
-    (``chain.one_turn``) has only k = 0. Returns (angles, inside (M,), and with ``shifts`` (k_min, k_max,
-    k_best) (M, n), 0 for continuous and one-turn joints)."""
-    angles = wrapped.copy()
-    inside = np.ones(len(wrapped), dtype=bool)
-    one, many = chain.one_turn, chain.many_turns
-    if len(one):
-        w, lo, hi = wrapped[:, one], chain.lower[one], chain.upper[one]
-        fits = (w >= lo - TURN_TOL) & (w <= hi + TURN_TOL)
-        inside &= fits.all(axis=1)
-        on = np.minimum(np.maximum(w, lo), hi)
-        if ref is not None:  # no shift fits: the one nearest the reference
-            w = w + TWO_PI * np.rint((ref[:, one] - w) / TWO_PI)
-        angles[:, one] = np.where(fits, on, w)
-    k = None
-    if len(many):
-        w, lo, hi = wrapped[:, many], chain.lower[many], chain.upper[many]
-        k_min = np.ceil((lo - w) / TWO_PI - 1e-12)
-        k_max = np.floor((hi - w) / TWO_PI + 1e-12)
-        k_near = np.zeros_like(w) if ref is None else np.rint((ref[:, many] - w) / TWO_PI)
-        fits = k_min <= k_max
-        inside &= fits.all(axis=1)
-        k_best = np.where(fits, np.minimum(np.maximum(k_near, k_min), k_max), k_near)
-        a = w + TWO_PI * k_best
-        angles[:, many] = np.where(fits, np.minimum(np.maximum(a, lo), hi), a)
-        k = (k_min, k_max, k_best)
-    if not shifts:
-        return angles, inside, None
-    full = tuple(np.zeros_like(wrapped) for _ in range(3))
-    if k is not None:
-        for f, part in zip(full, k, strict=True):
-            f[:, many] = part
-    return angles, inside, full  # type: ignore[return-value]
-
-
-def _all_turns(
-    chain: Chain,
-    row: np.ndarray,
-    inside: np.ndarray,
-    full: np.ndarray,
-    k_min: np.ndarray,
-    k_max: np.ndarray,
-    k_best: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every 2π shift of each within-limits solution's joints whose range holds several (``many_turns``)
-    that stays within the limits (the chosen one first), joint by joint: each solution repeated once per
-    shift of that joint."""
-    for j in chain.many_turns:
-        shifts = np.where(inside, np.maximum(k_max[:, j] - k_min[:, j] + 1, 1), 1).astype(np.intp)
-        source = np.repeat(np.arange(len(row)), shifts)
-        step = np.arange(len(source)) - np.repeat(np.cumsum(shifts) - shifts, shifts)
-        k = np.where(inside[source], k_min[source, j] + step, k_best[source, j])
-        chosen = k == k_best[source, j]
-        order = np.lexsort((~chosen, source))  # the chosen shift first within each solution
-        source, k = source[order], k[order]
-        row, inside, full = row[source], inside[source], full[source]
-        k_min, k_max, k_best = k_min[source], k_max[source], k_best[source]
-        full[:, chain.columns[j]] += TWO_PI * (k - k_best[:, j])
-    return row, inside, full
 
 
 def residuals(
@@ -286,11 +286,34 @@ _SPLIT[3::4, 0] = 1.0  # the position entries of a row-major 3 × 4 block
 _SPLIT[[0, 1, 2, 4, 5, 6, 8, 9, 10], 1] = 0.5  # the rotation entries, halved: |C − C_d|_F² / 2
 
 
+def _with_mirrors(
+    chain: Chain,
+    poses: np.ndarray,
+    row: np.ndarray,
+    q: np.ndarray,
+    ideal: np.ndarray,
+    fold: np.ndarray,
+    start: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Near a fold of the real chain its two solutions q± ≈ q_f ± δ lie on either side of the ideal chain's
+    least-squares answer q_f (wrapped angles ``ideal`` of candidates ``fold``), of which the polish found
+    one (q): the other is polished from its mirror 2 q_f − q and added to the candidates (rows sorted).
+    ``start`` (len(fold), dof): the polish's start rows of those candidates (their other coordinates)."""
+    if not len(fold):
+        return row, q
+    d = wrap_pi(q[fold] - ideal[fold])
+    begin = start.copy()  # the polish's start rows of the fold candidates (their other coordinates)
+    begin[:, chain.columns] = shifted_into_ranges(chain, wrap_pi(ideal[fold] - d), None, False)[0]
+    mirrored = _repaired(chain.robot, chain.frame, begin, poses[row[fold]])[:, chain.columns]
+    order = np.argsort(np.concatenate((row, row[fold])), kind="stable")
+    return np.concatenate((row, row[fold]))[order], np.concatenate((q, mirrored))[order]
+
+
 def _repaired(robot: RobotLike, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:
     """Degenerate answers (the position met, the rotation about a line of aligned joint axes not) and
     an idealized chain's answers: a few damped least-squares iterations from each."""
     result = robot.inverse_kinematics(
-        T_d, frame, q, tol_position=ACCEPT / 10, tol_rotation=ACCEPT / 10, restarts=0, method="numeric"
+        T_d, frame, q, tol_position=ACCEPT / 1000, tol_rotation=ACCEPT / 1000, restarts=0, method="numeric"
     )
     return np.asarray(result.q)
 

@@ -6,6 +6,19 @@
  *                            angular], reference 0 "local_world_aligned", 1 "world", 2 "local"; T or J may
  *                            be None. Any strides that are multiples of 8 on 8-byte aligned data (the caller
  *                            copies other layouts); the GIL is released while it runs.
+ *   kernel.candidates(Q, row, T, base, table, out, shifts, has_ref, within, skip, accept, same, turn_tol)
+ *                            a closed-form IK solver's raw answers Q (M, n) of poses T (N, 4, 4), sorted by pose
+ *                            (row (M,) int64, or None for one pose), into the joint ranges and checked (kinengine/control/
+ *                            ik_candidates.py, whose numpy twin it is): per candidate the angles wrapped into
+ *                            (-pi, pi] (wrapped), each joint's 2 pi shift into its range nearest the reference
+ *                            (base's row if has_ref, else 0; shifts (M, n, 3) k_min, k_max, k_best unless None),
+ *                            the full row (base's other coordinates), the frame's pose at it against its target;
+ *                            out (M, dof + n + 4) = (full row, wrapped, kept, within the limits, position error
+ *                            [m], rotation error |C - C_d|_F / sqrt 2 [rad]); kept: both errors <= accept, within
+ *                            the limits unless not within, no earlier kept candidate of its pose equal to same
+ *                            modulo 2 pi; skip: a candidate outside the limits is not checked (errors inf).
+ *                            table (n, 4): per joint its column in q, kind (0 continuous, 1 a range
+ *                            within (-pi, pi], 2 any other), lower, upper.
  *   sin_check(angles)        the kernel's sin_cos on a buffer of float64 angles (sines, then cosines): checked
  *                            against libm at import (kinengine/kinematics/compiler.py), which falls back to the
  *                            numpy chain with one warning if they differ. Building with -ffast-math is an error.
@@ -140,7 +153,7 @@ get_array(PyObject *obj, Py_buffer *view, int ndim, int writable, const char *wh
         return -1;
     }
     if (view->ndim != ndim || view->itemsize != 8 || view->format == NULL || strcmp(view->format, "d") != 0) {
-        PyErr_Format(PyExc_ValueError, "Kernel.run: %s must be a %d-dimensional float64 array", what, ndim);
+        PyErr_Format(PyExc_ValueError, "Kernel: %s must be a %d-dimensional float64 array", what, ndim);
         PyBuffer_Release(view);
         return -1;
     }
@@ -149,7 +162,7 @@ get_array(PyObject *obj, Py_buffer *view, int ndim, int writable, const char *wh
         aligned = aligned && view->strides[k] % (Py_ssize_t)sizeof(double) == 0;
     }
     if (!aligned) { /* read as double *: the caller (kinengine/kinematics/batch.py) passes aligned copies */
-        PyErr_Format(PyExc_ValueError, "Kernel.run: %s must be an aligned float64 array", what);
+        PyErr_Format(PyExc_ValueError, "Kernel: %s must be an aligned float64 array", what);
         PyBuffer_Release(view);
         return -1;
     }
@@ -428,9 +441,241 @@ done:
     return result;
 }
 
+/* A 1-dimensional int64 array's buffer (the candidates' pose indices), or -1 and an error. */
+static int
+get_index(PyObject *obj, Py_buffer *view)
+{
+    if (PyObject_GetBuffer(obj, view, PyBUF_STRIDES | PyBUF_FORMAT) < 0) {
+        return -1;
+    }
+    const char *f = view->format;
+    if (f != NULL && (*f == '@' || *f == '=' || *f == '<')) {
+        f++;
+    }
+    if (view->ndim != 1 || view->itemsize != 8 || f == NULL || (strcmp(f, "l") != 0 && strcmp(f, "q") != 0) ||
+        (uintptr_t)view->buf % 8 != 0 || view->strides[0] % 8 != 0) {
+        PyErr_SetString(PyExc_ValueError, "Kernel.candidates: row must be an aligned 1-dimensional int64 array");
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+#define KE_PI 3.141592653589793
+#define TWO_PI 6.283185307179586
+
+/* One candidate of Kernel.candidates: its raw angles q (n) wrapped into (-pi, pi] (wrapped), each joint's angle
+ * put into its range (written into the full row), the 2 pi shifts (k_min, k_max, k_best) per joint if shifts is
+ * not NULL; returns 1 if every joint's angle fits its range. table: n rows (column, kind, lower, upper), kind
+ * 0 continuous, 1 a range within (-pi, pi], 2 any other range; ref: the reference full row or NULL (shift 0). */
+static int
+place(Py_ssize_t n, const double *q, const double *table, const double *ref, double turn_tol, double *wrapped,
+      double *full, double *shifts)
+{
+    int inside = 1;
+    for (Py_ssize_t j = 0; j < n; j++) {
+        const double *t = table + 4 * j;
+        Py_ssize_t column = (Py_ssize_t)t[0];
+        int kind = (int)t[1];
+        double lo = t[2], hi = t[3], a = q[j];
+        if (!(a > -KE_PI && a <= KE_PI)) { /* the solver's are in [-pi, pi]: then only -pi moves */
+            double m = fmod(KE_PI - a, TWO_PI);
+            a = KE_PI - (m < 0 ? m + TWO_PI : m);
+        }
+        wrapped[j] = a;
+        double angle = a, k_min = 0, k_max = 0, k_best = 0;
+        double r = ref != NULL ? ref[column] : 0.0;
+        if (kind == 1) {
+            int fits = a >= lo - turn_tol && a <= hi + turn_tol;
+            inside &= fits;
+            angle = fits ? fmin(fmax(a, lo), hi) : (ref != NULL ? a + TWO_PI * rint((r - a) / TWO_PI) : a);
+        }
+        else if (kind == 2) {
+            k_min = ceil((lo - a) / TWO_PI - 1e-12);
+            k_max = floor((hi - a) / TWO_PI + 1e-12);
+            double k_near = ref != NULL ? rint((r - a) / TWO_PI) : 0.0;
+            int fits = k_min <= k_max;
+            inside &= fits;
+            k_best = fits ? fmin(fmax(k_near, k_min), k_max) : k_near;
+            angle = a + TWO_PI * k_best;
+            if (fits) {
+                angle = fmin(fmax(angle, lo), hi);
+            }
+        }
+        full[column] = angle;
+        if (shifts != NULL) {
+            shifts[3 * j] = k_min, shifts[3 * j + 1] = k_max, shifts[3 * j + 2] = k_best;
+        }
+    }
+    return inside;
+}
+
+/* 1 if the angles a and b (n, in (-pi, pi]) agree to same modulo 2 pi */
+static int
+same_angles(Py_ssize_t n, const double *a, const double *b, double same)
+{
+    for (Py_ssize_t j = 0; j < n; j++) {
+        double d = fabs(a[j] - b[j]);
+        if (d > same && TWO_PI - d > same) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+typedef struct {
+    Py_buffer Q, row, T, base, table, out, shifts;
+} CandidateViews;
+
+/* The work of Kernel.candidates without the GIL, in blocks of BLOCK candidates as run_rows (their sines and
+ * cosines together); scratch: (6 + 3 BLOCK) m doubles. */
+static void
+candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int within, int skip, double accept,
+                double same, double turn_tol, double *scratch)
+{
+    const Py_ssize_t M = v->Q.shape[0], n = v->Q.shape[1], dof = k->dof, m = k->m;
+    const Py_ssize_t B = v->base.shape[0];
+    const double *table = (const double *)v->table.buf;
+    double *zp = scratch, *theta = scratch + 6 * m, *sines = theta + BLOCK * m, *cosines = sines + BLOCK * m;
+    double q[64], pose[16];
+    Py_ssize_t strides[3] = {16 * sizeof(double), 4 * sizeof(double), sizeof(double)};
+    Py_buffer Tout = {0}, none = {0};
+    Tout.buf = pose;
+    Tout.strides = strides;
+#define ROW(i) (v->row.buf == NULL ? 0 : *(const int64_t *)((const char *)v->row.buf + (i) * v->row.strides[0]))
+    Py_ssize_t first = 0; /* the first candidate of the current pose */
+    for (Py_ssize_t start = 0; start < M; start += BLOCK) {
+        Py_ssize_t rows = M - start < BLOCK ? M - start : BLOCK;
+        for (Py_ssize_t b = 0; b < rows; b++) { /* into the ranges: the full rows and their joint angles */
+            Py_ssize_t i = start + b, p = ROW(i);
+            double *full = &AT2(v->out, i, 0), *wrapped = &AT2(v->out, i, dof);
+            for (Py_ssize_t c = 0; c < dof; c++) {
+                full[c] = AT2(v->base, B == 1 ? 0 : p, c);
+            }
+            for (Py_ssize_t j = 0; j < n; j++) {
+                q[j] = AT2(v->Q, i, j);
+            }
+            /* the reference of joint j is full[column_j] (base's), read by place() before it writes it */
+            AT2(v->out, i, dof + n + 1) = place(n, q, table, has_ref ? full : NULL, turn_tol, wrapped, full,
+                                                v->shifts.buf != NULL ? &AT3(v->shifts, i, 0, 0) : NULL);
+            for (Py_ssize_t j = 0; j < m; j++) {
+                const Step *s = &k->steps[j];
+                double a = full[s->coordinate];
+                theta[b * m + j] = s->plain ? a : a * s->scaling + s->offset;
+            }
+        }
+        sin_cos(theta, sines, cosines, rows * m);
+        for (Py_ssize_t b = 0; b < rows; b++) { /* the pose at each against its target; duplicates */
+            Py_ssize_t i = start + b, p = ROW(i);
+            if (i > 0 && p != ROW(i - 1)) {
+                first = i;
+            }
+            double *wrapped = &AT2(v->out, i, dof), *result = &AT2(v->out, i, dof + n);
+            if (skip && within && result[1] == 0.0) { /* outside the limits: no solution asked for, not checked */
+                result[0] = 0.0, result[2] = INFINITY, result[3] = INFINITY;
+                continue;
+            }
+            run_row(k, 0, theta + b * m, sines + b * m, cosines + b * m, &Tout, &none, 0, zp);
+            double dp = 0, dr = 0;
+            for (int r = 0; r < 3; r++) {
+                for (int c = 0; c < 3; c++) {
+                    double d = pose[4 * r + c] - AT3(v->T, p, r, c);
+                    dr += d * d;
+                }
+                double d = pose[4 * r + 3] - AT3(v->T, p, r, 3);
+                dp += d * d;
+            }
+            dp = sqrt(dp), dr = sqrt(0.5 * dr);
+            int keep = dp <= accept && dr <= accept && (result[1] != 0.0 || !within);
+            for (Py_ssize_t e = first; keep && e < i; e++) {
+                if (AT2(v->out, e, dof + n) != 0.0 && same_angles(n, wrapped, &AT2(v->out, e, dof), same)) {
+                    keep = 0;
+                }
+            }
+            result[0] = keep, result[2] = dp, result[3] = dr;
+        }
+    }
+#undef ROW
+}
+
+static PyObject *
+kernel_candidates(Kernel *self, PyObject *args)
+{
+    PyObject *q_obj, *row_obj, *t_obj, *base_obj, *table_obj, *out_obj, *shifts_obj;
+    int has_ref, within, skip;
+    double accept, same, turn_tol;
+    if (!PyArg_ParseTuple(args, "OOOOOOOpppddd", &q_obj, &row_obj, &t_obj, &base_obj, &table_obj, &out_obj,
+                          &shifts_obj, &has_ref, &within, &skip, &accept, &same, &turn_tol)) {
+        return NULL;
+    }
+    CandidateViews v;
+    memset(&v, 0, sizeof v);
+    PyObject *result = NULL;
+    double *scratch = NULL;
+    if (get_array(q_obj, &v.Q, 2, 0, "Q") < 0) {
+        return NULL;
+    }
+    const Py_ssize_t M = v.Q.shape[0], n = v.Q.shape[1];
+    if ((row_obj != Py_None && get_index(row_obj, &v.row) < 0) || get_array(t_obj, &v.T, 3, 0, "T") < 0 ||
+        get_array(base_obj, &v.base, 2, 0, "base") < 0 || get_array(table_obj, &v.table, 2, 0, "table") < 0 ||
+        get_array(out_obj, &v.out, 2, 1, "out") < 0 ||
+        (shifts_obj != Py_None && get_array(shifts_obj, &v.shifts, 3, 1, "shifts") < 0)) {
+        goto done;
+    }
+    const Py_ssize_t N = v.T.shape[0], B = v.base.shape[0];
+    int ok = n <= 64 && (v.row.buf == NULL ? N == 1 : v.row.shape[0] == M) && v.T.shape[1] == 4 && v.T.shape[2] == 4 && (B == 1 || B == N) &&
+             v.base.shape[1] == self->dof && v.table.shape[0] == n && v.table.shape[1] == 4 &&
+             PyBuffer_IsContiguous(&v.table, 'C') && v.out.shape[0] == M && v.out.shape[1] == self->dof + n + 4 &&
+             v.out.strides[1] == sizeof(double) &&
+             (v.shifts.buf == NULL || (v.shifts.shape[0] == M && v.shifts.shape[1] == n && v.shifts.shape[2] == 3 &&
+                                      v.shifts.strides[2] == sizeof(double) &&
+                                      v.shifts.strides[1] == 3 * sizeof(double)));
+    for (Py_ssize_t j = 0; ok && j < n; j++) {
+        const double *t = (const double *)v.table.buf + 4 * j;
+        ok = t[0] >= 0 && t[0] < (double)self->dof && t[0] == floor(t[0]) && (t[1] == 0 || t[1] == 1 || t[1] == 2);
+    }
+    for (Py_ssize_t i = 0; ok && v.row.buf != NULL && i < M; i++) {
+        int64_t p = *(const int64_t *)((const char *)v.row.buf + i * v.row.strides[0]);
+        ok = p >= 0 && p < N &&
+             (i == 0 || p >= *(const int64_t *)((const char *)v.row.buf + (i - 1) * v.row.strides[0]));
+    }
+    if (!ok) {
+        PyErr_SetString(PyExc_ValueError,
+                        "Kernel.candidates: Q (M, n <= 64), row (M,) sorted indices into T (N, 4, 4), base (1 or N, "
+                        "dof), table (n, 4) (column, kind 0/1/2, lower, upper), out (M, dof + n + 4) rows contiguous, "
+                        "shifts None or (M, n, 3) rows contiguous");
+        goto done;
+    }
+    scratch = PyMem_RawMalloc(sizeof(double) * (6 + 3 * BLOCK) * (self->m ? self->m : 1));
+    if (scratch == NULL) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    if (M < BLOCK) { /* a few candidates (one pose): handing the GIL over would cost more than the work */
+        candidates_rows(self, &v, has_ref, within, skip, accept, same, turn_tol, scratch);
+    }
+    else {
+        Py_BEGIN_ALLOW_THREADS
+        candidates_rows(self, &v, has_ref, within, skip, accept, same, turn_tol, scratch);
+        Py_END_ALLOW_THREADS
+    }
+    result = Py_NewRef(Py_None);
+done:
+    PyMem_RawFree(scratch);
+    Py_buffer *views[] = {&v.Q, &v.row, &v.T, &v.base, &v.table, &v.out, &v.shifts};
+    for (size_t i = 0; i < sizeof views / sizeof views[0]; i++) {
+        if (views[i]->obj != NULL) {
+            PyBuffer_Release(views[i]);
+        }
+    }
+    return result;
+}
+
 static PyMethodDef kernel_methods[] = {
     {"run", (PyCFunction)kernel_run, METH_VARARGS,
      "run(Q, T, J, reference): fill T (N, 4, 4) and/or J (N, 6, dof) for Q (N, dof); None skips one."},
+    {"candidates", (PyCFunction)kernel_candidates, METH_VARARGS,
+     "candidates(Q, row, T, base, table, out, shifts, has_ref, within, skip, accept, same, turn_tol): closed-form IK answers into the joint ranges, checked against their poses, deduplicated."},
     {NULL, NULL, 0, NULL},
 };
 
