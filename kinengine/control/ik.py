@@ -25,9 +25,9 @@ is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations, or from iterat
 ``nullspace_target``) and the ``NEAREST_SEEDS`` configurations of a per-robot table
 (:mod:`.ik_seeds`: ``SEED_TABLE_SIZE`` random in-limit configurations, fixed seed) whose frame poses are
 nearest the target; then ``restarts`` uniformly random ones from ``rng``.
-The same algorithm runs vectorized over a batch of targets (N, 4, 4): :mod:`kinengine.control.ik_batch`,
-and over several frames at once (a mapping {frame: T_IF}, errors and Jacobians stacked):
-:mod:`kinengine.control.ik_multi`.
+The same algorithm runs vectorized over a batch of targets (N, 4, 4): :mod:`kinengine.control.ik_batch`;
+one frame or several at once (a mapping {frame: T_IF}, errors and Jacobians stacked: :mod:`.ik_multi`)
+run the same attempt loop, :func:`kinengine.control.ik_solver.solve`.
 """
 
 from __future__ import annotations
@@ -39,9 +39,10 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import OptionError
-from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, first_seeds
-from .ik_solver import IKResult, solve_one
-from .ik_target import Options, RandomSource, batch_targets, checked_problem, single_target
+from .ik_multi import checked_goals
+from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, frame_seeds
+from .ik_solver import IKResult, solve
+from .ik_target import FrameGoal, Options, RandomSource, batch_targets, checked_problem, single_target
 
 if TYPE_CHECKING:  # named for the checker only
     from .ik_batch import IKBatchResult
@@ -98,6 +99,7 @@ def inverse_kinematics(
         min_damping,
         q0 is not None,
     )
+    generator = RandomSource(rng)
     if isinstance(target, Mapping):
         if frame is not None or position is not None or rotation is not None:
             raise OptionError(
@@ -109,23 +111,21 @@ def inverse_kinematics(
                 "method='closed_form' solves pose targets (4, 4) or (N, 4, 4) of one frame; a mapping "
                 "{frame: pose} is solved by method='numeric' (or 'auto')"
             )
-        from .ik_multi import inverse_kinematics_frames
-
-        return inverse_kinematics_frames(robot, target, q0, rows, weights, rng, options)
+        goals = checked_goals(robot, target, rows, weights, options)
+        start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=False)
+        return solve(robot, goals, frame_seeds(robot, goals, start), generator, several=True)
     batch = (
         position is None and rotation is None and np.ndim(target) == 3
         if not isinstance(target, str)
         else False
     )
-    problem = checked_problem(robot, frame, rows, weights, *options.values())
+    problem = checked_problem(robot, frame, rows, weights, options)
     if problem.rows is not None and (position is not None or rotation is not None):
         raise OptionError(
             "`rows=` and `weights=` apply to pose targets (4, 4) or (N, 4, 4); for parameters χ "
             "name only the parameterizations you need"
         )
-    generator = RandomSource(rng)
-    joints = robot.engine.coordinates
-    start = None if q0 is None else joints.check(q0, name="q0", allow_batch=batch)
+    start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=batch)
     if method != "numeric":
         from .ik_dispatch import closed_form_or_none
 
@@ -150,11 +150,8 @@ def inverse_kinematics(
                 f"`q0` must be (dof,) or one row per target ({len(P_d)}), got {len(start)} rows"
             )
         return solve_batch(robot, problem, P_d, Cs_d, start, generator)
-    p_d, C_d = single_target(target, position, rotation)
-    seeds = first_seeds(
-        robot, problem, p_d[None] if p_d is not None else None, C_d[None] if C_d is not None else None, start
-    )[0]
-    return solve_one(robot, problem, p_d, C_d, seeds, generator)
+    goals = [FrameGoal(problem, *single_target(target, position, rotation))]
+    return solve(robot, goals, frame_seeds(robot, goals, start), generator)
 
 
 __all__ = ["NEAREST_SEEDS", "SEED_TABLES", "SEED_TABLE_BYTES", "IKResult", "inverse_kinematics"]

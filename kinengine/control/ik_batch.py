@@ -31,9 +31,9 @@ import pinocchio as pin
 from ..kinematics import batch
 from ..parameterizations import ROTATION_PARAMETERIZATIONS
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
-from .ik_solver import IKResult, solve_one
+from .ik_solver import IKResult, solve
 from .ik_step import POSE_ROW_DAMPING, STALL_SPAN, LimitWeights, damping, gives_way, limit_weights, take_steps
-from .ik_target import Problem, RandomSource
+from .ik_target import FrameGoal, Problem, RandomSource
 
 if TYPE_CHECKING:  # named for the checker only
     from .robot_like import RobotLike
@@ -139,7 +139,7 @@ def solve_batch(
         if r <= TAIL and patient.all():  # a few attempts that never give way: the single solver reruns them
             rest = replace(problem, restarts=0, patient_first=True)
             tail = [
-                solve_one(robot, rest, p_d[t], C_d[t], x[None], rng)
+                solve(robot, [FrameGoal(rest, p_d[t], C_d[t])], x[None], rng)
                 for t, x in zip(tid, state[S:].T.copy(), strict=True)
             ]
             e = np.array([[o.position_error, o.rotation_error, o.iterations] for o in tail]).reshape(r, 3).T

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .ik_target import Problem
+from .ik_target import FrameGoal, Problem
 
 if TYPE_CHECKING:  # named for the checker only
     from .robot_like import RobotLike
@@ -127,6 +127,34 @@ def first_seeds(
     return seeds
 
 
+def frame_seeds(robot: RobotLike, goals: list[FrameGoal], q0: np.ndarray | None) -> np.ndarray:
+    """The seeded attempts' starts (S, dof) for one or several frames' targets: :func:`first_seeds` of a
+    single frame (or of q0); for several, the stored seeds nearest any frame's target ranked by
+    Σ_F (|Δp| + 0.2·‖ΔC‖_F/√2) over the frames' kept rows (‖ΔC‖_F/√2 = 2 sin(θ/2) ≈ θ, the metric of the
+    tables), then the middle of the ranges (or the nullspace target)."""
+
+    def seeds(g: FrameGoal, q0: np.ndarray | None) -> np.ndarray:
+        p_d, C_d = (None if x is None else x[None] for x in (g.p_d, g.C_d))
+        return first_seeds(robot, g.problem, p_d, C_d, q0)[0]
+
+    if q0 is not None or len(goals) == 1:
+        return seeds(goals[0], q0)
+    per_frame = [seeds(g, None) for g in goals]
+    candidates = np.concatenate([s[:-1] for s in per_frame])
+    score, n = np.zeros(len(candidates)), len(candidates)
+    for g in goals:  # several frames: each a pose (4, 4)
+        assert g.p_d is not None and g.C_d is not None
+        T, rows = robot.frame_pose(candidates, g.problem.frame), g.problem.rows
+        d = g.p_d - T[:, :3, 3]
+        if rows is not None:
+            d = (d @ g.C_d)[:, rows[rows < 3]]  # C_dᵀ Δp, kept rows
+        score += np.sqrt(np.einsum("ij,ij->i", d, d))
+        if rows is None or rows[-1] >= 3:  # rows are sorted: a rotation row is kept
+            dC = (T[:, :3, :3] - g.C_d).reshape(n, 9)
+            score += SEED_ROTATION_WEIGHT / math.sqrt(2.0) * np.sqrt(np.einsum("ij,ij->i", dC, dC))
+    return np.concatenate((candidates[np.argsort(score, kind="stable")], per_frame[0][-1:]))
+
+
 class BatchSeeds:
     """The seeded starts for a batch (N targets), as :func:`first_seeds` orders them (the nearest table
     entries, then the middle of the ranges; or ``q0``), from a larger table (BATCH_SEED_TABLE_SIZE) searched
@@ -200,4 +228,5 @@ __all__ = [
     "BatchSeeds",
     "SeedTables",
     "first_seeds",
+    "frame_seeds",
 ]
