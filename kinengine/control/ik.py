@@ -6,28 +6,20 @@ tolerances are checked against; to first order its Jacobian is J = J_e0 ("local_
 With ``rows=`` or ``weights=`` both halves are expressed in the target frame D (e_D = C_dᵀ e, J_D = C_dᵀ J
 blockwise) and only the named rows count: rows=("x", "y", "z", "rx", "ry") is a 5-D target, position plus
 tool axis (D's z axis): rotation about it is left free. ``weights`` (w ≥ 0, one per kept row) minimize
-Σ w_i e_i² instead of |e|².
-Step (Sugihara's Levenberg–Marquardt rule: strong damping far from the target or near a singularity,
-Gauss–Newton speed close to it). A full pose is iterated in the end effector's own frame with its rotation
-rows weighted by ρ = ``ROTATION_ROW_WEIGHT`` = 0.2 m/rad (S = diag(1, 1, 1, ρ, ρ, ρ), the same distance
-that ranks seeds and attempts), λ² = ``DAMPING_SCALE``·(|e_p|² + ρ²|e_R|²) + λ_min² with DAMPING_SCALE = 0.1:
-    Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e  +  (I − Jᵀ (J Jᵀ + λ² I)⁻¹ J)·z,   q ← clip(q + Δq, lower, upper),
-(rows=/weights= targets: S = I and λ² = DAMPING_SCALE·|e_w|² + λ_min² on the weighted kept rows e_w), solved
-by Cholesky (least squares where the matrix is not positive definite),
-with z = gain·min(1, score/NULLSPACE_FADE) · (q_ns − q) pulling towards ``nullspace_target`` in the
-(damped) nullspace of J.
-Joint limits: every iterate is clipped into them, and Chan & Dubey's weights W
-(:class:`.ik_step.LimitWeights`) slow joints that approach a limit.
-Seeds, in order, one attempt each of at most ``max_iterations`` iterations (an attempt whose error
-is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations, or from iteration ``STALL_FROM`` on above
-``STALL_RATIO`` × its error ``STALL_SPAN`` iterations earlier, makes way for the next seed):
-``q0`` if given (its attempt never gives up early), else the middle of the joint ranges (or
-``nullspace_target``) and the ``NEAREST_SEEDS`` configurations of a per-robot table
-(:mod:`.ik_seeds`: ``SEED_TABLE_SIZE`` random in-limit configurations, fixed seed) whose frame poses are
-nearest the target; then ``restarts`` uniformly random ones from ``rng``.
-The same algorithm runs vectorized over a batch of targets (N, 4, 4): :mod:`kinengine.control.ik_batch`;
-one frame or several at once (a mapping {frame: T_IF}, errors and Jacobians stacked: :mod:`.ik_multi`)
-run the same attempt loop, :func:`kinengine.control.ik_solver.solve`.
+Σ w_i e_i² instead of |e|²; a full pose minimizes |e_p|² + (ρ|e_R|)², ρ = 0.2 m/rad.
+Step (:mod:`.ik_step`): Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e plus a pull towards ``nullspace_target`` in the
+nullspace of J, with Sugihara's damping λ² = 0.1·|S e|² + λ_min² (strong far from the target or near a
+singularity, Gauss–Newton speed close to it) and Chan & Dubey's joint-limit weights W; every iterate is
+clipped into the limits.
+Seeds, in order, one attempt each of at most ``max_iterations`` iterations (an attempt that stalls or is
+still far after a few iterations makes way for the next seed, :func:`.ik_step.gives_way`): ``q0`` if given
+(its attempt never gives up early), else the middle of the joint ranges (or ``nullspace_target``) and the
+``NEAREST_SEEDS`` configurations of a per-robot table (:mod:`.ik_seeds`: ``SEED_TABLE_SIZE`` random
+in-limit configurations, fixed seed) whose frame poses are nearest the target; then ``restarts`` uniformly
+random ones from ``rng``.
+One frame and several at once (a mapping {frame: T_IF}, errors and Jacobians stacked, :mod:`.ik_multi`)
+run one attempt loop, :func:`.ik_solver.solve`; a batch of targets (N, 4, 4) runs the same algorithm
+vectorized, :mod:`kinengine.control.ik_batch`.
 """
 
 from __future__ import annotations
@@ -114,11 +106,7 @@ def inverse_kinematics(
         goals = checked_goals(robot, target, rows, weights, options)
         start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=False)
         return solve(robot, goals, frame_seeds(robot, goals, start), generator, several=True)
-    batch = (
-        position is None and rotation is None and np.ndim(target) == 3
-        if not isinstance(target, str)
-        else False
-    )
+    batch = position is None and rotation is None and not isinstance(target, str) and np.ndim(target) == 3
     problem = checked_problem(robot, frame, rows, weights, options)
     if problem.rows is not None and (position is not None or rotation is not None):
         raise OptionError(

@@ -1,17 +1,9 @@
-"""Inverse kinematics for several frames at once: ``target`` a mapping {frame name: T_IF (4, 4)}, checked
-here and solved by the one attempt loop (:func:`.ik_solver.solve`) with the frames' errors and Jacobians
-stacked.
-
-Frames and units: every target T_IF is the frame F's pose in the root frame I (p_d [m], C_d); each frame's
-error is the single-frame one (:mod:`kinengine.control.ik`): e_F = (p_d − p, log3(C_d Cᵀ)) [m, rad], or, with
-``rows=``/``weights=``, e_D = (C_dᵀ e_p, C_dᵀ e_R) in the frame's target frame D, kept rows only, each times
-√w; J_F rotated and cut the same way. Success: EVERY frame within ``tol_position`` [m] and ``tol_rotation``
-[rad]. Attempts are ranked by Σ_F (|e_p| + 0.2 m/rad·|e_R|) and give way by the single-frame rules.
-Seeds: ``q0`` if given (never gives up early), else the ``NEAREST_SEEDS`` stored configurations
-(:mod:`.ik_seeds`) nearest each frame's target, all of them ranked by that sum over every frame, and the
-middle of the ranges (or ``nullspace_target``); then ``restarts`` random ones.
-The result's position_error / rotation_error are the maxima over the frames; ``frame_errors`` holds each
-frame's (position error [m], rotation error [rad]).
+"""Targets for several frames at once: a mapping {frame name: T_IF (4, 4)}, each frame's target and
+``rows``/``weights`` checked into a :class:`~.ik_target.FrameGoal`, all solved by the one attempt loop
+(:func:`.ik_solver.solve`, errors and Jacobians stacked): success when EVERY frame is within the
+tolerances; attempts ranked by Σ_F (|e_p| + 0.2 m/rad·|e_R|), seeds by :func:`.ik_seeds.frame_seeds`. The
+:class:`MultiIKResult`'s position_error / rotation_error are the maxima over the frames, ``frame_errors``
+each frame's (position error [m], rotation error [rad]).
 """
 
 from __future__ import annotations
@@ -58,7 +50,7 @@ def checked_goals(
     for name in target:
         if not isinstance(name, str):
             raise OptionError(f"`target`'s keys must be frame names (str), got {name!r}")
-    frames: dict[str, Any] = {str(name): pose for name, pose in target.items()}
+    frames: dict[str, Any] = dict(target)
     frame_rows, frame_weights = _per_frame("rows", rows, frames), _per_frame("weights", weights, frames)
     goals = []
     for frame, pose in frames.items():
