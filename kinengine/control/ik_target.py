@@ -1,6 +1,6 @@
-"""IK options and targets, checked once: :class:`Problem` (the validated options shared by the single and
-the batched solver), the target pose p_d (3,) [m] / C_d (3, 3) in the root frame I from a pose T_IF (4, 4),
-a batch (N, 4, 4) or parameters χ, and :class:`RandomSource` (the ``rng`` option)."""
+"""IK options and targets, checked once: :class:`Problem` (the validated options shared by every solver),
+:class:`FrameGoal` (a frame's problem and target), the target pose p_d (3,) [m] / C_d (3, 3) in the root
+frame I from a pose T_IF (4, 4), a batch (N, 4, 4) or parameters χ, and :class:`RandomSource` (``rng``)."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ _SIX_ROWS_POSITION.flags.writeable = False
 
 @dataclass(frozen=True)
 class Problem:
-    """Validated options shared by the single and the batched solver."""
+    """Validated options shared by every solver (one per frame of a mapping target)."""
 
     fid: int
     frame: str
@@ -179,11 +179,6 @@ def _rotation_ok(
 _BOTTOM = np.array([0.0, 0.0, 0.0, 1.0])
 
 
-def _bottom_ok(row: list[float]) -> bool:
-    """A pose's bottom row is [0, 0, 0, 1] (to 1e-9)."""
-    return all(abs(v - w) <= 1e-9 for v, w in zip(row, (0.0, 0.0, 0.0, 1.0), strict=True))
-
-
 def _real(target: object, expected: str) -> np.ndarray:
     """``target`` as a float array; complex numbers are refused (a cast would drop their imaginary parts)."""
     try:
@@ -221,8 +216,7 @@ def single_target(
         if value.shape != (4, 4):
             raise ParameterizationError(
                 f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got "
-                f"{value.shape}; "
-                "for parameters χ name their position= and/or rotation= parameterization"
+                f"{value.shape}; for parameters χ name their position= and/or rotation= parameterization"
             )
         flat = value.ravel().tolist()
         if not all(map(math.isfinite, flat)):
@@ -232,7 +226,7 @@ def single_target(
             raise ParameterizationError(
                 "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
             )
-        if not _bottom_ok(flat[12:]):
+        if not all(abs(v - w) <= 1e-9 for v, w in zip(flat[12:], _BOTTOM.tolist(), strict=True)):
             raise ParameterizationError(
                 f"`target`'s bottom row is {flat[12:]}, expected [0, 0, 0, 1]: a pose T_IF (4, 4) is a "
                 "homogeneous transform"
