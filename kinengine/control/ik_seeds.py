@@ -107,7 +107,7 @@ def _default_start(robot: RobotLike, problem: Problem) -> np.ndarray:
 
 
 def _nearest(robot: RobotLike, goal: FrameGoal) -> np.ndarray:
-    """The NEAREST_SEEDS configurations (k, dof) of the seed table of the goal's frame and target kind whose
+    """The NEAREST_SEEDS configurations (k, dof) of the stored table of the goal's frame and target kind whose
     frame poses are nearest its target, nearest first."""
     frame, use_p, use_R = goal.problem.frame, goal.p_d is not None, goal.C_d is not None
     tables = robot.engine.memoized("ik seed tables", SeedTables)
