@@ -251,3 +251,17 @@ def test_abb_tool0_and_link4_position_from_any_reachable_q(fractions, offset, se
     _check(ABB, near, targets, _LINK4_POSITION)
     free = ABB.inverse_kinematics(targets, rows=_LINK4_POSITION, rng=seed)
     _check(ABB, free, targets, _LINK4_POSITION)
+
+
+def test_a_robot_without_joints_reports_its_frames_errors():
+    """No joint moves any frame: the mapping target is answered from the fixed pose (Pinocchio crashed on
+    a Jacobian with nv = 0 when the stacked solver asked for one), errors by forward kinematics."""
+    robot = kinengine.load_urdf_string(
+        '<robot name="fixed"><link name="a"/><link name="b"/><joint name="j" type="fixed"><parent link="a"/>'
+        '<child link="b"/><origin xyz="0 0 1"/></joint></robot>'
+    )
+    T = robot.frame_pose(np.zeros(0), "b")
+    T[0, 3] += 0.5
+    result = inverse_kinematics(robot, {"b": T, "a": np.eye(4)})
+    _check(robot, result, {"b": T, "a": np.eye(4)})
+    assert not result.success and result.frame_errors["b"][0] == pytest.approx(0.5, abs=1e-12)
