@@ -330,14 +330,15 @@ def test_stalled_attempts_give_way_after_stall_from_iterations(abb):
     """A target 5 m away (the IRB 120 reaches 0.58 m): no attempt's error shrinks by 20 % in 3 iterations, so
     each one but the last gives way after STALL_FROM iterations and the last runs out max_iterations."""
     from kinengine.control import ik_step
-    from kinengine.control.ik_seeds import first_seeds
-    from kinengine.control.ik_target import checked_problem
+    from kinengine.control.ik_seeds import frame_seeds
+    from kinengine.control.ik_target import FrameGoal, Options, checked_problem
 
     T = np.eye(4)
     T[:3, 3] = [5.0, 0.0, 0.5]
     result = inverse_kinematics(abb, T, rng=0, restarts=2, max_iterations=50)
-    problem = checked_problem(abb, None, None, None, 1e-6, 1e-6, 50, 2, None, 0.1, 1e-6, False)
-    attempts = first_seeds(abb, problem, T[None, :3, 3], T[None, :3, :3], None).shape[1] + 2
+    options = Options(1e-6, 1e-6, 50, 2, None, 0.1, 1e-6, False)
+    problem = checked_problem(abb, None, None, None, options)
+    attempts = len(frame_seeds(abb, [FrameGoal(problem, T[:3, 3], T[:3, :3])], None)) + 2
     assert not result.success
     assert result.iterations == (attempts - 1) * ik_step.STALL_FROM + 50
     ep, _ = _pose_errors(abb, result.q, "tool0", T)

@@ -6,28 +6,20 @@ tolerances are checked against; to first order its Jacobian is J = J_e0 ("local_
 With ``rows=`` or ``weights=`` both halves are expressed in the target frame D (e_D = C_dᵀ e, J_D = C_dᵀ J
 blockwise) and only the named rows count: rows=("x", "y", "z", "rx", "ry") is a 5-D target, position plus
 tool axis (D's z axis): rotation about it is left free. ``weights`` (w ≥ 0, one per kept row) minimize
-Σ w_i e_i² instead of |e|².
-Step (Sugihara's Levenberg–Marquardt rule: strong damping far from the target or near a singularity,
-Gauss–Newton speed close to it). A full pose is iterated in the end effector's own frame with its rotation
-rows weighted by ρ = ``ROTATION_ROW_WEIGHT`` = 0.2 m/rad (S = diag(1, 1, 1, ρ, ρ, ρ), the same distance
-that ranks seeds and attempts), λ² = ``DAMPING_SCALE``·(|e_p|² + ρ²|e_R|²) + λ_min² with DAMPING_SCALE = 0.1:
-    Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e  +  (I − Jᵀ (J Jᵀ + λ² I)⁻¹ J)·z,   q ← clip(q + Δq, lower, upper),
-(rows=/weights= targets: S = I and λ² = DAMPING_SCALE·|e_w|² + λ_min² on the weighted kept rows e_w), solved
-by Cholesky (least squares where the matrix is not positive definite),
-with z = gain·min(1, score/NULLSPACE_FADE) · (q_ns − q) pulling towards ``nullspace_target`` in the
-(damped) nullspace of J.
-Joint limits: every iterate is clipped into them, and Chan & Dubey's weights W
-(:class:`.ik_step.LimitWeights`) slow joints that approach a limit.
-Seeds, in order, one attempt each of at most ``max_iterations`` iterations (an attempt whose error
-is still above ``GIVE_UP`` after ``PROBE_ITERATIONS`` iterations, or from iteration ``STALL_FROM`` on above
-``STALL_RATIO`` × its error ``STALL_SPAN`` iterations earlier, makes way for the next seed):
-``q0`` if given (its attempt never gives up early), else the middle of the joint ranges (or
-``nullspace_target``) and the ``NEAREST_SEEDS`` configurations of a per-robot table
-(:mod:`.ik_seeds`: ``SEED_TABLE_SIZE`` random in-limit configurations, fixed seed) whose frame poses are
-nearest the target; then ``restarts`` uniformly random ones from ``rng``.
-The same algorithm runs vectorized over a batch of targets (N, 4, 4): :mod:`kinengine.control.ik_batch`,
-and over several frames at once (a mapping {frame: T_IF}, errors and Jacobians stacked):
-:mod:`kinengine.control.ik_multi`.
+Σ w_i e_i² instead of |e|²; a full pose minimizes |e_p|² + (ρ|e_R|)², ρ = 0.2 m/rad.
+Step (:mod:`.ik_step`): Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e plus a pull towards ``nullspace_target`` in the
+nullspace of J, with Sugihara's damping λ² = 0.1·|S e|² + λ_min² (strong far from the target or near a
+singularity, Gauss–Newton speed close to it) and Chan & Dubey's joint-limit weights W; every iterate is
+clipped into the limits.
+Seeds, in order, one attempt each of at most ``max_iterations`` iterations (an attempt that stalls or is
+still far after a few iterations makes way for the next seed, :func:`.ik_step.gives_way`): ``q0`` if given
+(its attempt never gives up early), else the middle of the joint ranges (or ``nullspace_target``) and the
+``NEAREST_SEEDS`` configurations of a per-robot table (:mod:`.ik_seeds`: ``SEED_TABLE_SIZE`` random
+in-limit configurations, fixed seed) whose frame poses are nearest the target; then ``restarts`` uniformly
+random ones from ``rng``.
+One frame and several at once (a mapping {frame: T_IF}, errors and Jacobians stacked, :mod:`.ik_multi`)
+run one attempt loop, :func:`.ik_solver.solve`; a batch of targets (N, 4, 4) runs the same algorithm
+vectorized, :mod:`kinengine.control.ik_batch`.
 """
 
 from __future__ import annotations
@@ -39,9 +31,10 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import OptionError
-from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, first_seeds
-from .ik_solver import IKResult, solve_one
-from .ik_target import Options, RandomSource, batch_targets, checked_problem, single_target
+from .ik_multi import checked_goals
+from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, frame_seeds
+from .ik_solver import IKResult, solve
+from .ik_target import FrameGoal, Options, RandomSource, batch_targets, checked_problem, single_target
 
 if TYPE_CHECKING:  # named for the checker only
     from .ik_batch import IKBatchResult
@@ -98,6 +91,7 @@ def inverse_kinematics(
         min_damping,
         q0 is not None,
     )
+    generator = RandomSource(rng)
     if isinstance(target, Mapping):
         if frame is not None or position is not None or rotation is not None:
             raise OptionError(
@@ -109,23 +103,17 @@ def inverse_kinematics(
                 "method='closed_form' solves pose targets (4, 4) or (N, 4, 4) of one frame; a mapping "
                 "{frame: pose} is solved by method='numeric' (or 'auto')"
             )
-        from .ik_multi import inverse_kinematics_frames
-
-        return inverse_kinematics_frames(robot, target, q0, rows, weights, rng, options)
-    batch = (
-        position is None and rotation is None and np.ndim(target) == 3
-        if not isinstance(target, str)
-        else False
-    )
-    problem = checked_problem(robot, frame, rows, weights, *options.values())
+        goals = checked_goals(robot, target, rows, weights, options)
+        start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=False)
+        return solve(robot, goals, frame_seeds(robot, goals, start), generator, several=True)
+    batch = position is None and rotation is None and not isinstance(target, str) and np.ndim(target) == 3
+    problem = checked_problem(robot, frame, rows, weights, options)
     if problem.rows is not None and (position is not None or rotation is not None):
         raise OptionError(
             "`rows=` and `weights=` apply to pose targets (4, 4) or (N, 4, 4); for parameters χ "
             "name only the parameterizations you need"
         )
-    generator = RandomSource(rng)
-    joints = robot.engine.coordinates
-    start = None if q0 is None else joints.check(q0, name="q0", allow_batch=batch)
+    start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=batch)
     if method != "numeric":
         from .ik_dispatch import closed_form_or_none
 
@@ -150,11 +138,8 @@ def inverse_kinematics(
                 f"`q0` must be (dof,) or one row per target ({len(P_d)}), got {len(start)} rows"
             )
         return solve_batch(robot, problem, P_d, Cs_d, start, generator)
-    p_d, C_d = single_target(target, position, rotation)
-    seeds = first_seeds(
-        robot, problem, p_d[None] if p_d is not None else None, C_d[None] if C_d is not None else None, start
-    )[0]
-    return solve_one(robot, problem, p_d, C_d, seeds, generator)
+    goals = [FrameGoal(problem, *single_target(target, position, rotation))]
+    return solve(robot, goals, frame_seeds(robot, goals, start), generator)
 
 
 __all__ = ["NEAREST_SEEDS", "SEED_TABLES", "SEED_TABLE_BYTES", "IKResult", "inverse_kinematics"]

@@ -5,15 +5,16 @@ give-up rules and tolerances), each iteration done for every attempt still runni
 (q (dof, r), J (6, dof, r), ...: every numpy call runs over r contiguous entries): poses and
 Jacobians J_e0 from the batch chain (:mod:`kinengine.kinematics.batch`, written straight into reused
 column buffers), the rotation errors log(C_d Cᵀ) from the rotation-vector parameterization, and the step
-of :func:`kinengine.control.ik_step.take_steps` (numpy's stacked solve of the (m, m) systems). Attempts
+of :func:`kinengine.control.ik_step.take_steps` (a column-wise Cholesky factorization of the (m, m)
+systems from CHOLESKY_FROM running attempts on, numpy's stacked solve below). Attempts
 that end (converged, given up, out of iterations) are compacted away, and the target's next attempt starts
 (its seed looked up only then: :class:`~kinengine.control.ik_seeds.BatchSeeds`). When few attempts are
 left running (SPECULATE), each target runs several of its next attempts at the same time; every target's
 outcome is then taken from its attempts in order (:func:`_resolve`): the same q, success, iteration
 count and restarts as if the attempts had run one after another. The last few attempts that never give
-way (TAIL) are rerun from their starts by the single solver. Floating point differs from the single
-solver's (the batch chain's Jacobian, LU instead of Cholesky), so the two agree in convergence and
-tolerance, not bit for bit; random restarts draw from ``rng`` in a different order.
+way (TAIL) are rerun from their starts by the one-target loop (:func:`.ik_solver.solve`). Floating point
+differs from that loop's (the batch chain's Jacobian in I, another factorization), so the two agree in
+convergence and tolerance, not bit for bit; random restarts draw from ``rng`` in a different order.
 
 The result is an :class:`IKBatchResult`: arrays over the batch (``q`` (N, dof), ``success`` (N,), ...),
 and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``list(result)``).
@@ -31,9 +32,9 @@ import pinocchio as pin
 from ..kinematics import batch
 from ..parameterizations import ROTATION_PARAMETERIZATIONS
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
-from .ik_solver import IKResult, solve_one
+from .ik_solver import IKResult, solve
 from .ik_step import POSE_ROW_DAMPING, STALL_SPAN, LimitWeights, damping, gives_way, limit_weights, take_steps
-from .ik_target import Problem, RandomSource
+from .ik_target import FrameGoal, Problem, RandomSource
 
 if TYPE_CHECKING:  # named for the checker only
     from .robot_like import RobotLike
@@ -139,7 +140,7 @@ def solve_batch(
         if r <= TAIL and patient.all():  # a few attempts that never give way: the single solver reruns them
             rest = replace(problem, restarts=0, patient_first=True)
             tail = [
-                solve_one(robot, rest, p_d[t], C_d[t], x[None], rng)
+                solve(robot, [FrameGoal(rest, p_d[t], C_d[t])], x[None], rng)
                 for t, x in zip(tid, state[S:].T.copy(), strict=True)
             ]
             e = np.array([[o.position_error, o.rotation_error, o.iterations] for o in tail]).reshape(r, 3).T

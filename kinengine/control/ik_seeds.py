@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .ik_target import Problem
+from .ik_target import FrameGoal, Problem
 
 if TYPE_CHECKING:  # named for the checker only
     from .robot_like import RobotLike
@@ -86,8 +86,9 @@ def _seed_table(
 
 
 def _embed(p: np.ndarray | None, C: np.ndarray | None, n: int) -> np.ndarray:
-    """Points whose squared distance is |Δp|² + w²‖ΔC‖²/2 = |Δp|² + w²·2(1 − cos θ) ≈ |Δp|² + (wθ)²."""
-    parts = [p] if p is not None else []
+    """Points (n, ≤ 12) whose squared distance is |Δp|² + w²‖ΔC‖²/2 = |Δp|² + w²·2(1 − cos θ) ≈ |Δp|² + (wθ)²,
+    for positions p (n, 3) and rotations C (n, 3, 3) (either None; n = 1: also p (3,), C (3, 3))."""
+    parts = [p.reshape(n, 3)] if p is not None else []
     if C is not None:
         parts.append(C.reshape(n, 9) * (SEED_ROTATION_WEIGHT / math.sqrt(2.0)))
     return np.hstack(parts) if parts else np.zeros((n, 1))
@@ -96,39 +97,51 @@ def _embed(p: np.ndarray | None, C: np.ndarray | None, n: int) -> np.ndarray:
 def _default_start(robot: RobotLike, problem: Problem) -> np.ndarray:
     """The seeded start that is not from a table: the middle of the joint ranges (0 for an unbounded joint),
     or the nullspace target clipped into the limits."""
-    joints = robot.engine.coordinates
+    lower, upper = robot.engine.coordinates.lower, robot.engine.coordinates.upper
     if problem.q_ns is not None:
-        return np.clip(problem.q_ns, joints.lower, joints.upper)
-    bounded = np.isfinite(joints.lower) & np.isfinite(joints.upper)
-    return (np.where(bounded, joints.lower, 0.0) + np.where(bounded, joints.upper, 0.0)) / 2
-
-
-def first_seeds(
-    robot: RobotLike, problem: Problem, p_d: np.ndarray | None, C_d: np.ndarray | None, q0: np.ndarray | None
-) -> np.ndarray:
-    """The seeded attempts' starts (N, S, dof) for targets p_d (N, 3) | None, C_d (N, 3, 3) | None."""
-    joints = robot.engine.coordinates
-    given = p_d if p_d is not None else C_d
-    assert given is not None  # a target fixes a position, a rotation or both
-    n = len(given)
-    if q0 is not None:
-        return np.broadcast_to(np.clip(q0, joints.lower, joints.upper), (n, robot.dof))[:, None, :].copy()
-    first = _default_start(robot, problem)
-    tables = robot.engine.memoized("ik seed tables", SeedTables)
-    key = (problem.frame, p_d is not None, C_d is not None)
-    configs, tree = tables.get(
-        key, lambda: _seed_table(robot, problem.frame, p_d is not None, C_d is not None)
+        return np.clip(problem.q_ns, lower, upper)
+    bounded = np.isfinite(lower) & np.isfinite(upper)
+    return robot.engine.memoized(
+        "ik middle of the ranges", lambda: (np.where(bounded, lower, 0.0) + np.where(bounded, upper, 0.0)) / 2
     )
+
+
+def _nearest(robot: RobotLike, goal: FrameGoal) -> np.ndarray:
+    """The NEAREST_SEEDS configurations (k, dof) of the stored table of the goal's frame and target kind whose
+    frame poses are nearest its target, nearest first."""
+    frame, use_p, use_R = goal.problem.frame, goal.p_d is not None, goal.C_d is not None
+    tables = robot.engine.memoized("ik seed tables", SeedTables)
+    configs, tree = tables.get((frame, use_p, use_R), lambda: _seed_table(robot, frame, use_p, use_R))
     k = min(NEAREST_SEEDS, len(configs))
-    _, index = tree.query(_embed(p_d, C_d, n), k=k, workers=-1 if n > 256 else 1)
-    seeds = np.empty((n, k + 1, robot.dof))
-    seeds[:, :k] = configs[np.asarray(index).reshape(n, k)]
-    seeds[:, k] = first  # the middle of the ranges (or the nullspace target): rarely the nearest
-    return seeds
+    return configs[np.reshape(tree.query(_embed(goal.p_d, goal.C_d, 1), k=k)[1], k)]
+
+
+def frame_seeds(robot: RobotLike, goals: list[FrameGoal], q0: np.ndarray | None) -> np.ndarray:
+    """The seeded attempts' starts (S, dof): q0 clipped into the limits, else the stored seeds nearest the
+    target, then the middle of the ranges (or the nullspace target: rarely the nearest). For several
+    frames, the stored seeds nearest any frame's target, ranked by Σ_F (|Δp| + 0.2·‖ΔC‖_F/√2) over the
+    frames' kept rows (‖ΔC‖_F/√2 = 2 sin(θ/2) ≈ θ, the metric of the tables)."""
+    if q0 is not None:
+        return np.clip(q0, robot.engine.coordinates.lower, robot.engine.coordinates.upper)[None]
+    candidates = np.concatenate([_nearest(robot, g) for g in goals])
+    if len(goals) > 1:
+        score, n = np.zeros(len(candidates)), len(candidates)
+        for g in goals:  # several frames: each a pose (4, 4)
+            assert g.p_d is not None and g.C_d is not None
+            T, rows = robot.frame_pose(candidates, g.problem.frame), g.problem.rows
+            d = g.p_d - T[:, :3, 3]
+            if rows is not None:
+                d = (d @ g.C_d)[:, rows[rows < 3]]  # C_dᵀ Δp, kept rows
+            score += np.sqrt(np.einsum("ij,ij->i", d, d))
+            if rows is None or rows[-1] >= 3:  # rows are sorted: a rotation row is kept
+                dC = (T[:, :3, :3] - g.C_d).reshape(n, 9)
+                score += SEED_ROTATION_WEIGHT / math.sqrt(2.0) * np.sqrt(np.einsum("ij,ij->i", dC, dC))
+        candidates = candidates[np.argsort(score, kind="stable")]
+    return np.concatenate((candidates, _default_start(robot, goals[0].problem)[None]))
 
 
 class BatchSeeds:
-    """The seeded starts for a batch (N targets), as :func:`first_seeds` orders them (the nearest table
+    """The seeded starts for a batch (N targets), as :func:`frame_seeds` orders them (the nearest table
     entries, then the middle of the ranges; or ``q0``), from a larger table (BATCH_SEED_TABLE_SIZE) searched
     approximately (BATCH_SEED_EPS) and only when needed: every target's nearest entry at once, its
     further ones when the target first needs a second attempt. :meth:`starts` gives (m, dof) for
@@ -199,5 +212,5 @@ __all__ = [
     "SEED_TABLE_SIZE",
     "BatchSeeds",
     "SeedTables",
-    "first_seeds",
+    "frame_seeds",
 ]

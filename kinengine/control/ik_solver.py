@@ -1,9 +1,13 @@
-"""The single-target IK solver: damped least squares iterations (see :mod:`kinengine.control.ik` for the
-error and the seeds, :mod:`kinengine.control.ik_step` for the step, the damping, the joint-limit weights and
-the give-way rule) from each seed in turn; returns an :class:`IKResult`.
+"""The IK attempt loop, one for a single frame and for several: damped least squares iterations (see
+:mod:`kinengine.control.ik` for the error and the seeds, :mod:`kinengine.control.ik_step` for the step, the
+damping, the joint-limit weights and the give-way rule) from each seed in turn.
 
-A full pose target is iterated in the frame F itself (e_F = blockdiag(Cᵀ, Cᵀ) e, J_F likewise): the step
-and the norms are the same in any frame (Robot Dynamics lecture notes, ETH Zurich, §2.8)."""
+The frames' errors and Jacobians are stacked, e = (e_F1, e_F2, ...), J = (J_F1; J_F2; ...); a single target
+is one frame. A full pose target is iterated in the frame F itself (e_F = blockdiag(Cᵀ, Cᵀ) e, J_F likewise,
+Jacobian "local"): the step and the norms are the same in any frame (Robot Dynamics lecture notes, ETH
+Zurich, §2.8), and the error comes from one SE3 call. Any other target keeps the rows S e [m, rad] of e in
+I (a position or rotation part) or in the target frame D (``rows=``, S the kept rows of
+blockdiag(C_dᵀ, C_dᵀ)), each times √w, with J_D = S J_e0 ("local_world_aligned")."""
 
 from __future__ import annotations
 
@@ -16,7 +20,7 @@ import pinocchio as pin
 
 from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT
-from .ik_target import Problem, RandomSource
+from .ik_target import FrameGoal, RandomSource
 
 if TYPE_CHECKING:  # named for the checker only
     from .robot_like import RobotLike
@@ -41,128 +45,152 @@ class IKResult:
         )
 
 
-def solve_one(
+@dataclass(frozen=True)
+class MultiIKResult(IKResult):
+    """An :class:`IKResult` for several frames: position_error / rotation_error are the maxima over the
+    frames, ``frame_errors`` {frame: (position error [m], rotation error [rad])} each frame's own."""
+
+    frame_errors: dict[str, tuple[float, float]] | None = None
+
+
+def _layout(goals: list[FrameGoal], err: np.ndarray) -> tuple[list[tuple], list[tuple], np.ndarray]:
+    """Per frame, for its error: (fid, T_IF_d as an SE3 for a full pose else None, p_d, C_d, e (6,) [m, rad],
+    S (k, 6) or None, √w or None, kept position rows, its rows start:stop of ``err``) (a full pose's e is
+    its rows of ``err``, any other's rows are S e); for its Jacobian: (fid, reference frame, S·√w or None,
+    start, stop); and the damping's row scale S⁻² (ik_step.POSE_ROW_DAMPING on a full pose's rows)."""
+    errors: list[tuple] = []
+    jacobians: list[tuple] = []
+    row_damping, start = [], 0
+    for g in goals:
+        problem, p_d, C_d = g.problem, g.p_d, g.C_d
+        fid, rows, sqrt_w, stop = problem.fid, problem.rows, problem.sqrt_weights, start + g.row_count
+        if rows is None and p_d is not None and C_d is not None:  # a full pose, in F
+            e = err[start:stop]
+            errors.append((fid, pin.SE3(C_d, p_d), p_d, C_d, e, e[:3], e[3:], None, None, None, start, stop))
+            jacobians.append((fid, pin.LOCAL, None, start, stop))
+            row_damping.append(step.POSE_ROW_DAMPING)
+        else:
+            if rows is None:  # a position or rotation part, in I
+                S = np.eye(6)[0 if p_d is not None else 3 : 6 if C_d is not None else 3]
+            else:  # kept rows in D
+                assert C_d is not None  # rows= is for pose targets only
+                S = np.zeros((6, 6))
+                S[:3, :3] = S[3:, 3:] = C_d.T
+                S = np.ascontiguousarray(S[rows])
+            S_w = S if sqrt_w is None else S * sqrt_w[:, None]
+            position_rows = S[:, :3].any(axis=1)
+            e = np.zeros(6)
+            errors.append((fid, None, p_d, C_d, e, e[:3], e[3:], S, sqrt_w, position_rows, start, stop))
+            jacobians.append((fid, pin.LOCAL_WORLD_ALIGNED, S_w, start, stop))
+            row_damping.append(np.ones(stop - start))
+        start = stop
+    return errors, jacobians, row_damping[0] if len(goals) == 1 else np.concatenate(row_damping)
+
+
+def solve(
     robot: RobotLike,
-    problem: Problem,
-    p_d: np.ndarray | None,
-    C_d: np.ndarray | None,
+    goals: list[FrameGoal],
     seeds: np.ndarray,
     generator: RandomSource,
-    wrap: bool = True,
+    several: bool = False,
 ) -> IKResult:
-    """Attempts from each seed, then ``restarts`` random ones; the first converged (or the best) wins.
+    """Attempts from each seed (S, dof), then ``restarts`` random ones; the first that brings every frame
+    within the tolerances (or the best by Σ_F |e_p| + 0.2 m/rad·|e_R|) wins. ``several``: a
+    :class:`MultiIKResult` (maxima over the frames and each frame's errors).
 
     Per iteration a dozen numpy calls on arrays of 6 to 42 numbers, so their count sets the speed: the
     normal matrix is written into one buffer whose diagonal view takes λ², and solved by Cholesky
-    (LAPACK ``dposv``: J W⁻¹Jᵀ + λ² I is symmetric positive definite for λ > 0; least squares if not)."""
+    (LAPACK ``dposv``: J W⁻¹Jᵀ + λ² S⁻² is symmetric positive definite for λ > 0; least squares if not)."""
     from scipy.linalg.lapack import dposv  # 5x cheaper per call than np.linalg.solve on a 6x6
 
     kin = robot.engine
     joints = kin.coordinates
     model, data = kin.model, kin.data()
-    lower, upper, fid = joints.lower, joints.upper, problem.fid
-    tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
-    rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
-    damping_sq, q_ns, gain = problem.damping_sq, problem.q_ns, problem.gain
-    attempts = len(seeds) + problem.restarts
-    e = np.zeros(6)
-    e_p, e_r = e[:3], e[3:]
-    full = rows is None and p_d is not None and C_d is not None
-    part = slice(0 if p_d is not None else 3, 6 if C_d is not None else 3)
+    shared = goals[0].problem
+    tol_p, tol_r, max_iterations = shared.tol_position, shared.tol_rotation, shared.max_iterations
+    damping_sq, q_ns, gain = shared.damping_sq, shared.q_ns, shared.gain
+    attempts = len(seeds) + shared.restarts
     pinocchio_q, fold, identity = kin.pinocchio_q, joints.fold, joints.identity
-    frame_jacobian, place, log3, LWA = (
-        pin.computeFrameJacobian,
-        pin.updateFramePlacement,
-        pin.log3,
-        pin.LOCAL_WORLD_ALIGNED,
-    )
-    joint_jacobians, get_jacobian, LOCAL = pin.computeJointJacobians, pin.getFrameJacobian, pin.LOCAL
-    forward, movable = pin.forwardKinematics, kin.dof > 0  # Pinocchio 4.1 crashes on a Jacobian with nv = 0
-    # A full pose is solved in F (the damped step and the norms do not depend on the frame they are
-    # written in): its error then comes from one SE3 call instead of a subtraction and a 3x3 product.
-    target = pin.SE3(C_d, p_d) if full else None
-    # Rows weighted by S = diag(1, 1, 1, ρ, ρ, ρ): (S J W⁻¹Jᵀ S + λ² I) x = S e is (J W⁻¹Jᵀ + λ² S⁻²)(S x) = e
-    # with Δq = W⁻¹Jᵀ (S x): the weights only scale the damping on the diagonal.
-    rotation_sq = step.ROTATION_ROW_WEIGHT**2 if full else 1.0
-    row_damping = step.POSE_ROW_DAMPING if full else 1.0
-    subtract, hypot = np.subtract, math.hypot
-    m = len(rows) if rows is not None else part.stop - part.start
-    A = np.empty((m, m))
+    place, log3, get_jacobian = pin.updateFramePlacement, pin.log3, pin.getFrameJacobian
+    # Pinocchio 4.1 crashes on a Jacobian with nv = 0: a robot without joints only has its pose computed
+    movable = kin.dof > 0
+    kinematics = pin.computeJointJacobians if movable else pin.forwardKinematics
+    subtract, hypot, sqrt = np.subtract, math.hypot, math.sqrt
+    m = sum(g.row_count for g in goals)
+    err, J, A = np.empty(m), np.empty((m, robot.dof)), np.empty((m, m))
+    # a full pose's rows are weighted by S = diag(1, 1, 1, ρ, ρ, ρ): (S J W⁻¹Jᵀ S + λ² I) x = S e is
+    # (J W⁻¹Jᵀ + λ² S⁻²)(S x) = e with Δq = W⁻¹Jᵀ (S x), so the weights only scale the damping's diagonal
+    errors, jacobians, row_damping = _layout(goals, err)
+    rotation_sq = step.ROTATION_ROW_WEIGHT**2
     limits = step.limit_weights(kin)
-    weigh = limits.inverse_weights_one if limits.any else None
-    bounds = (lower, upper)
+    weigh, bounds = limits.inverse_weights_one if limits.any else None, (joints.lower, joints.upper)
     best, total = None, 0
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
-        last = attempt == attempts - 1 or (attempt == 0 and problem.patient_first)
+        last = attempt == attempts - 1 or (attempt == 0 and shared.patient_first)
         iteration, previous = 0, None
         history: list[float] = []  # the score at each iteration
         while True:
-            qp = q if identity else pinocchio_q(q)
-            if full:  # e and J in F: Cᵀ e = (Cᵀ(p_d − p), log3(Cᵀ C_d)) from M⁻¹ M_d, one SE3 call
-                (joint_jacobians if movable else forward)(model, data, qp)
-                M = place(model, data, fid).actInv(target)
-                e_p[:] = M.translation
-                e_r[:] = log3(M.rotation)
-            else:
-                if movable:
-                    J = frame_jacobian(model, data, qp, fid, LWA)
-                else:
-                    forward(model, data, qp)
+            kinematics(model, data, q if identity else pinocchio_q(q))
+            per_frame = []
+            score, squared, done = 0.0, 0.0, True
+            for fid, target, p_d, C_d, e, e_p, e_r, S, sqrt_w, position_rows, start, stop in errors:
                 M = place(model, data, fid)
-                if p_d is not None:
-                    subtract(p_d, M.translation, out=e_p)
-                if C_d is not None:
-                    e_r[:] = log3(C_d @ M.rotation.T)
-            if rows is None:
-                e0, e1, e2, e3, e4, e5 = e.tolist()
-                ep, er = hypot(e0, e1, e2), hypot(e3, e4, e5)
-                err = e if full else e[part]
-                squared = e0 * e0 + e1 * e1 + e2 * e2 + rotation_sq * (e3 * e3 + e4 * e4 + e5 * e5)
-            else:
-                assert C_d is not None  # rows= is for pose targets only
-                e_d = np.concatenate((C_d.T @ e_p, C_d.T @ e_r))[rows]
-                ep = math.sqrt(float(e_d[position_rows] @ e_d[position_rows]))
-                er = math.sqrt(float(e_d[~position_rows] @ e_d[~position_rows]))
-                err = e_d if sqrt_w is None else e_d * sqrt_w
-                squared = float(err @ err)
-            score = ep + SEED_ROTATION_WEIGHT * er
-            done = ep <= tol_p and er <= tol_r
+                if target is not None:  # e in F: Cᵀ e = (Cᵀ(p_d − p), log3(Cᵀ C_d)) from M⁻¹ M_d
+                    M = M.actInv(target)
+                    e_p[:] = M.translation
+                    e_r[:] = log3(M.rotation)
+                    e0, e1, e2, e3, e4, e5 = e.tolist()
+                    ep, er = hypot(e0, e1, e2), hypot(e3, e4, e5)
+                    squared += e0 * e0 + e1 * e1 + e2 * e2 + rotation_sq * (e3 * e3 + e4 * e4 + e5 * e5)
+                else:
+                    if p_d is not None:
+                        subtract(p_d, M.translation, out=e_p)
+                    if C_d is not None:
+                        e_r[:] = log3(C_d @ M.rotation.T)
+                    e_d = S @ e
+                    ep = sqrt(float(e_d[position_rows] @ e_d[position_rows]))
+                    er = sqrt(float(e_d[~position_rows] @ e_d[~position_rows]))
+                    kept = err[start:stop]
+                    kept[:] = e_d if sqrt_w is None else e_d * sqrt_w
+                    squared += float(kept @ kept)
+                per_frame.append((ep, er))
+                score += ep + SEED_ROTATION_WEIGHT * er
+                done = done and ep <= tol_p and er <= tol_r
             if (
                 done
+                or not movable  # no joint moves a frame: the error stays as it is
                 or iteration == max_iterations
                 or (not last and step.gives_way(iteration, score, history))
             ):
                 break
-            if not movable:  # no joint moves the frame: the error stays as it is
-                break
             history.append(score)
             iteration += 1
-            if full:
-                J = get_jacobian(model, data, fid, LOCAL)
-            if not identity or J.ndim == 1:
-                J = fold(J.reshape(6, -1))
-            if rows is not None:
-                assert C_d is not None
-                J = np.vstack((C_d.T @ J[:3], C_d.T @ J[3:]))[rows]
-                if sqrt_w is not None:
-                    J = J * sqrt_w[:, None]
-            elif not full:
-                J = J[part]
+            for fid, reference, S_w, start, stop in jacobians:
+                J_F = get_jacobian(model, data, fid, reference).reshape(6, -1)
+                if not identity:
+                    J_F = fold(J_F)
+                if S_w is None:
+                    J[start:stop] = J_F
+                else:
+                    np.dot(S_w, J_F, out=J[start:stop])
             diagonal = step.damping(squared, damping_sq) * row_damping
             previous = step.take_step(
                 q, J, err, A, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
             )
         total += iteration
-        if best is None or score < best[3]:
-            best = (q, ep, er, score, attempt)
+        if best is None or score < best[2]:
+            best = (q, per_frame, score, attempt, done)
         if done:
             break
     assert best is not None  # attempts >= 1: the seeds hold at least one start
-    q, ep, er, _, attempt = best
-    if wrap:
-        limits.wrap(q)
-    return IKResult(q, bool(ep <= tol_p and er <= tol_r), total, ep, er, attempt)
+    q, per_frame, _, attempt, done = best
+    limits.wrap(q)
+    ep, er = max(pe[0] for pe in per_frame), max(pe[1] for pe in per_frame)
+    if not several:
+        return IKResult(q, bool(done), total, ep, er, attempt)
+    by_frame = {g.problem.frame: pe for g, pe in zip(goals, per_frame, strict=True)}
+    return MultiIKResult(q, bool(done), total, ep, er, attempt, by_frame)
 
 
-__all__ = ["IKResult", "solve_one"]
+__all__ = ["IKResult", "MultiIKResult", "solve"]

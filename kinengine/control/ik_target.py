@@ -1,6 +1,6 @@
-"""IK options and targets, checked once: :class:`Problem` (the validated options shared by the single and
-the batched solver), the target pose p_d (3,) [m] / C_d (3, 3) in the root frame I from a pose T_IF (4, 4),
-a batch (N, 4, 4) or parameters χ, and :class:`RandomSource` (the ``rng`` option)."""
+"""IK options and targets, checked once: :class:`Problem` (the validated options shared by every solver),
+:class:`FrameGoal` (a frame's problem and target), the target pose p_d (3,) [m] / C_d (3, 3) in the root
+frame I from a pose T_IF (4, 4), a batch (N, 4, 4) or parameters χ, and :class:`RandomSource` (``rng``)."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ _SIX_ROWS_POSITION.flags.writeable = False
 
 @dataclass(frozen=True)
 class Problem:
-    """Validated options shared by the single and the batched solver."""
+    """Validated options shared by every solver (one per frame of a mapping target)."""
 
     fid: int
     frame: str
@@ -44,8 +44,8 @@ class Problem:
 
 @dataclass(frozen=True)
 class Options:
-    """inverse_kinematics' options as given, in :func:`checked_problem`'s order (``values()``); a mapping
-    target checks them once per frame."""
+    """inverse_kinematics' options as given, checked by :func:`checked_problem` (once per frame of a
+    mapping target)."""
 
     tol_position: object
     tol_rotation: object
@@ -56,17 +56,21 @@ class Options:
     min_damping: object
     has_q0: bool
 
-    def values(self) -> tuple[object, object, object, object, object, object, object, bool]:
-        return (
-            self.tol_position,
-            self.tol_rotation,
-            self.max_iterations,
-            self.restarts,
-            self.nullspace_target,
-            self.nullspace_gain,
-            self.min_damping,
-            self.has_q0,
-        )
+
+@dataclass(frozen=True)
+class FrameGoal:
+    """One frame's validated options (its :class:`Problem`: fid, rows, weights) and target p_d (3,) [m],
+    C_d (3, 3) in I (either None where the target leaves that part free)."""
+
+    problem: Problem
+    p_d: np.ndarray | None
+    C_d: np.ndarray | None
+
+    @property
+    def row_count(self) -> int:
+        """Rows of the frame's error: the kept ``rows``, else 3 per fixed part (position, rotation)."""
+        rows = self.problem.rows
+        return len(rows) if rows is not None else 3 * ((self.p_d is not None) + (self.C_d is not None))
 
 
 def _number(name: str, value: object, low: float, high: float = math.inf) -> float:
@@ -89,27 +93,20 @@ def checked_problem(
     frame: str | None,
     rows: object,
     weights: object,
-    tol_position: object,
-    tol_rotation: object,
-    max_iterations: object,
-    restarts: object,
-    nullspace_target: object,
-    nullspace_gain: object,
-    min_damping: object,
-    has_q0: bool,
+    options: Options,
 ) -> Problem:
     """The options of :func:`kinengine.control.ik.inverse_kinematics`, each checked (OptionError)."""
     frame = robot.end_effector if frame is None else frame
-    fid = robot.frame_id(frame)
-    tol_p, tol_r = _number("tol_position", tol_position, 0.0), _number("tol_rotation", tol_rotation, 0.0)
-    max_iterations = _count("max_iterations", max_iterations, 1_000_000)
-    restarts = _count("restarts", restarts, 10_000)
-    gain = _number("nullspace_gain", nullspace_gain, 0.0, 1.0)
-    damping = _number("min_damping", min_damping, 0.0, 1e6)
+    fid, o = robot.frame_id(frame), options
+    tol_p, tol_r = _number("tol_position", o.tol_position, 0.0), _number("tol_rotation", o.tol_rotation, 0.0)
+    max_iterations = _count("max_iterations", o.max_iterations, 1_000_000)
+    restarts = _count("restarts", o.restarts, 10_000)
+    gain = _number("nullspace_gain", o.nullspace_gain, 0.0, 1.0)
+    damping = _number("min_damping", o.min_damping, 0.0, 1e6)
     q_ns = (
         None
-        if nullspace_target is None
-        else robot.engine.coordinates.check(nullspace_target, name="nullspace_target", allow_batch=False)
+        if o.nullspace_target is None
+        else robot.engine.coordinates.check(o.nullspace_target, name="nullspace_target", allow_batch=False)
     )
     kept, sqrt_w = None, None
     if rows is not None or weights is not None:
@@ -122,21 +119,8 @@ def checked_problem(
                 )
             sqrt_w = np.sqrt([_number("weights[i]", v, 0.0, 1e12) for v in w])
     position_rows = _SIX_ROWS_POSITION if kept is None else kept < 3
-    return Problem(
-        fid,
-        frame,
-        kept,
-        sqrt_w,
-        position_rows,
-        tol_p,
-        tol_r,
-        max_iterations,
-        restarts,
-        damping**2,
-        q_ns,
-        gain,
-        has_q0,
-    )
+    limits = (tol_p, tol_r, max_iterations, restarts, damping**2)
+    return Problem(fid, frame, kept, sqrt_w, position_rows, *limits, q_ns, gain, o.has_q0)
 
 
 def _rows(rows: object) -> np.ndarray:
@@ -195,11 +179,6 @@ def _rotation_ok(
 _BOTTOM = np.array([0.0, 0.0, 0.0, 1.0])
 
 
-def _bottom_ok(row: list[float]) -> bool:
-    """A pose's bottom row is [0, 0, 0, 1] (to 1e-9)."""
-    return all(abs(v - w) <= 1e-9 for v, w in zip(row, (0.0, 0.0, 0.0, 1.0), strict=True))
-
-
 def _real(target: object, expected: str) -> np.ndarray:
     """``target`` as a float array; complex numbers are refused (a cast would drop their imaginary parts)."""
     try:
@@ -237,8 +216,7 @@ def single_target(
         if value.shape != (4, 4):
             raise ParameterizationError(
                 f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got "
-                f"{value.shape}; "
-                "for parameters χ name their position= and/or rotation= parameterization"
+                f"{value.shape}; for parameters χ name their position= and/or rotation= parameterization"
             )
         flat = value.ravel().tolist()
         if not all(map(math.isfinite, flat)):
@@ -248,7 +226,7 @@ def single_target(
             raise ParameterizationError(
                 "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
             )
-        if not _bottom_ok(flat[12:]):
+        if not all(abs(v - w) <= 1e-9 for v, w in zip(flat[12:], _BOTTOM.tolist(), strict=True)):
             raise ParameterizationError(
                 f"`target`'s bottom row is {flat[12:]}, expected [0, 0, 0, 1]: a pose T_IF (4, 4) is a "
                 "homogeneous transform"
@@ -324,6 +302,7 @@ def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
 __all__ = [
     "MAX_TARGET_DISTANCE",
     "ROW_NAMES",
+    "FrameGoal",
     "Options",
     "Problem",
     "RandomSource",

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import numpy.typing as npt
@@ -65,6 +65,17 @@ class SingularityReport:
     def is_singular(self) -> bool:
         """True if J[rows] has fewer than len(rows) singular values above ``tolerance``."""
         return self.rank < len(self.rows)
+
+    def require_regular(self) -> SingularityReport:
+        """This report if J[rows] has full row rank, else KinematicSingularityError (with ``.report``)."""
+        if self.is_singular:
+            error = KinematicSingularityError(
+                f"{self}\nThe robot itself cannot move its frame along these directions at this q; "
+                "no choice of pose parameterization changes that (unlike a representation singularity)."
+            )
+            error.report = self
+            raise error
+        return self
 
     def __str__(self) -> str:
         what = f"J_e0 rows {' '.join(self.rows)}" + (f" of frame {self.frame!r}" if self.frame else "")
@@ -183,24 +194,10 @@ def velocity_ellipsoid(robot: RobotLike, q: npt.ArrayLike, frame: str | None = N
     return VelocityEllipsoid(T[:3, 3].copy(), U, semi)
 
 
-def require_regular(
-    robot: RobotLike,
-    q: npt.ArrayLike,
-    frame: str | None = None,
-    rows: Rows = "all",
-    *,
-    tolerance: float = DEFAULT_TOLERANCE,
-) -> SingularityReport:
-    """The report if J_e0[rows] has full row rank; KinematicSingularityError (with ``.report``) otherwise."""
-    report = singularity_report(robot, q, frame, rows, tolerance=tolerance)
-    if report.is_singular:
-        error = KinematicSingularityError(
-            f"{report}\nThe robot itself cannot move its frame along these directions at this q; "
-            "no choice of pose parameterization changes that (unlike a representation singularity)."
-        )
-        error.report = report
-        raise error
-    return report
+def require_regular(robot: RobotLike, q: npt.ArrayLike, *options: Any, **keywords: Any) -> SingularityReport:
+    """:func:`singularity_report` (the same arguments: frame, rows, tolerance) if J_e0[rows] has full row
+    rank, else KinematicSingularityError with ``.report`` (:meth:`SingularityReport.require_regular`)."""
+    return singularity_report(robot, q, *options, **keywords).require_regular()
 
 
 def describe_twist(twist: np.ndarray, digits: int = 2) -> str:
