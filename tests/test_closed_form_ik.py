@@ -5,6 +5,8 @@ the errors of chains without a closed form."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -50,6 +52,8 @@ def tilted_arm_urdf() -> str:
 def _load(case: str) -> kinengine.Robot:
     if case == "tilted_arm":
         return kinengine.load_urdf_string(tilted_arm_urdf())
+    if case == "rounded_angles":
+        return kinengine.load(Path(__file__).parent / "data" / "ik" / "rounded_angles.urdf")
     name, _, lock = case.partition(":")
     robot = kinengine.load(name)
     return robot.locked({lock: float(robot.neutral()[robot.joint_names.index(lock)])}) if lock else robot
@@ -84,6 +88,9 @@ CASES = {  # robot (name:locked joint) -> completeness floor
     # chain is solved and its answers polished on the real one (to 1e-12; next to a fold, from the mirror
     # of the polished answer too; next to a limit, from outside it): measured 100.00 % (seed 7)
     "xarm7:joint7": 0.999,
+    # right angles written 1.571 (Doosan's descriptions): axes 2e-4 rad off, wrist offsets 1e-4 m; measured
+    # 100.00 % (seed 7), 99.98 % (seed 8: misses at sigma_min 4.3e-3 and 1.4e-5)
+    "rounded_angles": 0.999,
 }
 
 
@@ -436,3 +443,52 @@ def test_the_c_kernel_refuses_malformed_candidates(abb):
     table[0, 0] = 6.0  # column beyond q
     with pytest.raises(ValueError, match="table"):
         chain.kernel.candidates(q, np.array([0, 1]), T, base, table, out, None, *args)
+
+
+def test_q_near_on_another_turn_of_a_continuous_joint_still_comes_first():
+    """Kinova's joints 1, 4 and 6 are continuous: q_near two turns away is the same configuration. The
+    solutions (reported in (−π, π]) are sorted by the wrapped distance, and inverse_kinematics answers on
+    q0's own turn."""
+    robot = kinengine.load("kinova")
+    q = robot.random_configuration(rng=3)
+    q[[0, 5]] += 2 * np.pi
+    T = robot.frame_pose(q)
+    found = robot.ik_solutions(T, q_near=q)
+    assert _angle_gap(found.q[0], q).max() < 1e-9
+    np.testing.assert_allclose(robot.inverse_kinematics(T, q0=q).q, q, rtol=0, atol=1e-9)
+    Q = np.stack([q, q - 4 * np.pi * np.eye(6)[3]])
+    np.testing.assert_allclose(robot.inverse_kinematics(robot.frame_pose(Q), q0=Q).q, Q, rtol=0, atol=1e-9)
+
+
+def test_a_float32_or_slightly_skewed_target_is_solved_for_its_nearest_rotation(abb):
+    """A rotation block orthonormal only to ~1e-7 (float32) is accepted by the pose check (1e-6); it is
+    solved for its nearest rotation (SVD), which the answers reproduce to 1e-9."""
+    Q = abb.random_configuration(rng=0, size=50)
+    T32 = abb.frame_pose(Q).astype(np.float32)
+    found = abb.ik_solutions(T32)
+    assert found.reachable.all()
+    C = T32[:, :3, :3].astype(float)
+    U, _, Vt = np.linalg.svd(C)
+    nearest = U @ Vt
+    real = ~np.isnan(found.q[..., 0])
+    rows = np.nonzero(real)[0]
+    reached = abb.frame_pose(found.q[real])
+    assert np.abs(reached[:, :3, :3] - nearest[rows]).max() <= 1e-9
+    assert np.abs(reached[:, :3, 3] - T32[rows, :3, 3]).max() <= 1e-6  # float32's own position rounding
+    one = abb.ik_solutions(T32[0])
+    assert one.reachable and np.abs(abb.frame_pose(one.q)[:, :3, :3] - nearest[0]).max() <= 1e-9
+    skewed = abb.frame_pose(Q[0])
+    skewed[:3, :3] *= 1 + 1e-8
+    assert abb.ik_solutions(skewed).reachable
+
+
+def test_at_a_wrist_singularity_q_near_itself_is_returned(abb):
+    """At q5 = 0 the solutions form a continuum (q4 + q6 fixed): with q_near a member of it, the
+    representative returned first is q_near, also through inverse_kinematics."""
+    for q in (np.array([0.3, -0.2, 0.4, 1.0, 0.0, -0.5]), np.array([0.3, -0.2, 0.4, -2.0, 0.0, 2.5])):
+        T = abb.frame_pose(q)
+        found = abb.ik_solutions(T, q_near=q)
+        assert found.singular
+        np.testing.assert_allclose(found.q[0], q, rtol=0, atol=1e-9)
+        assert _pose_error(abb.frame_pose(found.q), T).max() <= 1e-9
+        np.testing.assert_allclose(abb.inverse_kinematics(T, q0=q).q, q, rtol=0, atol=1e-9)

@@ -32,7 +32,7 @@ from ..errors import KinematicsError, OptionError
 from ..kinematics.compiler import compiled_chain
 from .ik_candidates import candidates_to_solutions, shared_by_poses
 from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined
-from .ik_target import batch_targets, single_target
+from .ik_target import ROTATION_EXACT, batch_targets, exact_pose, rotation_deviation, single_target
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .robot_like import RobotLike
@@ -41,9 +41,9 @@ EXTRA_HINT = "closed-form IK needs the solver library EAIK: pip install 'kinengi
 METHODS = ("auto", "closed_form", "numeric")
 THREADS = max(1, min(4, os.cpu_count() or 1))
 """EAIK's worker threads for a batch (its C++ threads run without the GIL)."""
-SNAP_AXIS = 1e-4
+SNAP_AXIS = 1e-3
 """Axis entries below this (in I) count as zero when the exact chain has no decomposition (``snapped``)."""
-SNAP_OFFSET = 1e-5
+SNAP_OFFSET = 1e-3
 """[m] offset entries below this count as zero alike; the ideal chain's answers are then polished on the
 robot's own chain (:mod:`.ik_solutions`)."""
 CHUNK_POSES = 16384
@@ -277,14 +277,19 @@ def ik_solutions(
 
 
 def _checked_poses(T: object) -> np.ndarray:
-    """T as a C-contiguous float64 (4, 4) or (N, 4, 4), checked as the numeric solver checks its targets."""
+    """T as a C-contiguous float64 (4, 4) or (N, 4, 4), checked as the numeric solver checks its targets;
+    a rotation block off orthonormal by more than ROTATION_EXACT (float32, rounded) is replaced by its
+    nearest rotation (:func:`.ik_target.exact_pose`), which the answers then reproduce to 1e-9."""
     if np.ndim(T) == 3:  # type: ignore[arg-type]
         batch_targets(T)
-    else:
-        single_target(T, None, None)
-    if type(T) is np.ndarray and T.dtype == np.float64 and T.flags.c_contiguous:
-        return T
-    return np.ascontiguousarray(T, dtype=np.float64)
+        return exact_pose(np.ascontiguousarray(T, dtype=np.float64))
+    single_target(T, None, None)
+    if not (type(T) is np.ndarray and T.dtype == np.float64 and T.flags.c_contiguous):
+        T = np.ascontiguousarray(T, dtype=np.float64)
+    a, b, c, _, d, e, f, _, g, h, i = T.ravel().tolist()[:11]
+    if rotation_deviation(a, b, c, d, e, f, g, h, i) > ROTATION_EXACT:
+        return exact_pose(T)
+    return T
 
 
 def snapped(g: Geometry) -> Geometry:

@@ -15,13 +15,16 @@ kinengine/kinematics/chainkernel.c, or its numpy twin where the extension is not
 2. deduplicate: candidates of one pose closer than ``SAME`` [rad] (angles compared modulo 2π) are one;
 
 then ``all_turns`` adds every other shift that stays inside, each pose's solutions are sorted by
-distance |q − q_near| (within-limits first), and a batch is padded with NaN.
+distance |q − q_near| (within-limits first; a continuous joint's difference taken modulo 2π, into
+(−π, π], as its angle is reported there whatever q_near's turn), and a batch is padded with NaN.
 
 ``singular``: the solver met a degenerate subproblem (its least-squares answer meets the target's
 position): joint axes line up, and the solutions there form a continuum (e.g. a spherical wrist at
 q5 = 0, where only q4 + q6 is fixed) or coincide (a stretched elbow). A representative set is returned:
 the solver's answer, its rotation about the aligned axes completed by a few damped least-squares
-iterations when it is not exact.
+iterations when it is not exact; with ``q_near``, each is then moved along the continuum toward q_near
+(the null direction of the frame's Jacobian there, checked again), so that on a continuum that is a
+line in joint space (a spherical wrist at q5 = 0) q_near itself is returned when it is a solution.
 """
 
 from __future__ import annotations
@@ -134,9 +137,11 @@ def candidates_to_solutions(
     keep = out[:, e].nonzero()[0]
     full = out[keep, :dof]
     inside = np.ones(len(keep), dtype=bool) if within_limits else out[keep, e + 1] != 0
+    if has_near and singular is not None and singular.any():  # a continuum: its member nearest q_near
+        full = _toward_near(chain, poses, row[keep], full, base, singular)
     if single and turns is None:  # one pose: its rows need no pose index
         if has_near and len(full) > 1:
-            order = np.lexsort((np.linalg.norm(full - base[0], axis=1), ~inside))
+            order = np.lexsort((near_distance(chain, full, base[0]), ~inside))
             full, inside = full[order], inside[order]
         elif not within_limits and len(full) > 1:
             order = np.argsort(~inside, kind="stable")
@@ -150,7 +155,7 @@ def candidates_to_solutions(
         row, inside, full = all_turns_of(chain, row, inside, full, *(k[keep] for k in turns))
     # 3. within the limits first, then by distance to q_near, within each pose; padded with NaN
     if has_near and len(row) > 1:
-        distance = np.linalg.norm(full - base[0 if len(base) == 1 else row], axis=1)
+        distance = near_distance(chain, full, base[0 if len(base) == 1 else row])
         order = np.lexsort((distance, ~inside, row))
         row, full, inside = row[order], full[order], inside[order]
     elif not within_limits and len(row) > 1:
@@ -168,6 +173,16 @@ def candidates_to_solutions(
     out[row, slot] = full
     limits[row, slot] = inside
     return IKSolutions(out, count, count > 0, singular, limits, frame, chain.joints)
+
+
+def near_distance(chain: Chain, full: np.ndarray, near: np.ndarray) -> np.ndarray:
+    """|q − q_near| of each row of ``full`` (M, dof) to ``near`` ((dof,) or (M, dof)), a continuous joint's
+    difference wrapped into (−π, π] (every turn of it is the same configuration)."""
+    d = full - near
+    continuous = chain.columns[chain.continuous]
+    if len(continuous):
+        d[:, continuous] = wrap_pi(d[:, continuous])
+    return np.linalg.norm(d, axis=1)
 
 
 def placed(
@@ -307,6 +322,37 @@ def _with_mirrors(
     mirrored = _repaired(chain.robot, chain.frame, begin, poses[row[fold]])[:, chain.columns]
     order = np.argsort(np.concatenate((row, row[fold])), kind="stable")
     return np.concatenate((row, row[fold]))[order], np.concatenate((q, mirrored))[order]
+
+
+def _toward_near(
+    chain: Chain, poses: np.ndarray, row: np.ndarray, full: np.ndarray, base: np.ndarray, singular: np.ndarray
+) -> np.ndarray:
+    """``full`` (K, dof) with each solution of a singular pose moved toward its reference q (``base`` (1, dof)
+    or (N, dof)) along the continuum: Δ = n·nᵀ(q_near − q) with n the null direction of the frame's
+    Jacobian over the chain's joints; kept where it reproduces the pose (``ACCEPT``), stays within the
+    limits and is nearer q_near. Exact where the continuum is a line in joint space (two aligned axes
+    turning against each other, as a spherical wrist at q5 = 0); elsewhere the representative stays."""
+    robot, frame, columns = chain.robot, chain.frame, chain.columns
+    out = full.copy()
+    for k in np.flatnonzero(singular[row]):
+        q = full[k]
+        near = base[0 if len(base) == 1 else row[k]]
+        J = robot.jacobian(q, frame, "world")[:, columns]
+        n = np.linalg.svd(J)[2][-1]
+        start = q.copy()
+        start[columns] += n * (n @ (near[columns] - q[columns]))
+        moved = start[None]
+        err_p, err_r = residuals(robot, frame, moved, poses[row[k]][None])
+        angles = moved[0, columns]
+        if (
+            err_p[0] <= ACCEPT
+            and err_r[0] <= ACCEPT
+            and (angles >= chain.lower).all()
+            and (angles <= chain.upper).all()
+            and np.linalg.norm(moved[0] - near) < np.linalg.norm(q - near)
+        ):
+            out[k] = moved[0]
+    return out
 
 
 def _repaired(robot: RobotLike, frame: str, q: np.ndarray, T_d: np.ndarray) -> np.ndarray:

@@ -17,6 +17,7 @@ import numpy.typing as npt
 from ..errors import KinematicsError, OptionError
 from .closed_form import METHODS, available, chain_of, ik_solutions
 from .ik_candidates import residuals
+from .ik_ranges import wrap_pi
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .ik_batch import IKBatchResult
@@ -104,7 +105,7 @@ def nearest_result(
     found = ik_solutions(robot, target, frame, q_near=reference)
     poses = np.asarray(target, dtype=np.float64)
     if single and found.count:  # the common case, without the batch's arrays
-        q = found.q[0].copy()
+        q = _turned_near(robot, found.q[0].copy(), reference)
         err_p, err_r = residuals(robot, found.frame, q[None], poses[None])
         return IKResult(q, True, 0, float(err_p[0]), float(err_r[0]), 0)
     batch = poses if not single else poses[None]
@@ -112,7 +113,7 @@ def nearest_result(
     solved = count > 0
     q = np.repeat(reference[None], len(batch), axis=0) if reference.ndim == 1 else reference.copy()
     if found.q.size:
-        q[solved] = (found.q[None] if single else found.q)[solved, 0]
+        q[solved] = _turned_near(robot, (found.q[None] if single else found.q)[solved, 0], q[solved])
     err_p, err_r = residuals(robot, found.frame, q, batch)  # unsolved rows: measured at the reference q
     zero = np.zeros(len(batch), dtype=np.intp)
     result = IKBatchResult(q, solved, zero, err_p, err_r, zero.copy())
@@ -125,6 +126,16 @@ def nearest_result(
         for name in ("q", "success", "iterations", "position_error", "rotation_error", "restarts"):
             getattr(result, name)[missing] = getattr(rest, name)
     return result[0] if single else result
+
+
+def _turned_near(robot: RobotLike, q: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """q (dof,) or (N, dof) with each continuous joint's angle on the turn nearest ``reference`` (ik_solutions
+    reports it in (−π, π]; the answer nearest q0 is q0's own turn of it)."""
+    coords = robot.engine.coordinates
+    turn = coords.continuous | ~np.isfinite(coords.upper - coords.lower)
+    if turn.any():
+        q[..., turn] = reference[..., turn] + wrap_pi(q[..., turn] - reference[..., turn])
+    return q
 
 
 __all__ = ["closed_form_or_none", "nearest_result"]

@@ -17,7 +17,7 @@ ACCEPT = 1e-9
 """[m and rad] a candidate whose frame pose is further than this from the target is no solution."""
 SAME = 1e-7
 """[rad] candidates of one pose whose angles all agree to this (modulo 2π) are one solution."""
-POLISH = 1e-3
+POLISH = 1e-2
 """[m and rad] an answer of an idealized chain (rounded axes) this close to the target is polished."""
 DEGENERATE = 1e-6
 """[m] a least-squares answer this close to the target's position met a degenerate subproblem (a line of

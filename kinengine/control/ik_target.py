@@ -160,20 +160,54 @@ class RandomSource:
         return robot.random_configuration(self.generator, size=size)
 
 
+ROTATION_TOLERANCE = 1e-6
+"""max |CᵀC − I| of a target's rotation block accepted (float32 poses, rounded print-outs)."""
+ROTATION_EXACT = 1e-12
+"""max |CᵀC − I| above which an accepted rotation block is replaced by its nearest rotation."""
+
+
+def rotation_deviation(
+    a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float, i: float
+) -> float:
+    """max |CᵀC − I| of C = [[a, b, c], [d, e, f], [g, h, i]] (row by row); inf when det C <= 0 or NaN, in
+    plain floats (cheaper than numpy for one 3x3)."""
+    if not a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0:
+        return math.inf
+    return max(
+        abs(a * a + d * d + g * g - 1.0),
+        abs(b * b + e * e + h * h - 1.0),
+        abs(c * c + f * f + i * i - 1.0),
+        abs(a * b + d * e + g * h),
+        abs(a * c + d * f + g * i),
+        abs(b * c + e * f + h * i),
+    )
+
+
 def _rotation_ok(
     a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float, i: float
 ) -> bool:
-    """C = [[a, b, c], [d, e, f], [g, h, i]] (row by row): CᵀC = I to 1e-6 and det C > 0 (False for NaN), in
-    plain floats (cheaper than numpy for one 3x3)."""
-    return (
-        abs(a * a + d * d + g * g - 1.0) <= 1e-6
-        and abs(b * b + e * e + h * h - 1.0) <= 1e-6
-        and abs(c * c + f * f + i * i - 1.0) <= 1e-6
-        and abs(a * b + d * e + g * h) <= 1e-6
-        and abs(a * c + d * f + g * i) <= 1e-6
-        and abs(b * c + e * f + h * i) <= 1e-6
-        and a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0
-    )
+    """C = [[a, b, c], [d, e, f], [g, h, i]] (row by row): CᵀC = I to 1e-6 and det C > 0 (False for NaN)."""
+    return rotation_deviation(a, b, c, d, e, f, g, h, i) <= ROTATION_TOLERANCE
+
+
+def nearest_rotations(C: np.ndarray) -> np.ndarray:
+    """The rotation matrices nearest (Frobenius) to C (N, 3, 3) with det C > 0: U·Vᵀ of C's SVD."""
+    U, _, Vt = np.linalg.svd(C)
+    return U @ Vt
+
+
+def exact_pose(T: np.ndarray) -> np.ndarray:
+    """A checked pose T (4, 4) or (N, 4, 4), float64: T itself when every rotation block is a rotation to
+    ``ROTATION_EXACT``, else a copy with the others replaced by their nearest rotations (a float32 or
+    rounded target is solved for the rotation it stands for; answers then reproduce that to 1e-9)."""
+    C = T[..., :3, :3]
+    deviation = np.abs(np.einsum("...ki,...kj->...ij", C, C) - np.eye(3)).max(axis=(-2, -1))
+    if not (deviation > ROTATION_EXACT).any():
+        return T
+    out = np.array(T, dtype=np.float64)
+    fix = deviation > ROTATION_EXACT
+    out[..., :3, :3][fix] = nearest_rotations(out[..., :3, :3][fix])
+    return out
 
 
 _BOTTOM = np.array([0.0, 0.0, 0.0, 1.0])
@@ -222,7 +256,8 @@ def single_target(
         if not all(map(math.isfinite, flat)):
             raise ParameterizationError("`target` holds NaN or inf: a pose T_IF (4, 4) has finite entries")
         a, b, c, x, d, e, f, y, g, h, i, z = flat[:12]
-        if not _rotation_ok(a, b, c, d, e, f, g, h, i):
+        deviation = rotation_deviation(a, b, c, d, e, f, g, h, i)
+        if not deviation <= ROTATION_TOLERANCE:
             raise ParameterizationError(
                 "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
             )
@@ -233,7 +268,8 @@ def single_target(
             )
         if not max(abs(x), abs(y), abs(z)) <= MAX_TARGET_DISTANCE:
             _too_far()
-        return np.array((x, y, z)), value[:3, :3].copy()
+        C = value[:3, :3].copy()
+        return np.array((x, y, z)), nearest_rotations(C[None])[0] if deviation > ROTATION_EXACT else C
     P = get_position(position) if position is not None else None
     R = get_rotation(rotation) if rotation is not None else None
     m = (P.size if P else 0) + (R.size if R else 0)
@@ -281,10 +317,8 @@ def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
             "T_IF (4, 4) has finite entries"
         )
     C = value[:, :3, :3]
-    bad = np.flatnonzero(
-        (np.abs(np.einsum("nki,nkj->nij", C, C) - np.eye(3)).max(axis=(1, 2)) > 1e-6)
-        | (np.linalg.det(C) <= 0)
-    )
+    deviation = np.abs(np.einsum("nki,nkj->nij", C, C) - np.eye(3)).max(axis=(1, 2))
+    bad = np.flatnonzero((deviation > ROTATION_TOLERANCE) | (np.linalg.det(C) <= 0))
     if len(bad):
         raise ParameterizationError(
             f"`target`[{bad[0]}]'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
@@ -296,11 +330,17 @@ def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
             "a pose T_IF (4, 4) is a homogeneous transform"
         )
     _position_ok(value[:, :3, 3])
-    return np.ascontiguousarray(value[:, :3, 3]), np.ascontiguousarray(C)
+    C = np.array(C)
+    fix = deviation > ROTATION_EXACT
+    if fix.any():
+        C[fix] = nearest_rotations(C[fix])
+    return np.ascontiguousarray(value[:, :3, 3]), C
 
 
 __all__ = [
     "MAX_TARGET_DISTANCE",
+    "ROTATION_EXACT",
+    "ROTATION_TOLERANCE",
     "ROW_NAMES",
     "FrameGoal",
     "Options",
@@ -308,5 +348,8 @@ __all__ = [
     "RandomSource",
     "batch_targets",
     "checked_problem",
+    "exact_pose",
+    "nearest_rotations",
+    "rotation_deviation",
     "single_target",
 ]
