@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 
-from ..errors import ConfigurationError
+from ..errors import ConfigurationError, KinematicsError
 from ..parameterizations import get_rotation
 from .arguments import add_frame_argument, load_robot, parse_vector, printable, robot_command
 
@@ -19,9 +19,21 @@ def _triple(text: str) -> list[float]:
     return values
 
 
+def _lock(text: str) -> tuple[str, float]:
+    name, equals, value = text.partition("=")
+    values = parse_vector(value) if equals and name.strip() else []
+    if len(values) != 1 or not np.isfinite(values[0]):
+        raise argparse.ArgumentTypeError(
+            f"expected JOINT=VALUE [rad or m], e.g. panda_joint7=0, got {text!r:.60}"
+        )
+    return name.strip(), values[0]
+
+
 def _run(args: argparse.Namespace) -> int:
     """Solve first, then print: an error leaves nothing half-printed."""
     robot = load_robot(args)
+    if args.lock:
+        robot = robot.locked(dict(args.lock))
     frame = args.frame or robot.end_effector
     roll, pitch, yaw = args.rpy
     T = np.eye(4)
@@ -35,7 +47,12 @@ def _run(args: argparse.Namespace) -> int:
         )
     except ConfigurationError as exc:
         raise ConfigurationError(f"--near: {exc}") from None
-    found = robot.ik_solutions(T, frame, q_near=near, within_limits=not args.all, all_turns=args.all)
+    try:
+        found = robot.ik_solutions(T, frame, q_near=near, within_limits=not args.all, all_turns=args.all)
+    except KinematicsError as exc:
+        if "locking" not in str(exc):
+            raise
+        raise KinematicsError(f"{exc} (on the command line: --lock JOINT=VALUE)") from None
     if args.json:
         report = {
             "robot": robot.name,
@@ -93,6 +110,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=None,
         metavar="Q",
         help="comma-separated joint values [rad]: sort the solutions by distance to them",
+    )
+    p.add_argument(
+        "--lock",
+        type=_lock,
+        action="append",
+        metavar="JOINT=VALUE",
+        help="hold a joint at a value [rad or m] (repeatable): lock one joint of a 7-joint arm",
     )
     p.add_argument("--json", action="store_true", help="print JSON instead of a table")
     p.set_defaults(handler=_run)
