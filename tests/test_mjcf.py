@@ -252,6 +252,20 @@ def test_a_free_base_is_held_with_a_warning_and_root_picks_the_tree():
         kinengine.load(TWO_TREES, root="nope")
 
 
+def test_the_default_tree_is_the_one_with_the_most_joints(tmp_path):
+    """A static table written before the arm: the arm is loaded, and the warning names the table."""
+    path = _write(
+        tmp_path,
+        f'<body name="table" pos="0.5 0 0.4"><geom type="box" size="0.4 0.4 0.02"/></body>'
+        f'<body name="top"><geom size=".05"/>{ARM}</body>',
+    )
+    with pytest.warns(
+        UserWarning, match=r"2 trees: loaded the one with the most joints, of body 'top', not 'table'"
+    ):
+        robot = kinengine.load(path)
+    assert robot.dof > 0 and "table" not in robot.frame_names
+
+
 def test_a_ball_joint_on_the_top_body_is_held_like_a_free_one(tmp_path):
     body = f'<body name="top" euler="0.3 0 0"><joint name="s" type="ball"/><geom size=".05"/>{ARM}</body>'
     with pytest.warns(UserWarning, match="by a ball joint 's'.*held at its pose in the file"):

@@ -47,8 +47,9 @@ UNLIMITED_SLIDE = 1e16
 def describe(
     model: Any, source: str, *, root: str | None = None, limits: Limits = LIMITS
 ) -> RobotDescription:
-    """The description of the tree of ``model`` whose top body is ``root`` (default: the first child of
-    the world body), rooted at link ``world``; MJCFError for what a fixed-base tree cannot hold."""
+    """The description of the tree of ``model`` whose top body is ``root`` (default: the child of the world
+    body whose tree has the most joints, free joints not counted; the first of equals), rooted at link
+    ``world``; MJCFError for what a fixed-base tree cannot hold."""
     names = MJCFNames(model, source, limits)
     top = _top_body(model, names, root, source)
     notes: list[str] = []
@@ -75,7 +76,8 @@ def describe(
     if others and root is None:
         listed = ", ".join(repr(n) for n in others[:5]) + (", ..." if len(others) > 5 else "")
         notes.append(
-            f"the world body holds {len(others) + 1} trees: loaded the first, of body {names.body[top]!r}, "
+            f"the world body holds {len(others) + 1} trees: loaded the one with the most joints, of body "
+            f"{names.body[top]!r}, "
             f"not {listed}; pass root= to load another"
         )
     check_magnitudes(links, joints, source=source, limits=limits)
@@ -210,8 +212,11 @@ def _top_body(model: Any, names: MJCFNames, root: str | None, source: str) -> in
     tops = [b for b in range(1, model.nbody) if model.body_parentid[b] == 0]
     if not tops:
         raise MJCFError("the world body has no child body: there is no robot to load", source=source)
-    if root is None:
-        return tops[0]
+    if root is None:  # the tree with the most joints (a table or a floor beside the arm has none)
+        joints = np.bincount(
+            model.body_rootid[model.jnt_bodyid[model.jnt_type != FREE]], minlength=model.nbody
+        )
+        return max(tops, key=lambda b: (int(joints[b]), -b))
     for b in tops:
         if names.body[b] == root:
             return b
