@@ -2,6 +2,7 @@
 
     python benchmarks/render_targets.py [--json PATH]                 # print the Markdown
     python benchmarks/render_targets.py --update docs/benchmarks.md   # rewrite the page's generated blocks
+    python benchmarks/render_targets.py --readme                      # the README's speed table (ABB)
 
 Blocks (each between ``<!-- generated: NAME -->`` and ``<!-- end generated: NAME -->``; the text
 outside them is the page's own):
@@ -273,6 +274,67 @@ def ik_rows(report: dict) -> str:
     return "\n".join(lines)
 
 
+README_PEERS = {"roboticstoolbox": "Robotics Toolbox", "mujoco": "MuJoCo", "drake": "Drake"}
+README_ROWS = (  # (label, case, group, n)
+    ("`frame_pose(q)`", "frame_pose", "latency", 1),
+    ("`jacobian(q)`", "jacobian[local_world_aligned]", "latency", 1),
+    ("`robot.frame(f).jacobian(q)` (checked)", "frame().jacobian", "latency", 1),
+    ("`analytic_jacobian(q)`, ZYZ angles", "analytic_jacobian[euler_zyz]", "latency", 1),
+    ("`task.update(q)`, ZYX angles", "task.update(q)", "latency", 1),
+    ("`frame_pose(Q)`, batch of 10,000", "frame_pose", "throughput", 10_000),
+    ("`kinematics(Q)` (poses + Jacobians), batch of 100,000", "kinematics", "throughput", 100_000),
+    ("`inverse_kinematics`, one target (random targets)", NUMERIC, "latency", None),
+    ("`inverse_kinematics`, batch of 10,000 random targets", NUMERIC, "throughput", 10_000),
+    ("[`ik_solutions(T)`](docs/ik.md), every solution of one pose", SOLUTIONS, "latency", None),
+    ("`ik_solutions(T)`, batch of 10,000 poses", SOLUTIONS, "throughput", 10_000),
+)
+
+
+def readme(report: dict, robot: str = "abb_irb120") -> str:
+    """The README's speed table for one robot: time (µs) or rate per row, its floor, the ratio, and the
+    peers' (× kinengine's time); IK rows give the share reached and the median achieved error."""
+    head = ["call", "kinengine", "raw Pinocchio", "ratio", *README_PEERS.values()]
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "--:|" * (len(head) - 1)]
+    for label, case, group, n in README_ROWS:
+        row = find(report, robot, case, group, n)
+        if row is None:
+            continue
+        k, p = row["kinengine"], row["pinocchio"]
+        single = group == "latency" and row["n"] == 1
+
+        def cell(side: dict, k: dict = k, single: bool = single, row: dict = row) -> str:
+            if "success" in row:  # IK: rate, share reached, median error
+                median = f", median error {exponent(side['error_median'])}" if "error_median" in side else ""
+                return f"{side['per_second']:,.0f}/s ({side['success']:.1%}{median})"
+            if single:
+                return f"{side['min_us']:.2f} µs"
+            return f"{side['per_second'] / 1e6:.2f} M/s"
+
+        if row["case"] == SOLUTIONS:
+            ours = (
+                f"{k['min_us'] / row['n']:.1f} µs"
+                if group == "latency"
+                else f"{k['per_second']:,.0f} poses/s"
+            )
+        else:  # an IK row's outcome is the row's, a peer's its own
+            ours = cell({**k, **{key: row[key] for key in ("success", "error_median") if key in row}})
+        cells = [
+            label,
+            ours,
+            cell(p) if "min_us" in p else "–",
+            f"{row['ratio']:.2f}" if "ratio" in row else "–",
+        ]
+        for name in README_PEERS:
+            peer = row.get("peers", {}).get(name, {"status": "unsupported"})
+            if peer["status"] != "ok":
+                cells.append("–")
+                continue
+            times = peer["min_us"] / k["min_us"]
+            cells.append(cell(peer) + (f" ({times:.1f}×)" if single else f" ({times:.1f}× the time)"))
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def run_block(report: dict) -> str:
     tables = "\n\n".join(f"### {r['name']}\n\n{markdown(report, r['name'])}" for r in report["robots"])
     return f"Machine: {machine(report)}\n\n{conditions(report)}\n\n{tables}\n\n### Floors\n\n{floors(report)}"
@@ -302,8 +364,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", type=Path, default=HERE / "results.json")
     parser.add_argument("--update", type=Path, default=None, metavar="PAGE", help="rewrite PAGE's blocks")
+    parser.add_argument("--readme", action="store_true", help="print the README's speed table (ABB) only")
     args = parser.parse_args()
-    generated = blocks(json.loads(args.json.read_text()))
+    report = json.loads(args.json.read_text())
+    if args.readme:
+        print(readme(report))
+        return
+    generated = blocks(report)
     if args.update is None:
         print("\n\n".join(f"<!-- {name} -->\n{body}" for name, body in generated.items()))
         return
