@@ -278,7 +278,7 @@ README_PEERS = {"roboticstoolbox": "Robotics Toolbox", "mujoco": "MuJoCo", "drak
 README_ROWS = (  # (label, case, group, n)
     ("`frame_pose(q)`", "frame_pose", "latency", 1),
     ("`jacobian(q)`", "jacobian[local_world_aligned]", "latency", 1),
-    ("`robot.frame(f).jacobian(q)` (checked)", "frame().jacobian", "latency", 1),
+    ("`robot.frame(FRAME).jacobian(q)` (checked)", "frame().jacobian", "latency", 1),
     ("`analytic_jacobian(q)`, ZYZ angles", "analytic_jacobian[euler_zyz]", "latency", 1),
     ("`task.update(q)`, ZYX angles", "task.update(q)", "latency", 1),
     ("`frame_pose(Q)`, batch of 10,000", "frame_pose", "throughput", 10_000),
@@ -293,7 +293,9 @@ README_ROWS = (  # (label, case, group, n)
 def readme(report: dict, robot: str = "abb_irb120") -> str:
     """The README's speed table for one robot: time (µs) or rate per row, its floor, the ratio, and the
     peers' (× kinengine's time); IK rows give the share reached and the median achieved error."""
-    head = ["call", "kinengine", "raw Pinocchio", "ratio", *README_PEERS.values()]
+    frame = next(r["frame"] for r in report["robots"] if r["name"] == robot)
+    head = [f"call ({NAMES.get(robot, robot)}, `{frame}`)", "kinengine", "raw Pinocchio", "ratio"]
+    head += README_PEERS.values()
     lines = ["| " + " | ".join(head) + " |", "|---|" + "--:|" * (len(head) - 1)]
     for label, case, group, n in README_ROWS:
         row = find(report, robot, case, group, n)
@@ -310,16 +312,17 @@ def readme(report: dict, robot: str = "abb_irb120") -> str:
                 return f"{side['min_us']:.2f} µs"
             return f"{side['per_second'] / 1e6:.2f} M/s"
 
-        if row["case"] == SOLUTIONS:
+        if row["case"] == SOLUTIONS:  # every solution: per pose, and the worst solution's error
             ours = (
                 f"{k['min_us'] / row['n']:.1f} µs"
                 if group == "latency"
                 else f"{k['per_second']:,.0f} poses/s"
             )
+            ours += f" (max error {exponent(row['error_max'])})" if "error_max" in row else ""
         else:  # an IK row's outcome is the row's, a peer's its own
             ours = cell({**k, **{key: row[key] for key in ("success", "error_median") if key in row}})
         cells = [
-            label,
+            label.replace("FRAME", f'"{frame}"'),
             ours,
             cell(p) if "min_us" in p else "–",
             f"{row['ratio']:.2f}" if "ratio" in row else "–",

@@ -143,7 +143,7 @@ def _report(ratio_ur5=1.2, kinematics_rate=13e6):
         _row("abb_irb120", SOLUTIONS, per_second=40_000, n=200, success=1.0, solutions_per_target=3.9)
     )
     return {
-        "robots": [{"name": "abb_irb120"}, {"name": "ur5"}],
+        "robots": [{"name": "abb_irb120", "frame": "tool0"}, {"name": "ur5", "frame": "tool0"}],
         "rows": rows,
         "timestamp": "2026-11-27T03:45",
         "settings": {"ik_peer_tol": 5e-13},
