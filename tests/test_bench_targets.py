@@ -204,5 +204,5 @@ def test_the_readme_row_of_batched_ik_gives_each_rate_its_accuracy_and_the_time_
     line = _line(render.readme(_report()), "`inverse_kinematics`, batch")
     assert line == (
         "| `inverse_kinematics`, batch of 10,000 random targets | 90,000/s (99.9%, median error 2e-8) | – | – "
-        "| 9,000/s (100.0%) (10.0× the time) | – | – |"
+        "| 9,000/s (100.0%) (10.0×) | – | – |"
     )
