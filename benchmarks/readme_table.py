@@ -4,6 +4,7 @@
 
 Default: every robot in the file. ``--floors`` adds the list of floor code (the inline raw-Pinocchio code
 each ratio is taken against); ``--machine`` a line naming the CPU, cores, versions and date.
+``python benchmarks/render_targets.py --update docs/benchmarks.md`` writes these tables into the page.
 """
 
 from __future__ import annotations

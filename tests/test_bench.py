@@ -6,9 +6,12 @@ compares before it times (kinengine against its raw-Pinocchio floor, peers again
 
 from __future__ import annotations
 
+import importlib
 import importlib.metadata
 import json
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,6 +20,7 @@ import kinengine
 from kinengine.cli.bench import command as bench
 from kinengine.cli.bench import run as bench_run
 from kinengine.cli.bench.cases import Case, throughput_cases
+from kinengine.cli.bench.ik_cases import NEAREST, SOLUTIONS
 from kinengine.parameterizations import ROTATION_PARAMETERIZATIONS
 
 pytestmark = pytest.mark.slow  # runs the benchmark, with the peers where installed
@@ -202,6 +206,43 @@ def test_ik_rows_count_reached_targets_and_record_the_achieved_error(quick_run):
         if report["robots"][0]["peers"]["roboticstoolbox"]["loaded"]:
             assert rtb["status"] == "ok" and 0.0 <= rtb["success"] <= 1.0
             assert 0.0 <= rtb["error_median"] <= rtb["error_max"]
+
+
+def test_closed_form_rows_record_every_solution_and_its_error(quick_run):
+    """The closed form on the numeric rows' targets: every solution (and the nearest one) exact, every
+    target reached; the peers are not timed again on these targets."""
+    _, report, _ = quick_run
+    rows = {(r["group"], r["case"]): r for r in report["rows"]}
+    if ("latency", SOLUTIONS) not in rows:
+        pytest.skip("no closed form here (the ik extra is missing)")
+    for group in ("latency", "throughput"):
+        every, nearest = rows[(group, SOLUTIONS)], rows[(group, NEAREST)]
+        assert every["n"] == nearest["n"] == rows[(group, "inverse_kinematics[random targets]")]["n"]
+        assert every["success"] == nearest["success"] == 1.0
+        assert every["error_max"] <= 1e-9 and nearest["error_max"] <= 1e-9
+        assert 1.0 <= every["solutions_per_target"] <= 8.0  # a 6R arm has at most 8 within one turn
+        for row in (every, nearest):
+            assert all(peer == {"status": "unsupported"} for peer in row["peers"].values())
+
+
+def test_render_targets_reads_the_figures_of_the_run(quick_run):
+    """benchmarks/render_targets.py on the quick run's JSON: the frame_pose ratio and the single IK rate
+    as the JSON has them."""
+    _, report, _ = quick_run
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    try:
+        render = importlib.import_module("render_targets")
+    finally:
+        sys.path.pop(0)
+    table = render.targets(report).splitlines()
+    row = next(r for r in report["rows"] if (r["group"], r["case"]) == ("latency", "frame_pose"))
+    assert next(line for line in table if line.startswith("| `frame_pose(q)`")).startswith(
+        f"| `frame_pose(q)` ≤ 1.3× | {row['ratio']:.2f} | "
+    )
+    ik = next(r for r in report["rows"] if (r["group"], r["case"]) == ("latency", render.NUMERIC))
+    assert f"| {ik['kinengine']['per_second']:,.0f}/s, {ik['success']:.1%}, error " in next(
+        line for line in table if line.startswith("| single IK")
+    )
 
 
 def test_ikpy_poses_agree(quick_run):

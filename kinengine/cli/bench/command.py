@@ -6,10 +6,8 @@ Rows and floors: :mod:`.cases`; interleaved timing and checks: :mod:`.run`; peer
 Times are per call [µs], min and median over repeats (kinengine and its floor alternate); "per s"
 is configurations (or IK solves) per second at the min; ratio = kinengine / floor (min). Every
 floor is the inline raw-Pinocchio code a user would write for the same output; the table names it.
-Targets the project tracks (measured, never asserted; ratios to the floor): frame_pose and jacobian
-≤ 1.6×; robot.frame(...) handles ≤ 1.5× (≤ 1.1× with check_inputs=False); analytic_jacobian and
-task.update(q) ≤ 1.25×; kinematics at N = 100,000 ≥ 6 M configurations/s; IK ≥ 3,000 solves/s one
-by one and ≥ 50,000/s as a batch of 10,000.
+The speed targets the project tracks (measured, never asserted) and their figures: the "Targets" section
+of docs/benchmarks.md, rendered from this command's JSON by benchmarks/render_targets.py.
 """
 
 from __future__ import annotations

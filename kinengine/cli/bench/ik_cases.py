@@ -13,6 +13,9 @@ from ...robot import Robot
 from .row import Case
 
 IK_TARGETS = 8
+SOLUTIONS = "ik_solutions[all, closed form]"
+"""The rows of ``robot.ik_solutions``: every solution of each target (the others give one)."""
+NEAREST = "inverse_kinematics[random targets, closed form]"
 
 
 def ik_case(robot: Robot, frame: str) -> Case:
@@ -103,9 +106,11 @@ def ik_cases(robot: Robot, frame: str, single: int, batch: int, seed: int = 2024
 
 
 def closed_form_cases(robot: Robot, frame: str, single: int, batch: int, seed: int = 2024) -> list[Case]:
-    """``robot.ik_solutions``: every solution of random reachable targets, one by one and as one batch
-    (wrapping into the ranges and the limit filter included); none where the frame's chain has no closed
-    form or the ``ik`` extra is missing."""
+    """The closed form on the targets of :func:`ik_cases` (the same seed: the same targets), one by one and
+    as one batch: ``robot.ik_solutions`` (every solution; wrapping into the ranges and the limit filter
+    included) and ``inverse_kinematics(T, method="closed_form")`` (the solution nearest the middle of the
+    ranges), each with its achieved error. None where the frame's chain has no closed form or the ``ik``
+    extra is missing. The peers are not timed again on these targets (their rows are :func:`ik_cases`')."""
     rng = np.random.default_rng(seed)
     try:
         robot.ik_solutions(robot.frame_pose(robot.neutral(), frame), frame)
@@ -116,17 +121,29 @@ def closed_form_cases(robot: Robot, frame: str, single: int, batch: int, seed: i
         targets = robot.frame_pose(robot.random_configuration(rng, size=n), frame)
         if group == "throughput":
 
-            def solve(targets: np.ndarray = targets) -> object:
+            def every(targets: np.ndarray = targets) -> object:
                 return robot.ik_solutions(targets, frame).q
+
+            def nearest(targets: np.ndarray = targets) -> object:
+                return robot.inverse_kinematics(targets, frame, method="closed_form").q
         else:
 
-            def solve(targets: np.ndarray = targets) -> object:
+            def every(targets: np.ndarray = targets) -> object:
                 return [robot.ik_solutions(T, frame).q for T in targets]
 
-        cases.append(
-            Case(group, "ik_solutions[all, closed form]", n, solve, None, "every solution within the limits")
-        )
+            def nearest(targets: np.ndarray = targets) -> object:
+                return np.array([robot.inverse_kinematics(T, frame, method="closed_form").q for T in targets])
+
+        for name, solve, note in (
+            (SOLUTIONS, every, "every solution within the limits"),
+            (NEAREST, nearest, "method='closed_form': the solution nearest the middle of the ranges"),
+        ):
+            cases.append(
+                Case(
+                    group, name, n, solve, None, note, targets=targets, robot=robot, frame=frame, peers=False
+                )
+            )
     return cases
 
 
-__all__ = ["IK_TARGETS", "closed_form_cases", "ik_case", "ik_cases"]
+__all__ = ["IK_TARGETS", "NEAREST", "SOLUTIONS", "closed_form_cases", "ik_case", "ik_cases"]

@@ -25,6 +25,7 @@ class Case:
     targets: np.ndarray | None = None  # IK rows: the target poses (n, 4, 4), for the peers
     robot: object = None  # IK rows: the robot and frame the targets are for
     frame: str = ""
+    peers: bool = True  # False: no peer is timed on this row (it repeats another row's targets)
 
 
 __all__ = ["Case"]
