@@ -23,7 +23,7 @@ def ratios(name: str) -> None:
     robot = kinengine.load(name)
     frame = robot.end_effector
     rotations = list(ROTATION_PARAMETERIZATIONS)
-    q = regular_configuration(robot, frame, rotations)
+    q, _ = regular_configuration(robot, frame, rotations)
     floor = floors(robot, frame, q)
     task = robot.task(frame, position="cartesian", rotation="euler_zyx")
     fns = {}

@@ -295,3 +295,16 @@ def test_measure_counts_calls_until_min_time():
     timing = bench_run.measure(lambda: calls.append(1), bench_run.Settings((1,), repeat=3, min_time=1e-3))
     assert timing["calls"] >= 1 and timing["min_us"] <= timing["median_us"]
     assert len(calls) >= 1 + 3 * timing["calls"]
+
+
+def test_a_planar_arm_is_benched_without_the_parameterizations_singular_everywhere(tmp_path, capsys):
+    """planar_3dof turns about z only: euler_yxy and euler_yzy are within 0.1 of their singular sets at
+    every configuration (χ2 stays at 0 or π); their rows are left out with a warning, the rest is timed."""
+    from kinengine.cli import main
+
+    path = tmp_path / "planar.json"
+    assert main(["bench", "planar_3dof", "--quick", "--json", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "the analytic rows of euler_yxy, euler_yzy are not timed" in err
+    names = {row["case"] for row in json.loads(path.read_text())["rows"]}
+    assert "analytic_jacobian[euler_zyx]" in names and "analytic_jacobian[euler_yxy]" not in names

@@ -19,7 +19,7 @@ def setup(request):
     robot = kinengine.load(request.param)
     frame = robot.end_effector
     rotations = list(ROTATION_PARAMETERIZATIONS)
-    q = regular_configuration(robot, frame, rotations)
+    q, _ = regular_configuration(robot, frame, rotations)
     return robot, frame, q, floors(robot, frame, q)
 
 
