@@ -236,17 +236,18 @@ def test_cli_with_stdout_closed_says_so_in_one_line():
     ]
 
 
-@pytest.mark.parametrize("urdf", [_ZERO, _ONE.format(kind="revolute", axis="0 0 1")])
-def test_cli_bench_on_0_and_1_dof_robots_is_one_line_and_exit_2(tmp_path, capsys, urdf):
+@pytest.mark.parametrize(
+    ("urdf", "name", "dof"), [(_ZERO, "zero", 0), (_ONE.format(kind="revolute", axis="0 0 1"), "one", 1)]
+)
+def test_cli_bench_on_0_and_1_dof_robots_is_one_line_and_exit_2(tmp_path, capsys, urdf, name, dof):
     from kinengine.cli import main
 
     path = tmp_path / "small.urdf"
     path.write_text(urdf)
     assert main(["bench", "--quick", str(path)]) == 2
-    captured = capsys.readouterr()
-    lines = captured.err.splitlines()
-    assert len(lines) == 1 and lines[0].startswith("kinengine: error: no configuration of"), lines
-    assert "singular set of every rotation parameterization" in lines[0]
+    assert capsys.readouterr().err.splitlines() == [
+        f"kinengine: error: {name} has {dof} movable joint(s); kinengine bench times robots with 2 or more"
+    ]
 
 
 def test_cli_view_with_an_empty_host_is_one_line(capsys):

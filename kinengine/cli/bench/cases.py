@@ -18,7 +18,7 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from ...errors import RepresentationSingularityError
+from ...errors import ConfigurationError, RepresentationSingularityError
 from ...robot import Robot
 from .floors import (
     FLOOR_ANALYTIC,
@@ -76,6 +76,10 @@ def regular_configuration(
 def latency_cases(robot: Robot, frame: str, rotations: list[str]) -> list[Case]:
     """Single-call rows at one configuration regular for every parameterization timed (those singular
     there are left out, with a warning)."""
+    if robot.dof < 2:
+        raise ConfigurationError(
+            f"{robot.name} has {robot.dof} movable joint(s); kinengine bench times robots with 2 or more"
+        )
     q, rotations = regular_configuration(robot, frame, rotations)
     floor = floors(robot, frame, q)
     fk, fast = robot.frame(frame), robot.frame(frame, check_inputs=False)
