@@ -283,19 +283,6 @@ class Kinematics:
             return J if self.dof > 1 else J.reshape(6, 1)
         return self.mimic.fold(_frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref))
 
-    def pose_and_jacobian(
-        self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(T_IF (4, 4), J (6, dof) in ``ref``), bit for bit :meth:`pose` and :meth:`jacobian`: for
-        "local_world_aligned" and "world" one pass (Pinocchio's frame Jacobian places the joints the
-        pose needs), for "local" a placement pass and the Jacobian."""
-        if self.dof == 0:
-            return self.pose(q, fid), np.zeros((6, 0))
-        if ref == pin.LOCAL:
-            return self.pose(q, fid), self.jacobian(q, fid, ref)
-        J = self.jacobian(q, fid, ref)
-        return _place(self.model, self._tls.data, fid).homogeneous, J
-
 
 def _frame_ids(model: pin.Model) -> dict[str, int]:
     """Frame name -> index for every frame but 'universe'; a link wins over a joint of the same name."""
