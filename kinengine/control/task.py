@@ -29,11 +29,12 @@ with ``on_singularity="raise"`` (default) the update then raises RepresentationS
 writing every attribute: a failed update leaves the Task consistent, holding all the new configuration's
 values (so the next update continues from it), never a mix of old and new.
 
-How: per frame Pinocchio's frame Jacobian (with q̇ one Pinocchio call for the world-frame joint Jacobians
-and their rates, :func:`~kinengine.control.task_frame.joint_jacobians`); per entry
+How: per frame Pinocchio's frame Jacobian on the frame's cheapest exact model
+(:meth:`~kinengine.kinematics.engine.Kinematics.frame_path`); with q̇ one Pinocchio call for the world-frame
+joint Jacobians and their rates (:func:`~kinengine.control.task_frame.joint_jacobians`); per entry
 :mod:`kinengine.control.task_frame` does the rest. Pinocchio's model has plain joints only; with mimic joints
 q_pin = M q + b and q̇_pin = M q̇ are written into preallocated arrays and the Jacobians are folded, J·M (see
-:mod:`kinengine.model.coordinates`).
+:mod:`kinengine.model.coordinates`), except for a frame that no mimic joint moves, whose model takes q.
 
 A Task owns its own Pinocchio Data: use one Task per thread. The attributes are read-only
 views that the next update overwrites; copy what you keep.
