@@ -132,13 +132,9 @@ def _single_calls(
     local_frame, dof = pin.LOCAL, kin.dof
     coords = kin.coordinates
     pinocchio_q: Callable[[np.ndarray], np.ndarray] = coords.to_pinocchio if mapped else _same
-    fold: Callable[[np.ndarray], np.ndarray] = (
-        (lambda J: coords.fold(J.reshape(6, -1)))
-        if mapped
-        else _same
-        if dof > 1
-        else (lambda J: J.reshape(6, dof))
-    )
+    fold: Callable[[np.ndarray], np.ndarray] = _same if dof > 1 else (lambda J: J.reshape(6, dof))
+    if mapped:
+        fold = lambda J: coords.fold(J.reshape(6, -1))  # noqa: E731
     if dof == 0:
         frame_jacobian = _no_columns
 
