@@ -77,6 +77,7 @@ class FrameKinematics:
         self.Jw, self.dJw = np.empty((6, dof)), np.empty((6, dof))
         self.J: np.ndarray = np.zeros((6, dof))  # Pinocchio's array (rebound) or self.buffer
         self.buffer, self.Jdot, self.twist = np.zeros((6, dof)), np.zeros((6, dof)), np.zeros(6)
+        self.adopted = False  # Jdot and twist are an absolute block's own arrays (see FrameBlock)
         self.C: list[list[float]] = []
         self.pos: list[float] = []
 
@@ -108,17 +109,17 @@ class FrameKinematics:
         self.J = np.dot(X, Jw, out=self.buffer)
         np.dot(self.J, qdot, out=self.twist)
         np.dot(X, self._folded(self.data.dJ.reshape(6, self.nv), self.dJw), out=self.Jdot)
-        _skew(self.S, *(-self.twist[:3]).tolist())  # Ẋ's block −[ṗ]x
+        vx, vy, vz = self.twist[:3].tolist()
+        _skew(self.S, -vx, -vy, -vz)  # Ẋ's block −[ṗ]x
         np.dot(self.S, Jw[3:], out=self.tmp)
         np.add(self.Jdot[:3], self.tmp, out=self.Jdot[:3])
 
     def _folded(self, Jw: np.ndarray, out: np.ndarray) -> np.ndarray:
         """This frame's columns of a joint-level (6, nv) matrix, folded by the coordinate map into ``out``."""
+        if self.fold is None:  # nv = dof
+            return Jw if self.mask is None else np.multiply(Jw, self.mask, out=out)
         if self.mask is not None:
             Jw = np.multiply(Jw, self.mask, out=self.masked)
-        if self.fold is None:
-            np.copyto(out, Jw)
-            return out
         return np.dot(Jw, self.fold, out=out)
 
 
@@ -167,6 +168,8 @@ class FrameBlock:
         self.J, self.JA = self.out[:6], self.out[6:]
         self.JAdot, self.chi_dot, self.tmp = np.zeros((ms, dof)), np.zeros(ms), np.zeros((ms, dof))
         self.Edot, self.Edot_selected, self.singular = np.zeros((m, 6)), np.zeros((ms, 6)), [False] * k
+        if b is None and not a.adopted:  # the frame writes its rates straight into this block's arrays
+            a.Jdot, a.twist, a.adopted = self.Jdot, self.twist, True
         if b is not None:  # relative: buffers for J_rel and its rate
             self.CBt, self.CBA, self.skew = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, 3))
             self.inner, self.dinner, self.t3 = np.zeros((6, dof)), np.zeros((6, dof)), np.zeros((3, dof))
@@ -233,7 +236,7 @@ class FrameBlock:
         if self.b is None:
             a = self.a
             C, p, J = a.C, a.pos, a.J
-            if qdot is not None:
+            if qdot is not None and a.Jdot is not self.Jdot:  # another block adopted the frame's rates
                 np.copyto(self.Jdot, a.Jdot)
                 np.copyto(self.twist, a.twist)
         else:
