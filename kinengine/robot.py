@@ -326,14 +326,10 @@ class Robot:
         return Task(
             self,
             self._end_effector if frames is None else frames,
-            options.position,
-            options.rotation,
-            rows=options.rows,
+            options,
             check_inputs=check_inputs,
             continuous=continuous,
-            singularity_threshold=options.singularity_threshold,
             relative_to=relative_to,
-            on_singularity=options.on_singularity,
         )
 
     # -- relative kinematics --------------------------------------------------------------------

@@ -24,7 +24,7 @@ from test_batch import AXES_URDF, ONE_JOINT_URDF, ROBOTS, SPECIAL_ANGLES
 
 import kinengine
 from kinengine.kinematics import batch, compiler
-from kinengine.kinematics.chain import evaluate_chain
+from kinengine.kinematics.chain import Outputs, evaluate_chain
 
 if compiler.KERNEL is None:
     pytest.skip("the C chain is not built (or KINENGINE_PURE_PYTHON is set)", allow_module_level=True)
@@ -92,7 +92,7 @@ def test_kernel_equals_numpy_chain_and_pinocchio(name):
         for reference, label in REFERENCES.items():
             T, J = _run(chain.kernel, Q, robot.dof, compiler.REFERENCE_CODES[reference])
             T_np, J_np = np.empty_like(T), np.empty_like(J)
-            evaluate_chain(chain, Q.T, T_np, J_np, reference)
+            evaluate_chain(chain, Q.T, Outputs(T_np, J_np, reference))
             J_pin = np.array([robot.jacobian(q, frame, label) for q in Q]).reshape(J.shape)
             message = f"{name} {frame} {label}"
             np.testing.assert_allclose(T, T_np, rtol=0, atol=1e-14, err_msg=message)

@@ -1,7 +1,7 @@
 """The controller's hot path: one ``update(q, qdot)`` computes everything, into preallocated arrays.
 
 >>> task = robot.task("tool0", position="cartesian", rotation="euler_zyz")
->>> task.update(q, qdot)                       # one pass over the chain, no numpy allocation
+>>> task.update(q, qdot)                       # into preallocated read-only arrays
 >>> task.chi, task.analytic_jacobian, task.jacobian_dot, task.analytic_jacobian_dot
 
 A task stack: several :class:`~kinengine.FrameTask` entries, each with its own parameterizations,
@@ -29,12 +29,12 @@ with ``on_singularity="raise"`` (default) the update then raises RepresentationS
 writing every attribute: a failed update leaves the Task consistent, holding all the new configuration's
 values (so the next update continues from it), never a mix of old and new.
 
-How: one Pinocchio call fills its world-frame joint Jacobians J_w and, with q̇, J̇_w
-(:func:`~kinengine.control.task_frame.joint_jacobians`); per frame :mod:`kinengine.control.task_frame` does
-the rest. Pinocchio's model has plain joints only; with mimic joints q_pin = M q + b and q̇_pin = M q̇
-are written into preallocated arrays and J_w, J̇_w are folded, J_w·M (see :mod:`kinengine.model.coordinates`).
-A task of one absolute frame with all rows, Cartesian position and a rotation takes the fast path of
-:mod:`kinengine.control.task_fast` (the same χ, J and J_A to rounding by one product) wherever χ is regular.
+How: per frame Pinocchio's frame Jacobian on the frame's cheapest exact model
+(:meth:`~kinengine.kinematics.engine.Kinematics.frame_path`); with q̇ one Pinocchio call for the world-frame
+joint Jacobians and their rates (:func:`~kinengine.control.task_frame.joint_jacobians`); per entry
+:mod:`kinengine.control.task_frame` does the rest. Pinocchio's model has plain joints only; with mimic joints
+q_pin = M q + b and q̇_pin = M q̇ are written into preallocated arrays and the Jacobians are folded, J·M (see
+:mod:`kinengine.model.coordinates`), except for a frame that no mimic joint moves, whose model takes q.
 
 A Task owns its own Pinocchio Data: use one Task per thread. The attributes are read-only
 views that the next update overwrites; copy what you keep.
@@ -53,7 +53,6 @@ from ..analytic.options import DEFAULTS, AnalyticOptions
 from ..errors import OptionError
 from ..kinematics.memory import create_data
 from .frame_task import FrameTask, as_frame_tasks
-from .task_fast import fast_update
 from .task_frame import FrameBlock, FrameKinematics, joint_jacobians
 
 if TYPE_CHECKING:  # named for the checker only
@@ -63,131 +62,87 @@ if TYPE_CHECKING:  # named for the checker only
 class Task:
     """Kinematics of one or several frames for a control loop. Build it with :meth:`Robot.task`.
 
-    ``check_inputs=False`` skips the shape and finiteness checks of q and q̇ (for callers that
-    validate upstream: then pass float64 arrays of shape (dof,)). ``continuous=True`` keeps χ
-    continuous between updates (no 2π jumps, no quaternion sign flips, rotation vectors across
-    θ = π); :meth:`reset` returns to the canonical ranges. ``singularity_threshold``: as in
-    :meth:`Robot.analytic_jacobian` (below it: NaN rows, and with ``on_singularity="raise"`` the error
-    after the update). ``relative_to`` (for frames given by name): χ of T_BA and the relative Jacobian in B.
+    ``options``: the parameterizations, rows, ``singularity_threshold`` (below it: NaN rows, and with
+    ``on_singularity="raise"`` the error after the update) as :meth:`Robot.analytic_jacobian` takes them
+    (:class:`~kinengine.analytic.options.AnalyticOptions`). ``check_inputs=False`` skips the shape and
+    finiteness checks of q and q̇ (for callers that validate upstream: then pass float64 arrays (dof,)).
+    ``continuous=True`` keeps χ continuous between updates (no 2π jumps, no quaternion sign flips, rotation
+    vectors across θ = π); :meth:`reset` returns to the canonical ranges. ``relative_to`` (for frames given
+    by name): χ of T_BA and the relative Jacobian in B.
     """
 
     def __init__(
         self,
         robot: RobotLike,
         frames: str | FrameTask | Sequence[str | FrameTask],
-        position: str | None = DEFAULTS.position,
-        rotation: str | None = DEFAULTS.rotation,
+        options: AnalyticOptions = DEFAULTS,
         *,
-        rows: Sequence[str | int] | None = DEFAULTS.rows,
         check_inputs: bool = True,
         continuous: bool = True,
-        singularity_threshold: float = DEFAULTS.singularity_threshold,
         relative_to: str | None = None,
-        on_singularity: str = DEFAULTS.on_singularity,
     ) -> None:
-        options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity).checked()
+        options = options.checked()
         specs = as_frame_tasks(frames, options.position, options.rotation, options.rows, relative_to)
         if not specs:
             raise OptionError("a task needs at least one frame: pass a frame name or a list of them")
-        self.options = options
-        self._nan, self.on_singularity = options.nan, on_singularity
-        pmaps = [pose_map(f.position, f.rotation, as_rows(f.rows)) for f in specs]
-        self.frame_tasks, self.frames = specs, tuple(f.frame for f in specs)
-        uniform = all(
-            not isinstance(f, FrameTask)
-            for f in ((frames,) if isinstance(frames, (str, FrameTask)) else frames)
-        )
-        self.labels = pmaps[0].labels if uniform else tuple(lab for pm in pmaps for lab in pm.labels)
-        self.row_labels = tuple(
-            f"{f.frame}:{lab}" for f, pm in zip(specs, pmaps, strict=False) for lab in pm.labels
-        )
-        self.singularity_labels = tuple(
-            f"{f.frame}:{part.name}" for f, pm in zip(specs, pmaps, strict=False) for part in pm.parts
-        )
-        self.check_inputs, self.continuous = check_inputs, continuous
+        self.options, self.on_singularity = options, options.on_singularity
         self.singularity_threshold = options.singularity_threshold
+        self.check_inputs, self.continuous = check_inputs, continuous
+        self.frame_tasks, self.frames = specs, tuple(f.frame for f in specs)
         kin = robot.engine
-        self._coords = coords = kin.coordinates
-        self._model = model = kin.model
-        self._data = data = create_data(model, "a Task")
-        self.dof = n = robot.dof
-        k, M = len(specs), sum(pm.size for pm in pmaps)
-        # views of Pinocchio's world-frame joint Jacobians (eigenpy hands a (6, 1) matrix over as (6,))
-        self._Jw, self._dJw = data.J.reshape(6, model.nv), data.dJ.reshape(6, model.nv)
-        self._zero = np.zeros(model.nv)
-        self._qp, self._vp = np.empty(model.nq), np.empty(model.nv)
-        spec0, pm0 = specs[0], pmaps[0]
-        fast = (
-            k == 1
-            and spec0.relative_to is None
-            and pm0.rows is None
-            and pm0.position is not None
-            and pm0.position.name == "cartesian"
-            and pm0.rotation is not None
-        )
-        # J_e0 and J_A in one buffer: the fast path writes both with one product (see task_fast)
-        stacked = np.zeros((6 * k + M, n))
-        self._J, self._JA = stacked[: 6 * k].reshape(k, 6, n), stacked[6 * k :]
-        stacked_dot, rates = np.zeros((6 * k + M, n)), np.zeros(6 * k + M)  # [J̇; J̇_A], [twist; χ̇] alike
-        self._Jdot, self._JAdot = stacked_dot[: 6 * k].reshape(k, 6, n), stacked_dot[6 * k :]
-        self._twist, self._chi_dot = rates[: 6 * k].reshape(k, 6), rates[6 * k :]
-        # ([X; E·X] of the fast path,) χ, the distances and the poses in one buffer: one struct call fills it
-        P, lead = len(self.singularity_labels), 6 * (6 + M) if fast else 0
-        flat = np.zeros(lead + M + P + 16 * k)
-        self._chi, self._distances = flat[lead : lead + M], flat[lead + M : lead + M + P]
-        self._distances.fill(np.inf)
-        self._pose = flat[lead + M + P :].reshape(k, 4, 4)
-        self._pose[:, 3, 3] = 1.0
-        self._weights = np.concatenate(
-            [np.full(pm.size, f.weight) for f, pm in zip(specs, pmaps, strict=False)]
-        )
+        self._coords, self._model = kin.coordinates, kin.model
+        self._data = data = create_data(kin.model, "a Task")
+        self.dof = robot.dof
+        self._zero = np.zeros(kin.model.nv)
+        self._qp, self._vp = np.empty(kin.model.nq), np.empty(kin.model.nv)
         kinematics: dict[int, FrameKinematics] = {}
 
         def frame_kinematics(name: str) -> FrameKinematics:
             fid = robot.frame_id(name)
             if fid not in kinematics:
-                kinematics[fid] = FrameKinematics(model, data, fid, n, coords)
+                kinematics[fid] = FrameKinematics(kin, data, fid)
             return kinematics[fid]
 
-        self._blocks: list[FrameBlock] = []
-        row, part = 0, 0
-        for i, (spec, pm) in enumerate(zip(specs, pmaps, strict=False)):
-            a = frame_kinematics(spec.frame)
-            b = None if spec.relative_to is None else frame_kinematics(spec.relative_to)
-            rows_i = slice(row, row + pm.size)
-            out = {
-                "pose": self._pose[i],
-                "J": self._J[i],
-                "Jdot": self._Jdot[i],
-                "twist": self._twist[i],
-                "JA": self._JA[rows_i],
-                "JAdot": self._JAdot[rows_i],
-                "chi_dot": self._chi_dot[rows_i],
-            }
-            if b is None and not a.adopted:
-                a.adopt(out["J"], out["Jdot"], out["twist"])
-            block = FrameBlock(spec, pm, a, b, n, out, row, part)
-            self._blocks.append(block)
-            row, part = row + pm.size, part + len(pm.parts)
+        self._blocks = [
+            FrameBlock(
+                spec,
+                pose_map(spec.position, spec.rotation, as_rows(spec.rows)),
+                frame_kinematics(spec.frame),
+                None if spec.relative_to is None else frame_kinematics(spec.relative_to),
+            )
+            for spec in specs
+        ]
         self._kinematics = tuple(kinematics.values())
-        self._fast = (
-            fast_update(self._kinematics[0], self._blocks[0], stacked, stacked_dot, rates, flat)
-            if fast
-            else None
+        self._mapped = not self._coords.identity and any(f.mapped or not f.path_nv for f in self._kinematics)
+        self._stacked = len(self._blocks) > 1
+        blocks = self._blocks
+        uniform = all(
+            not isinstance(f, FrameTask)
+            for f in ((frames,) if isinstance(frames, (str, FrameTask)) else frames)
         )
+        self.labels = (
+            blocks[0].pmap.labels if uniform else tuple(lab for b in blocks for lab in b.pmap.labels)
+        )
+        self.row_labels = tuple(f"{b.spec.frame}:{lab}" for b in blocks for lab in b.pmap.labels)
+        self.singularity_labels = tuple(f"{b.spec.frame}:{part.name}" for b in blocks for part in b.parts)
+        self._weights = np.concatenate([np.full(b.pmap.size, b.spec.weight) for b in blocks])
+        # one block: the Task's arrays are the block's own; a stack: copies of each block's (see _gather)
+        names = ("pose", "J", "JA", "chi", "distances", "Jdot", "JAdot", "twist", "chi_dot")
+        if len(blocks) == 1:
+            arrays = [getattr(blocks[0], name) for name in names]
+        else:
+            arrays = [np.stack([b.pose for b in blocks])]
+            arrays += [np.concatenate([getattr(b, name) for b in blocks]) for name in names[1:]]
+        self._arrays = dict(zip(names, arrays, strict=True))
+        pose, J, JA, chi, distances, Jdot, JAdot, twist, chi_dot = arrays
         single = isinstance(frames, (str, FrameTask))
-        self.pose = _readonly(self._pose[0] if single else self._pose)
-        self.jacobian = _readonly(self._J.reshape(6 * k, n))
-        self.jacobian_dot = _readonly(self._Jdot.reshape(6 * k, n))
-        self.twist = _readonly(self._twist.reshape(6 * k))
-        self.chi = _readonly(self._chi)
-        self.analytic_jacobian = _readonly(self._JA)
-        self.analytic_jacobian_dot = _readonly(self._JAdot)
-        self.chi_dot = _readonly(self._chi_dot)
-        self.weights = _readonly(self._weights)
-        self.singularity_distances = _readonly(self._distances)
-        self._rates = (self._twist, self._Jdot, self._JAdot, self._chi_dot)
-        self._rates_valid: bool = False
+        self.pose = _readonly(pose if single else pose.reshape(len(blocks), 4, 4))
+        self.jacobian, self.jacobian_dot = _readonly(J), _readonly(Jdot)
+        self.twist, self.chi = _readonly(twist), _readonly(chi)
+        self.analytic_jacobian, self.analytic_jacobian_dot = _readonly(JA), _readonly(JAdot)
+        self.chi_dot, self.weights = _readonly(chi_dot), _readonly(self._weights)
+        self.singularity_distances = _readonly(distances)
+        self._rates = (Jdot, JAdot, twist, chi_dot)
         self._invalidate_rates()
 
     def __repr__(self) -> str:
@@ -206,49 +161,52 @@ class Task:
         set: NaN rows (``on_singularity="nan"``) or, after every attribute is written,
         RepresentationSingularityError (see the module doc).
         """
-        fast = self._fast
-        if fast is not None and fast(q, qdot, self.check_inputs, self.singularity_threshold, self.continuous):
-            if qdot is not None:
-                self._rates_valid = True
-            elif self._rates_valid:
-                self._invalidate_rates()
-            return
         coords = self._coords
         if self.check_inputs:
-            q = coords.check(q, allow_batch=False)
-            if qdot is not None:
+            if not coords.ready(q):
+                q = coords.check(q, allow_batch=False)
+            if qdot is not None and not coords.ready(qdot):
                 qdot = coords.check(qdot, name="qdot", allow_batch=False)
-        qp, vp = q, qdot
-        if not coords.identity:  # mimic joints: q_pin = M q + b, q̇_pin = M q̇, written in place
-            qp = self._qp
-            np.dot(coords.matrix, q, out=qp)
-            if coords.has_offset:
-                np.add(qp, coords.offset, out=qp)
-            if qdot is not None:
-                vp = self._vp
-                np.dot(coords.matrix, qdot, out=vp)
-        joint_jacobians(self._model, self._data, qp, vp, self._zero)
-        if qdot is None:
-            if self._rates_valid:
-                self._invalidate_rates()
-        else:
+        q_pin = q
+        if qdot is not None:  # q_pin = M q + b and q̇_pin = M q̇ (written in place) for the joint Jacobians
+            v = qdot
+            if not coords.identity:
+                q_pin, v = self._to_pinocchio(q), np.dot(coords.matrix, qdot, out=self._vp)
+            joint_jacobians(self._model, self._data, q_pin, v, self._zero)
             self._rates_valid = True
-        Jw, dJw = self._Jw, self._dJw
+        elif self._mapped:  # a frame that needs q_pin
+            q_pin = self._to_pinocchio(q)
         for frame in self._kinematics:
-            frame.update(Jw, dJw, qdot)
-        error = None
-        threshold, continuous, chi, distances = (
-            self.singularity_threshold,
-            self.continuous,
-            self._chi,
-            self._distances,
-        )
+            frame.update(q, q_pin, qdot)
+        error, threshold, continuous = None, self.singularity_threshold, self.continuous
         for block in self._blocks:
-            found = block.update(qdot, threshold, continuous, chi, distances, block.distance_offset)
-            if found is not None and error is None:
-                error = found
-        if error is not None and not self._nan:
+            found = block.update(qdot, threshold, continuous)
+            error = error or found  # the first block's error
+        if self._stacked:
+            self._gather(qdot is not None)
+        if qdot is None and self._rates_valid:
+            self._invalidate_rates()
+        if error is not None and not self.options.nan:
             raise error
+
+    def _to_pinocchio(self, q: np.ndarray) -> np.ndarray:
+        """q_pin = M q + b into a preallocated array."""
+        coords = self._coords
+        q_pin = np.dot(coords.matrix, q, out=self._qp)
+        return np.add(q_pin, coords.offset, out=q_pin) if coords.has_offset else q_pin
+
+    def _gather(self, rates: bool) -> None:
+        """Copy each block's arrays into the stacked ones (rates only with q̇)."""
+        names = ("pose", "J", "JA", "chi", "distances") + (
+            ("Jdot", "JAdot", "twist", "chi_dot") if rates else ()
+        )
+        for name in names:
+            target = self._arrays[name]
+            if name == "pose":
+                for i, block in enumerate(self._blocks):
+                    target[i] = block.pose
+            else:
+                np.concatenate([getattr(b, name) for b in self._blocks], out=target)
 
     def _invalidate_rates(self) -> None:
         """NaN in every rate attribute (until an update with q̇ fills them)."""

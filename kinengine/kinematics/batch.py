@@ -28,7 +28,7 @@ import pinocchio as pin
 
 from ..errors import OptionError
 from . import compiler
-from .chain import CHUNK, Chain, evaluate_chain, scratch_rows
+from .chain import CHUNK, Chain, Outputs, evaluate_chain, scratch_rows
 from .compiler import REFERENCE_CODES, compiled_chain
 from .engine import Kinematics
 
@@ -125,15 +125,10 @@ def run_chain(
     pieces = workers * max(1, math.ceil(per) if MIN_CHUNK < chunk < CHUNK else round(per))  # if memory binds
     chunks = list(itertools.pairwise(len(Q) * i // pieces for i in range(pieces + 1)))
 
+    outputs = Outputs(pose, jac, reference, analytic)
+
     def evaluate_rows(a: int, b: int) -> None:
-        evaluate_chain(
-            chain,
-            Q[a:b].T,  # a strided view: the chain reads its rows
-            None if pose is None else pose[a:b],
-            None if jac is None else jac[a:b],
-            reference,
-            None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b]),
-        )
+        evaluate_chain(chain, Q[a:b].T, outputs.rows(a, b))  # Q[a:b].T: a strided view, its rows read
 
     in_shares(chunks, evaluate_rows, workers)
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import itertools
 import threading
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -170,19 +170,33 @@ def _cos_sin(q: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return cos, sin
 
 
-def evaluate_chain(
-    chain: Chain,
-    qT: np.ndarray,
-    pose: np.ndarray | None,
-    jac: np.ndarray | None,
-    reference: pin.ReferenceFrame | None,
-    analytic: tuple | None = None,
-) -> None:
-    """Fill pose (n, 4, 4), jac (n, 6, dof) and/or the analytic Jacobian for the chunk qT (dof, n).
+class Outputs(NamedTuple):
+    """What a batch evaluation fills, for rows 0..n of Q: pose (n, 4, 4) and / or jac (n, 6, dof) in
+    ``reference``, or the analytic Jacobian: (pmap, out (n, m, dof), distances (n, parts)) in
+    "local_world_aligned". None: not asked."""
+
+    pose: np.ndarray | None
+    jac: np.ndarray | None
+    reference: pin.ReferenceFrame | None
+    analytic: tuple | None = None
+
+    def rows(self, a: int, b: int) -> Outputs:
+        """The outputs of rows a..b (views)."""
+        pose, jac, reference, analytic = self
+        if analytic is not None:
+            analytic = (analytic[0], analytic[1][a:b], analytic[2][a:b])
+        return Outputs(
+            None if pose is None else pose[a:b], None if jac is None else jac[a:b], reference, analytic
+        )
+
+
+def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
+    """Fill ``outputs`` for the chunk qT (dof, n).
 
     qT may be a strided view (``Q[a:b].T``): only its rows are read. Results go straight into the
-    outputs' strided views; analytic: (pmap, out (n, m, dof), distances (n, parts)), "local_world_aligned".
+    outputs' strided views.
     """
+    pose, jac, reference, analytic = outputs
     dof, n, m, plan = chain.dof, qT.shape[1], len(chain.steps), chain.plan
     jacobian = jac is not None or analytic is not None
     direct = analytic is None and reference != pin.LOCAL  # Jacobian columns straight into jac's view
@@ -320,4 +334,4 @@ def _rows(n: int, rows: int) -> np.ndarray:
     return memory[: rows * n].reshape(rows, n)
 
 
-__all__ = ["CHUNK", "Chain", "Step", "Terms", "constant_terms", "evaluate_chain", "scratch_rows"]
+__all__ = ["CHUNK", "Chain", "Outputs", "Step", "Terms", "constant_terms", "evaluate_chain", "scratch_rows"]

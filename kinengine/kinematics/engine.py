@@ -40,7 +40,6 @@ REFERENCES: dict[object, pin.ReferenceFrame] = {
 }
 _ENUMS = (pin.WORLD, pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
 _forward, _place, _frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
-_dot, _add = np.dot, np.add
 
 
 def resolve_reference(reference: object) -> pin.ReferenceFrame:
@@ -54,70 +53,6 @@ def resolve_reference(reference: object) -> pin.ReferenceFrame:
         f"unknown reference {reference!r}; use 'world', 'local' or "
         "'local_world_aligned' (or a pinocchio.ReferenceFrame)"
     )
-
-
-class MimicMap:
-    """q_pin = M q + b and J = J_pin · M for one configuration, cheaper than the matrix products when the
-    independent joints come first in Pinocchio's order (the usual case: grippers' mimic fingers last):
-    q_pin[:dof] = q and one float per mimic joint; J_pin's mimic columns are added onto their leaders'
-    in place and the first dof columns returned (a view of the fresh J_pin). Else, when every mimic joint
-    copies its leader, q_pin = q[leader] (one take); otherwise the CoordinateMap's matrix products."""
-
-    def __init__(self, coords: CoordinateMap) -> None:
-        self.coords, self.dof = coords, coords.dof
-        self.prefix = bool(np.array_equal(coords.independent, np.arange(coords.dof)))
-        self.unit = bool(np.all(coords.multiplier == 1.0) and not coords.has_offset)  # q_pin = q[leader]
-        self.leader = coords.leader
-        self.rows = tuple(
-            (k, int(coords.leader[k]), float(coords.multiplier[k]), float(coords.offset[k]))
-            for k in range(coords.nq)
-            if k >= coords.dof
-        )
-
-    def q_pin(self, q: np.ndarray, buffer: np.ndarray) -> np.ndarray:
-        """M q + b written into ``buffer`` (nq,), which is returned."""
-        if self.prefix:  # the independent joints first: one slice copy and one float per mimic joint
-            buffer[: self.dof] = q
-            for k, leader, m, o in self.rows:
-                buffer[k] = q.item(leader) if m == 1.0 and o == 0.0 else q.item(leader) * m + o
-            return buffer
-        if self.unit:
-            return q.take(self.leader, out=buffer)
-        coords = self.coords
-        _dot(coords.matrix, q, out=buffer)
-        if coords.has_offset:
-            _add(buffer, coords.offset, out=buffer)
-        return buffer
-
-    def gather(self) -> Callable[[np.ndarray], np.ndarray]:
-        """q (dof,) -> a fresh q_pin = M q + b (nq,) for a frame that mimic joints move: one gather
-        ``q[leader]`` (numpy's cheapest call for it) when every mimic joint copies its leader, else the
-        gather scaled and shifted."""
-        leader, multiplier, offset = self.leader, self.coords.multiplier, self.coords.offset
-        if self.unit:
-            return lambda q: q[leader]
-        if not self.coords.has_offset:
-            return lambda q: q[leader] * multiplier
-        return lambda q: q[leader] * multiplier + offset
-
-    def folder(self) -> Callable[[np.ndarray], np.ndarray]:
-        """J_pin (6, nq) -> J = J_pin · M (6, dof), a fresh C-contiguous array from one product (cheaper
-        than column updates at these sizes)."""
-        matrix = self.coords.matrix
-        return lambda J_pin: J_pin.dot(matrix)
-
-    def fold(self, J_pin: np.ndarray) -> np.ndarray:
-        """J (6, dof) = J_pin (6, nq) · M; J_pin (fresh from Pinocchio) may be modified."""
-        if J_pin.ndim == 1:
-            J_pin = J_pin.reshape(6, 1)
-        if not self.prefix:
-            return self.coords.fold(J_pin)
-        for k, leader, m, _ in self.rows:
-            if m == 1.0:
-                J_pin[:, leader] += J_pin[:, k]
-            elif m != 0.0:
-                J_pin[:, leader] += m * J_pin[:, k]
-        return J_pin[:, : self.dof]
 
 
 class FramePath(NamedTuple):
@@ -141,7 +76,6 @@ class Kinematics:
         self.frame_names: tuple[str, ...] = tuple(self.frame_ids)
         self._tls = threading.local()
         self._memo: dict[object, object] = {}
-        self.mimic = MimicMap(self.coordinates)
 
     def data(self) -> pin.Data:
         """This thread's Pinocchio Data (created on first use)."""
@@ -223,15 +157,8 @@ class Kinematics:
 
     def pinocchio_q(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio's configuration (nq,) for a checked q (dof,): q itself without mimic joints, else
-        M q + b written into this thread's scratch buffer (valid until this thread's next call)."""
-        coords = self.coordinates
-        if coords.identity:
-            return q
-        try:
-            buffer = self._tls.q_pin
-        except AttributeError:
-            buffer = self._tls.q_pin = np.empty(coords.nq)
-        return self.mimic.q_pin(q, buffer)
+        M q + b (:meth:`CoordinateMap.to_pinocchio`)."""
+        return self.coordinates.to_pinocchio(q)
 
     def memoized(self, key: object, make: Callable[[], T]) -> T:
         """A constant derived from the model (a compiled chain, an IK seed table), made once per key.
@@ -281,20 +208,7 @@ class Kinematics:
         if coords.identity:
             J = _frame_jacobian(self.model, data, q, fid, ref)
             return J if self.dof > 1 else J.reshape(6, 1)
-        return self.mimic.fold(_frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref))
-
-    def pose_and_jacobian(
-        self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(T_IF (4, 4), J (6, dof) in ``ref``), bit for bit :meth:`pose` and :meth:`jacobian`: for
-        "local_world_aligned" and "world" one pass (Pinocchio's frame Jacobian places the joints the
-        pose needs), for "local" a placement pass and the Jacobian."""
-        if self.dof == 0:
-            return self.pose(q, fid), np.zeros((6, 0))
-        if ref == pin.LOCAL:
-            return self.pose(q, fid), self.jacobian(q, fid, ref)
-        J = self.jacobian(q, fid, ref)
-        return _place(self.model, self._tls.data, fid).homogeneous, J
+        return coords.fold(_frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref).reshape(6, -1))
 
 
 def _frame_ids(model: pin.Model) -> dict[str, int]:
@@ -320,4 +234,4 @@ def _reduced(model: pin.Model, locked: list[int]) -> pin.Model | None:
         return None
 
 
-__all__ = ["REFERENCES", "FramePath", "Kinematics", "MimicMap", "resolve_reference"]
+__all__ = ["REFERENCES", "FramePath", "Kinematics", "resolve_reference"]

@@ -130,10 +130,11 @@ def _single_calls(
     so a 0-dof Jacobian is zeros (6, 0)."""
     forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
     local_frame, dof = pin.LOCAL, kin.dof
-    pinocchio_q: Callable[[np.ndarray], np.ndarray] = kin.mimic.gather() if mapped else _same
-    fold: Callable[[np.ndarray], np.ndarray] = (
-        kin.mimic.folder() if mapped else _same if dof > 1 else (lambda J: J.reshape(6, dof))
-    )
+    coords = kin.coordinates
+    pinocchio_q: Callable[[np.ndarray], np.ndarray] = coords.to_pinocchio if mapped else _same
+    fold: Callable[[np.ndarray], np.ndarray] = _same if dof > 1 else (lambda J: J.reshape(6, dof))
+    if mapped:
+        fold = lambda J: coords.fold(J.reshape(6, -1))  # noqa: E731
     if dof == 0:
         frame_jacobian = _no_columns
 

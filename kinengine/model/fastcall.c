@@ -102,16 +102,19 @@ static PyTypeObject ReadyType = {
 
 /* ---- FrameCalls -------------------------------------------------------------------------------- */
 
+/* What a FrameCalls binds, in the order of its keyword arguments: the Pinocchio model, the frame index, the
+ * threading.local and the new-Data callable, pinocchio's forwardKinematics, updateFramePlacement and
+ * computeFrameJacobian, the reference table (dict), the default and LOCAL references, the pure-Python closures. */
+enum { MODEL, FRAME_ID, LOCAL, STATE, FORWARD, PLACE, FRAME_JACOBIAN, REFERENCES, DEFAULT_REFERENCE,
+       LOCAL_REFERENCE, SLOW_POSE, SLOW_JACOBIAN, SLOW_KINEMATICS, BOUND };
+
 typedef struct {
     PyObject_HEAD
     Py_ssize_t dof;
     double limit;
     int checking;
-    PyObject *model, *frame_id, *local, *state;     /* Pinocchio model, frame index, threading.local, new Data */
-    PyObject *forward, *place, *frame_jacobian;     /* pinocchio functions */
-    PyObject *references, *default_reference, *local_reference;
-    PyObject *slow_pose, *slow_jacobian, *slow_kinematics; /* the pure-Python closures */
-    uint64_t cached_thread;                         /* PyThreadState_GetID of the thread owning cached_data */
+    PyObject *bound[BOUND];
+    uint64_t cached_thread; /* PyThreadState_GetID of the thread owning cached_data */
     PyObject *cached_data;
 } FrameCallsObject;
 
@@ -120,19 +123,9 @@ static PyObject *str_data, *str_homogeneous, *str_reference;
 static int
 calls_traverse(FrameCallsObject *self, visitproc visit, void *arg)
 {
-    Py_VISIT(self->model);
-    Py_VISIT(self->frame_id);
-    Py_VISIT(self->local);
-    Py_VISIT(self->state);
-    Py_VISIT(self->forward);
-    Py_VISIT(self->place);
-    Py_VISIT(self->frame_jacobian);
-    Py_VISIT(self->references);
-    Py_VISIT(self->default_reference);
-    Py_VISIT(self->local_reference);
-    Py_VISIT(self->slow_pose);
-    Py_VISIT(self->slow_jacobian);
-    Py_VISIT(self->slow_kinematics);
+    for (int i = 0; i < BOUND; i++) {
+        Py_VISIT(self->bound[i]);
+    }
     Py_VISIT(self->cached_data);
     return 0;
 }
@@ -140,19 +133,9 @@ calls_traverse(FrameCallsObject *self, visitproc visit, void *arg)
 static int
 calls_clear(FrameCallsObject *self)
 {
-    Py_CLEAR(self->model);
-    Py_CLEAR(self->frame_id);
-    Py_CLEAR(self->local);
-    Py_CLEAR(self->state);
-    Py_CLEAR(self->forward);
-    Py_CLEAR(self->place);
-    Py_CLEAR(self->frame_jacobian);
-    Py_CLEAR(self->references);
-    Py_CLEAR(self->default_reference);
-    Py_CLEAR(self->local_reference);
-    Py_CLEAR(self->slow_pose);
-    Py_CLEAR(self->slow_jacobian);
-    Py_CLEAR(self->slow_kinematics);
+    for (int i = 0; i < BOUND; i++) {
+        Py_CLEAR(self->bound[i]);
+    }
     Py_CLEAR(self->cached_data);
     return 0;
 }
@@ -174,7 +157,7 @@ calls_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     Py_ssize_t dof;
     double limit;
     int checking;
-    PyObject *o[13];
+    PyObject *o[BOUND];
     if (!PyArg_ParseTupleAndKeywords(args, kwds, "ndpOOOOOOOO!OOOOO", names, &dof, &limit, &checking, &o[0],
                                      &o[1], &o[2], &o[3], &o[4], &o[5], &o[6], &PyDict_Type, &o[7], &o[8],
                                      &o[9], &o[10], &o[11], &o[12])) {
@@ -187,14 +170,9 @@ calls_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
     self->dof = dof;
     self->limit = limit;
     self->checking = checking;
-    PyObject **slots[13] = {&self->model,           &self->frame_id,        &self->local,
-                            &self->state,           &self->forward,         &self->place,
-                            &self->frame_jacobian,  &self->references,      &self->default_reference,
-                            &self->local_reference, &self->slow_pose,       &self->slow_jacobian,
-                            &self->slow_kinematics};
-    for (int i = 0; i < 13; i++) {
+    for (int i = 0; i < BOUND; i++) {
         Py_INCREF(o[i]);
-        *slots[i] = o[i];
+        self->bound[i] = o[i];
     }
     self->cached_data = NULL;
     self->cached_thread = 0;
@@ -213,13 +191,13 @@ thread_data(FrameCallsObject *self)
         return self->cached_data;
     }
 #endif
-    PyObject *data = PyObject_GetAttr(self->local, str_data);
+    PyObject *data = PyObject_GetAttr(self->bound[LOCAL], str_data);
     if (data == NULL) {
         if (!PyErr_ExceptionMatches(PyExc_AttributeError)) {
             return NULL;
         }
         PyErr_Clear();
-        data = PyObject_CallNoArgs(self->state);
+        data = PyObject_CallNoArgs(self->bound[STATE]);
         if (data == NULL) {
             return NULL;
         }
@@ -235,8 +213,8 @@ thread_data(FrameCallsObject *self)
 static PyObject *
 homogeneous(FrameCallsObject *self, PyObject *data)
 {
-    PyObject *argv[3] = {self->model, data, self->frame_id};
-    PyObject *placement = PyObject_Vectorcall(self->place, argv, 3, NULL);
+    PyObject *argv[3] = {self->bound[MODEL], data, self->bound[FRAME_ID]};
+    PyObject *placement = PyObject_Vectorcall(self->bound[PLACE], argv, 3, NULL);
     if (placement == NULL) {
         return NULL;
     }
@@ -248,8 +226,8 @@ homogeneous(FrameCallsObject *self, PyObject *data)
 static int
 forward_kinematics(FrameCallsObject *self, PyObject *data, PyObject *q)
 {
-    PyObject *argv[3] = {self->model, data, q};
-    PyObject *r = PyObject_Vectorcall(self->forward, argv, 3, NULL);
+    PyObject *argv[3] = {self->bound[MODEL], data, q};
+    PyObject *r = PyObject_Vectorcall(self->bound[FORWARD], argv, 3, NULL);
     if (r == NULL) {
         return -1;
     }
@@ -260,8 +238,8 @@ forward_kinematics(FrameCallsObject *self, PyObject *data, PyObject *q)
 static PyObject *
 frame_jacobian(FrameCallsObject *self, PyObject *data, PyObject *q, PyObject *reference)
 {
-    PyObject *argv[5] = {self->model, data, q, self->frame_id, reference};
-    return PyObject_Vectorcall(self->frame_jacobian, argv, 5, NULL);
+    PyObject *argv[5] = {self->bound[MODEL], data, q, self->bound[FRAME_ID], reference};
+    return PyObject_Vectorcall(self->bound[FRAME_JACOBIAN], argv, 5, NULL);
 }
 
 /* The reference frame of a plain call with a ready q (a borrowed reference), or NULL when the call is not
@@ -270,7 +248,7 @@ frame_jacobian(FrameCallsObject *self, PyObject *data, PyObject *q, PyObject *re
 static PyObject *
 plain_call(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames, int reference)
 {
-    PyObject *given = NULL, *found = self->default_reference;
+    PyObject *given = NULL, *found = self->bound[DEFAULT_REFERENCE];
     if (nargs < 1 || nargs > 1 + reference) {
         return NULL;
     }
@@ -286,7 +264,7 @@ plain_call(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyOb
         given = args[1];
     }
     if (given != NULL) {
-        if (!PyUnicode_CheckExact(given) || (found = PyDict_GetItemWithError(self->references, given)) == NULL) {
+        if (!PyUnicode_CheckExact(given) || (found = PyDict_GetItemWithError(self->bound[REFERENCES], given)) == NULL) {
             PyErr_Clear();
             return NULL;
         }
@@ -297,55 +275,20 @@ plain_call(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyOb
     return found;
 }
 
+enum { POSE, JACOBIAN, KINEMATICS };
+
 static PyObject *
-calls_pose(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
+pose_at(FrameCallsObject *self, PyObject *data, PyObject *q)
 {
-    if (plain_call(self, args, nargs, kwnames, 0) == NULL) {
-        return PyObject_Vectorcall(self->slow_pose, args, nargs, kwnames);
-    }
-    PyObject *data = thread_data(self);
-    if (data == NULL) {
-        return NULL;
-    }
-    PyObject *T = NULL;
-    if (forward_kinematics(self, data, args[0]) == 0) {
-        T = homogeneous(self, data);
-    }
-    Py_DECREF(data);
-    return T;
+    return forward_kinematics(self, data, q) == 0 ? homogeneous(self, data) : NULL;
 }
 
 static PyObject *
-calls_jacobian(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
+kinematics_at(FrameCallsObject *self, PyObject *data, PyObject *q, PyObject *reference)
 {
-    PyObject *reference = plain_call(self, args, nargs, kwnames, 1);
-    if (reference == NULL) {
-        return PyObject_Vectorcall(self->slow_jacobian, args, nargs, kwnames);
-    }
-    PyObject *data = thread_data(self);
-    if (data == NULL) {
-        return NULL;
-    }
-    PyObject *J = frame_jacobian(self, data, args[0], reference);
-    Py_DECREF(data);
-    return J;
-}
-
-static PyObject *
-calls_kinematics(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
-{
-    PyObject *reference = plain_call(self, args, nargs, kwnames, 1);
-    if (reference == NULL) {
-        return PyObject_Vectorcall(self->slow_kinematics, args, nargs, kwnames);
-    }
-    PyObject *data = thread_data(self);
-    if (data == NULL) {
-        return NULL;
-    }
-    PyObject *q = args[0], *T = NULL, *J = NULL, *result = NULL;
-    if (reference == self->local_reference) { /* Pinocchio's LOCAL frame Jacobian does not place the joints */
-        if (forward_kinematics(self, data, q) == 0 &&
-            (T = homogeneous(self, data)) != NULL) {
+    PyObject *T = NULL, *J = NULL, *result = NULL;
+    if (reference == self->bound[LOCAL_REFERENCE]) { /* Pinocchio's LOCAL frame Jacobian does not place the joints */
+        if ((T = pose_at(self, data, q)) != NULL) {
             J = frame_jacobian(self, data, q, reference);
         }
     }
@@ -357,8 +300,45 @@ calls_kinematics(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs
     }
     Py_XDECREF(T);
     Py_XDECREF(J);
+    return result;
+}
+
+/* One frame call of this kind: a plain call runs here on this thread's Data, any other goes to the
+ * pure-Python closure of the same kind unchanged. */
+static PyObject *
+frame_call(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames, int kind)
+{
+    PyObject *reference = plain_call(self, args, nargs, kwnames, kind != POSE);
+    if (reference == NULL) {
+        return PyObject_Vectorcall(self->bound[SLOW_POSE + kind], args, nargs, kwnames);
+    }
+    PyObject *data = thread_data(self);
+    if (data == NULL) {
+        return NULL;
+    }
+    PyObject *result = kind == POSE       ? pose_at(self, data, args[0])
+                       : kind == JACOBIAN ? frame_jacobian(self, data, args[0], reference)
+                                          : kinematics_at(self, data, args[0], reference);
     Py_DECREF(data);
     return result;
+}
+
+static PyObject *
+calls_pose(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
+{
+    return frame_call(self, args, nargs, kwnames, POSE);
+}
+
+static PyObject *
+calls_jacobian(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
+{
+    return frame_call(self, args, nargs, kwnames, JACOBIAN);
+}
+
+static PyObject *
+calls_kinematics(FrameCallsObject *self, PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames)
+{
+    return frame_call(self, args, nargs, kwnames, KINEMATICS);
 }
 
 static PyMethodDef calls_methods[] = {
