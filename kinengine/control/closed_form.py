@@ -32,7 +32,7 @@ from ..errors import KinematicsError, OptionError
 from ..kinematics.compiler import compiled_chain
 from .ik_candidates import candidates_to_solutions, shared_by_poses
 from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined
-from .ik_target import ROTATION_EXACT, batch_targets, exact_pose, rotation_deviation, single_target
+from .ik_target import ROTATION_EXACT, batch_targets, checked_pose, exact_pose
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .robot_like import RobotLike
@@ -283,13 +283,10 @@ def _checked_poses(T: object) -> np.ndarray:
     if np.ndim(T) == 3:  # type: ignore[arg-type]
         batch_targets(T)
         return exact_pose(np.ascontiguousarray(T, dtype=np.float64))
-    single_target(T, None, None)
-    if not (type(T) is np.ndarray and T.dtype == np.float64 and T.flags.c_contiguous):
-        T = np.ascontiguousarray(T, dtype=np.float64)
-    a, b, c, _, d, e, f, _, g, h, i = T.ravel().tolist()[:11]
-    if rotation_deviation(a, b, c, d, e, f, g, h, i) > ROTATION_EXACT:
-        return exact_pose(T)
-    return T
+    pose, deviation = checked_pose(T)
+    if not (type(pose) is np.ndarray and pose.flags.c_contiguous):
+        pose = np.ascontiguousarray(pose)
+    return exact_pose(pose) if deviation > ROTATION_EXACT else pose
 
 
 def snapped(g: Geometry) -> Geometry:

@@ -241,35 +241,45 @@ def _too_far() -> NoReturn:
     )
 
 
+def checked_pose(target: object) -> tuple[np.ndarray, float]:
+    """(T (4, 4) float64, max |CᵀC − I| of its rotation block): a pose target checked (finite, rotation
+    block a rotation to ``ROTATION_TOLERANCE``, bottom row (0, 0, 0, 1), position within reach);
+    ParameterizationError naming what is wrong."""
+    value = _real(target, "a (4, 4) pose or parameters χ")
+    if value.shape != (4, 4):
+        raise ParameterizationError(
+            f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got "
+            f"{value.shape}; for parameters χ name their position= and/or rotation= parameterization"
+        )
+    flat = value.ravel().tolist()
+    if not all(map(math.isfinite, flat)):
+        raise ParameterizationError("`target` holds NaN or inf: a pose T_IF (4, 4) has finite entries")
+    a, b, c, x, d, e, f, y, g, h, i, z = flat[:12]
+    deviation = rotation_deviation(a, b, c, d, e, f, g, h, i)
+    if not deviation <= ROTATION_TOLERANCE:
+        raise ParameterizationError(
+            "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+        )
+    if not all(abs(v - w) <= 1e-9 for v, w in zip(flat[12:], _BOTTOM.tolist(), strict=True)):
+        raise ParameterizationError(
+            f"`target`'s bottom row is {flat[12:]}, expected [0, 0, 0, 1]: a pose T_IF (4, 4) is a "
+            "homogeneous transform"
+        )
+    if not max(abs(x), abs(y), abs(z)) <= MAX_TARGET_DISTANCE:
+        _too_far()
+    return value, deviation
+
+
 def single_target(
     target: object, position: str | None, rotation: str | None
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """(p_d (3,) or None, C_d (3, 3) or None) from a pose (4, 4) or parameters χ."""
-    value = _real(target, "a (4, 4) pose or parameters χ")
+    """(p_d (3,) or None, C_d (3, 3) or None) from a pose (4, 4) or parameters χ; a pose's rotation block
+    off orthonormal by more than ``ROTATION_EXACT`` is replaced by its nearest rotation."""
     if position is None and rotation is None:
-        if value.shape != (4, 4):
-            raise ParameterizationError(
-                f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got "
-                f"{value.shape}; for parameters χ name their position= and/or rotation= parameterization"
-            )
-        flat = value.ravel().tolist()
-        if not all(map(math.isfinite, flat)):
-            raise ParameterizationError("`target` holds NaN or inf: a pose T_IF (4, 4) has finite entries")
-        a, b, c, x, d, e, f, y, g, h, i, z = flat[:12]
-        deviation = rotation_deviation(a, b, c, d, e, f, g, h, i)
-        if not deviation <= ROTATION_TOLERANCE:
-            raise ParameterizationError(
-                "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
-            )
-        if not all(abs(v - w) <= 1e-9 for v, w in zip(flat[12:], _BOTTOM.tolist(), strict=True)):
-            raise ParameterizationError(
-                f"`target`'s bottom row is {flat[12:]}, expected [0, 0, 0, 1]: a pose T_IF (4, 4) is a "
-                "homogeneous transform"
-            )
-        if not max(abs(x), abs(y), abs(z)) <= MAX_TARGET_DISTANCE:
-            _too_far()
+        value, deviation = checked_pose(target)
         C = value[:3, :3].copy()
-        return np.array((x, y, z)), nearest_rotations(C[None])[0] if deviation > ROTATION_EXACT else C
+        return value[:3, 3].copy(), nearest_rotations(C[None])[0] if deviation > ROTATION_EXACT else C
+    value = _real(target, "a (4, 4) pose or parameters χ")
     P = get_position(position) if position is not None else None
     R = get_rotation(rotation) if rotation is not None else None
     m = (P.size if P else 0) + (R.size if R else 0)
@@ -347,6 +357,7 @@ __all__ = [
     "Problem",
     "RandomSource",
     "batch_targets",
+    "checked_pose",
     "checked_problem",
     "exact_pose",
     "nearest_rotations",

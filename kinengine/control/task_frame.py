@@ -1,10 +1,10 @@
 """The per-frame work of a :class:`~kinengine.control.task.Task` update, all into preallocated arrays.
 
 :class:`FrameKinematics` — one Pinocchio frame F: J_e0 (rows [v; ω] in I, "local_world_aligned") and the
-pose C_IF, p [m]. Without q̇ J_e0 is Pinocchio's frame Jacobian (which also places the frame); with q̇ it
-comes from the world-frame joint Jacobians J_w, J̇_w that :func:`joint_jacobians` left in the Task's Data:
-J_e0 = X(p)·J_w with X = [[I, −[p]x], [0, I]] (the spatial velocity moved from I's origin to p),
-J̇_e0 = X·J̇_w + Ẋ·J_w with Ẋ = [[0, −[ṗ]x], [0, 0]], and the twist J_e0·q̇. Mimic joints fold every
+pose C_IF, p [m]. Without q̇ J_e0 is Pinocchio's frame Jacobian (which also places the frame); with q̇
+J_e0 and J̇_e0 (d/dt of that same Jacobian) are Pinocchio's ``getFrameJacobian`` and
+``getFrameJacobianTimeVariation`` in LOCAL_WORLD_ALIGNED from the joint Jacobians and their rates that
+:func:`joint_jacobians` left in the Task's Data, and the twist is J_e0·q̇. Mimic joints fold every
 Jacobian, J·M (see :mod:`kinengine.model.coordinates`).
 
 :class:`FrameBlock` — one :class:`~kinengine.FrameTask`: its pose (T_IA, or T_BA with ``relative_to`` B),
@@ -38,9 +38,9 @@ _INF = math.inf
 
 
 def joint_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray, zero: np.ndarray) -> None:
-    """Pinocchio's world-frame joint Jacobians J_w into ``data.J`` and their rate J̇_w along q̇ = ``v`` into
-    ``data.dJ`` at q (and the joint placements)."""
-    pin.computeForwardKinematicsDerivatives(model, data, q, v, zero)
+    """Pinocchio's joint Jacobians into ``data.J`` and their rates along q̇ = ``v`` into ``data.dJ`` at q (and
+    the joint placements and velocities); ``zero`` is unused (kept for the callers' signature)."""
+    pin.computeJointJacobiansTimeVariation(model, data, q, v)
 
 
 def _skew(S: np.ndarray, x: float, y: float, z: float) -> None:
@@ -64,17 +64,9 @@ class FrameKinematics:
         self.views = self.R, self.p = placement.rotation, placement.translation
         placement = data.oMf[fid]
         self.world_views = placement.rotation, placement.translation
-        mask = np.zeros(model.nv)  # Pinocchio's columns of the joints that move this frame
-        for j in model.supports[model.frames[fid].parentJoint][1:]:
-            joint = model.joints[j]
-            mask[joint.idx_v : joint.idx_v + joint.nv] = 1.0
-        self.mask = None if mask.all() else mask
         self.fold = None if coords.identity else coords.matrix
         self.plain = not path.mapped and path.model.nv > 1  # Pinocchio's frame Jacobian is J_e0 as it is
         dof = kin.dof
-        self.X, self.S = np.eye(6), np.zeros((3, 3))
-        self.masked, self.tmp = np.empty((6, model.nv)), np.empty((3, dof))
-        self.Jw, self.dJw = np.empty((6, dof)), np.empty((6, dof))
         self.J: np.ndarray = np.zeros((6, dof))  # Pinocchio's array (rebound) or self.buffer
         self.buffer, self.Jdot, self.twist = np.zeros((6, dof)), np.zeros((6, dof)), np.zeros(6)
         self.adopted = False  # Jdot and twist are an absolute block's own arrays (see FrameBlock)
@@ -100,27 +92,19 @@ class FrameKinematics:
         pin.updateFramePlacement(self.model, self.data, self.fid)
         self.R, self.p = R, p = self.world_views
         self.C, self.pos = R.tolist(), p.tolist()
-        if qdot is None:
+        if qdot is None or not self.nv:  # without q̇, or J and J̇ (6, 0): nothing more to fill
             return
-        Jw = self._folded(self.data.J.reshape(6, self.nv), self.Jw)
-        X = self.X
-        px, py, pz = self.pos
-        X[0, 4], X[0, 5], X[1, 3], X[1, 5], X[2, 3], X[2, 4] = pz, -py, -pz, px, py, -px
-        self.J = np.dot(X, Jw, out=self.buffer)
-        np.dot(self.J, qdot, out=self.twist)
-        np.dot(X, self._folded(self.data.dJ.reshape(6, self.nv), self.dJw), out=self.Jdot)
-        vx, vy, vz = self.twist[:3].tolist()
-        _skew(self.S, -vx, -vy, -vz)  # Ẋ's block −[ṗ]x
-        np.dot(self.S, Jw[3:], out=self.tmp)
-        np.add(self.Jdot[:3], self.tmp, out=self.Jdot[:3])
-
-    def _folded(self, Jw: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """This frame's columns of a joint-level (6, nv) matrix, folded by the coordinate map into ``out``."""
-        if self.fold is None:  # nv = dof
-            return Jw if self.mask is None else np.multiply(Jw, self.mask, out=out)
-        if self.mask is not None:
-            Jw = np.multiply(Jw, self.mask, out=self.masked)
-        return np.dot(Jw, self.fold, out=out)
+        model, data, fid = self.model, self.data, self.fid
+        J = pin.getFrameJacobian(model, data, fid, pin.LOCAL_WORLD_ALIGNED).reshape(6, self.nv)
+        dJ = pin.getFrameJacobianTimeVariation(model, data, fid, pin.LOCAL_WORLD_ALIGNED).reshape(6, self.nv)
+        if self.fold is None:
+            np.copyto(self.buffer, J)
+            np.copyto(self.Jdot, dJ)
+        else:
+            np.dot(J, self.fold, out=self.buffer)
+            np.dot(dJ, self.fold, out=self.Jdot)
+        self.J = self.buffer
+        np.dot(self.buffer, qdot, out=self.twist)
 
 
 class FrameBlock:
