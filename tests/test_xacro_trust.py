@@ -345,41 +345,36 @@ def test_cli_trust_xacro_option(tmp_path):
     assert "l2" in trusted.stdout
 
 
-def test_trusted_expression_that_does_not_finish_is_stopped_by_the_time_bound():
-    """xacro's own eval of 9**9**9 runs for hours; the trusted expansion's child process is stopped."""
+def _trusted_refusal(name: str, limits: str) -> str:
+    """The ResourceLimitError message of loading hostile file ``name`` trusted with ``Limits(limits)``, in
+    a fresh interpreter."""
     done = run_python(
         f"""
         import kinengine
         from kinengine.urdf import Limits
         try:
-            kinengine.load({str(HOSTILE / "huge_power.xacro")!r}, trust_xacro=True, limits=Limits(max_xacro_seconds=1))
+            kinengine.load({str(HOSTILE / name)!r}, trust_xacro=True, limits=Limits({limits}))
         except kinengine.errors.ResourceLimitError as exc:
             print(exc)
         """,
         timeout=120,
     )
     assert done.returncode == 0, done.stderr
-    assert "the trusted xacro expansion takes more than Limits.max_xacro_seconds = 1 s" in done.stdout
+    return done.stdout
+
+
+def test_trusted_expression_that_does_not_finish_is_stopped_by_the_time_bound():
+    """xacro's own eval of 9**9**9 runs for hours; the trusted expansion's child process is stopped."""
+    message = _trusted_refusal("huge_power.xacro", "max_xacro_seconds=1")
+    assert "the trusted xacro expansion takes more than Limits.max_xacro_seconds = 1 s" in message
 
 
 def test_trusted_expansion_is_bounded_in_memory():
     """xacro's own eval of 'x' * 2**30 asks for 1 GiB; the child's address space is bounded by
     Limits.max_xacro_memory (RLIMIT_AS) and the expansion is refused, not run."""
     pytest.importorskip("resource")
-    done = run_python(
-        f"""
-        import kinengine
-        from kinengine.urdf import Limits
-        try:
-            kinengine.load({str(HOSTILE / "huge_string.xacro")!r}, trust_xacro=True,
-                           limits=Limits(max_xacro_memory=2**29))
-        except kinengine.errors.ResourceLimitError as exc:
-            print(exc)
-        """,
-        timeout=120,
-    )
-    assert done.returncode == 0, done.stderr
-    assert "needs more than Limits.max_xacro_memory = 536870912 bytes" in done.stdout
+    message = _trusted_refusal("huge_string.xacro", "max_xacro_memory=2**29")
+    assert "needs more than Limits.max_xacro_memory = 536870912 bytes" in message
 
 
 def test_max_xacro_memory_is_checked():
