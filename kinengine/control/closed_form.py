@@ -32,7 +32,7 @@ from ..errors import KinematicsError, OptionError
 from ..kinematics.compiler import compiled_chain
 from .ik_candidates import candidates_to_solutions, shared_by_poses
 from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined
-from .ik_target import ROTATION_EXACT, batch_targets, checked_pose, exact_pose
+from .ik_target import ROTATION_EXACT, checked_pose, checked_poses, exact_pose
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .robot_like import RobotLike
@@ -281,12 +281,12 @@ def _checked_poses(T: object) -> np.ndarray:
     a rotation block off orthonormal by more than ROTATION_EXACT (float32, rounded) is replaced by its
     nearest rotation (:func:`.ik_target.exact_pose`), which the answers then reproduce to 1e-9."""
     if np.ndim(T) == 3:  # type: ignore[arg-type]
-        batch_targets(T)
-        return exact_pose(np.ascontiguousarray(T, dtype=np.float64))
+        poses, deviations = checked_poses(T)
+        return exact_pose(np.ascontiguousarray(poses), deviations)
     pose, deviation = checked_pose(T)
     if not (type(pose) is np.ndarray and pose.flags.c_contiguous):
         pose = np.ascontiguousarray(pose)
-    return exact_pose(pose) if deviation > ROTATION_EXACT else pose
+    return exact_pose(pose, deviation) if deviation > ROTATION_EXACT else pose
 
 
 def snapped(g: Geometry) -> Geometry:

@@ -15,7 +15,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import KinematicsError, OptionError
-from .closed_form import METHODS, available, chain_of, ik_solutions
+from .closed_form import METHODS, ClosedFormChain, available, chain_of, ik_solutions
 from .ik_candidates import residuals
 from .ik_ranges import wrap_pi
 
@@ -105,7 +105,7 @@ def nearest_result(
     found = ik_solutions(robot, target, frame, q_near=reference)
     poses = np.asarray(target, dtype=np.float64)
     if single and found.count:  # the common case, without the batch's arrays
-        q = _turned_near(robot, found.q[0].copy(), reference)
+        q = _turned_near(robot, found.frame, found.q[0].copy(), reference)
         err_p, err_r = residuals(robot, found.frame, q[None], poses[None])
         return IKResult(q, True, 0, float(err_p[0]), float(err_r[0]), 0)
     batch = poses if not single else poses[None]
@@ -113,7 +113,9 @@ def nearest_result(
     solved = count > 0
     q = np.repeat(reference[None], len(batch), axis=0) if reference.ndim == 1 else reference.copy()
     if found.q.size:
-        q[solved] = _turned_near(robot, (found.q[None] if single else found.q)[solved, 0], q[solved])
+        q[solved] = _turned_near(
+            robot, found.frame, (found.q[None] if single else found.q)[solved, 0], q[solved]
+        )
     err_p, err_r = residuals(robot, found.frame, q, batch)  # unsolved rows: measured at the reference q
     zero = np.zeros(len(batch), dtype=np.intp)
     result = IKBatchResult(q, solved, zero, err_p, err_r, zero.copy())
@@ -128,12 +130,12 @@ def nearest_result(
     return result[0] if single else result
 
 
-def _turned_near(robot: RobotLike, q: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """q (dof,) or (N, dof) with each continuous joint's angle on the turn nearest ``reference`` (ik_solutions
-    reports it in (−π, π]; the answer nearest q0 is q0's own turn of it)."""
-    coords = robot.engine.coordinates
-    turn = coords.continuous | ~np.isfinite(coords.upper - coords.lower)
-    if turn.any():
+def _turned_near(robot: RobotLike, frame: str, q: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """q (dof,) or (N, dof) with each continuous joint of ``frame``'s closed-form chain on the turn nearest
+    ``reference`` (ik_solutions reports it in (−π, π]; the answer nearest q0 is q0's own turn of it)."""
+    chain = chain_of(robot, frame)
+    turn = chain.columns[chain.continuous] if isinstance(chain, ClosedFormChain) else []
+    if len(turn):
         q[..., turn] = reference[..., turn] + wrap_pi(q[..., turn] - reference[..., turn])
     return q
 

@@ -196,16 +196,15 @@ def nearest_rotations(C: np.ndarray) -> np.ndarray:
     return U @ Vt
 
 
-def exact_pose(T: np.ndarray) -> np.ndarray:
-    """A checked pose T (4, 4) or (N, 4, 4), float64: T itself when every rotation block is a rotation to
+def exact_pose(T: np.ndarray, deviation: float | np.ndarray) -> np.ndarray:
+    """A checked pose T (4, 4) or (N, 4, 4), float64, with ``deviation`` (max |CᵀC − I| of each rotation
+    block, from :func:`checked_pose` / :func:`checked_poses`): T itself when every block is a rotation to
     ``ROTATION_EXACT``, else a copy with the others replaced by their nearest rotations (a float32 or
     rounded target is solved for the rotation it stands for; answers then reproduce that to 1e-9)."""
-    C = T[..., :3, :3]
-    deviation = np.abs(np.einsum("...ki,...kj->...ij", C, C) - np.eye(3)).max(axis=(-2, -1))
-    if not (deviation > ROTATION_EXACT).any():
+    fix = np.asarray(deviation) > ROTATION_EXACT
+    if not fix.any():
         return T
     out = np.array(T, dtype=np.float64)
-    fix = deviation > ROTATION_EXACT
     out[..., :3, :3][fix] = nearest_rotations(out[..., :3, :3][fix])
     return out
 
@@ -313,8 +312,9 @@ def single_target(
     return p_d, C_d
 
 
-def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
-    """(p_d (N, 3), C_d (N, 3, 3)) from a batch of poses (N, 4, 4), every one checked."""
+def checked_poses(target: object) -> tuple[np.ndarray, np.ndarray]:
+    """(T (N, 4, 4) float64, deviation (N,) = max |CᵀC − I| per rotation block): a batch of pose targets,
+    every one checked as :func:`checked_pose` checks one; ParameterizationError naming the first bad pose."""
     value = _real(target, "a batch of poses (N, 4, 4)")
     if value.ndim != 3 or value.shape[1:] != (4, 4) or not len(value):
         raise ParameterizationError(
@@ -340,11 +340,15 @@ def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
             "a pose T_IF (4, 4) is a homogeneous transform"
         )
     _position_ok(value[:, :3, 3])
-    C = np.array(C)
-    fix = deviation > ROTATION_EXACT
-    if fix.any():
-        C[fix] = nearest_rotations(C[fix])
-    return np.ascontiguousarray(value[:, :3, 3]), C
+    return value, deviation
+
+
+def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
+    """(p_d (N, 3), C_d (N, 3, 3)) from a batch of poses (N, 4, 4), every one checked; rotation blocks off
+    orthonormal by more than ``ROTATION_EXACT`` replaced by their nearest rotations."""
+    value, deviation = checked_poses(target)
+    T = exact_pose(value, deviation)
+    return np.ascontiguousarray(T[:, :3, 3]), np.array(T[:, :3, :3])
 
 
 __all__ = [
@@ -358,6 +362,7 @@ __all__ = [
     "RandomSource",
     "batch_targets",
     "checked_pose",
+    "checked_poses",
     "checked_problem",
     "exact_pose",
     "nearest_rotations",
