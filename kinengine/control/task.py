@@ -30,8 +30,8 @@ writing every attribute: a failed update leaves the Task consistent, holding all
 values (so the next update continues from it), never a mix of old and new.
 
 How: per frame Pinocchio's frame Jacobian on the frame's cheapest exact model
-(:meth:`~kinengine.kinematics.engine.Kinematics.frame_path`); with q̇ one Pinocchio call for the world-frame
-joint Jacobians and their rates (:func:`~kinengine.control.task_frame.joint_jacobians`); per entry
+(:meth:`~kinengine.kinematics.engine.Kinematics.frame_path`); with q̇ one Pinocchio call for the joint
+Jacobians and their rates (``computeJointJacobiansTimeVariation``); per entry
 :mod:`kinengine.control.task_frame` does the rest. Pinocchio's model has plain joints only; with mimic joints
 q_pin = M q + b and q̇_pin = M q̇ are written into preallocated arrays and the Jacobians are folded, J·M (see
 :mod:`kinengine.model.coordinates`), except for a frame that no mimic joint moves, whose model takes q.
@@ -47,13 +47,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
+import pinocchio as pin
 
 from ..analytic import as_rows, pose_map
 from ..analytic.options import DEFAULTS, AnalyticOptions
 from ..errors import OptionError
 from ..kinematics.memory import create_data
 from .frame_task import FrameTask, as_frame_tasks
-from .task_frame import FrameBlock, FrameKinematics, joint_jacobians
+from .task_frame import FrameBlock, FrameKinematics
 
 if TYPE_CHECKING:  # named for the checker only
     from .robot_like import RobotLike
@@ -93,7 +94,6 @@ class Task:
         self._coords, self._model = kin.coordinates, kin.model
         self._data = data = create_data(kin.model, "a Task")
         self.dof = robot.dof
-        self._zero = np.zeros(kin.model.nv)
         self._qp, self._vp = np.empty(kin.model.nq), np.empty(kin.model.nv)
         kinematics: dict[int, FrameKinematics] = {}
 
@@ -172,7 +172,7 @@ class Task:
             v = qdot
             if not coords.identity:
                 q_pin, v = self._to_pinocchio(q), np.dot(coords.matrix, qdot, out=self._vp)
-            joint_jacobians(self._model, self._data, q_pin, v, self._zero)
+            pin.computeJointJacobiansTimeVariation(self._model, self._data, q_pin, v)  # J, J̇ into the Data
             self._rates_valid = True
         elif self._mapped:  # a frame that needs q_pin
             q_pin = self._to_pinocchio(q)

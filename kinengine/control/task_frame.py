@@ -4,8 +4,8 @@
 pose C_IF, p [m]. Without q̇ J_e0 is Pinocchio's frame Jacobian (which also places the frame); with q̇
 J_e0 and J̇_e0 (d/dt of that same Jacobian) are Pinocchio's ``getFrameJacobian`` and
 ``getFrameJacobianTimeVariation`` in LOCAL_WORLD_ALIGNED from the joint Jacobians and their rates that
-:func:`joint_jacobians` left in the Task's Data, and the twist is J_e0·q̇. Mimic joints fold every
-Jacobian, J·M (see :mod:`kinengine.model.coordinates`).
+``computeJointJacobiansTimeVariation`` left in the Task's Data, and the twist is J_e0·q̇. Mimic joints fold
+every Jacobian, J·M (see :mod:`kinengine.model.coordinates`).
 
 :class:`FrameBlock` — one :class:`~kinengine.FrameTask`: its pose (T_IA, or T_BA with ``relative_to`` B),
 its Jacobian J (J_e0 of A, or the relative Jacobian in B: see :mod:`kinengine.kinematics.relative`, with
@@ -35,12 +35,6 @@ from .continuity import continuity_rule
 from .frame_task import FrameTask
 
 _INF = math.inf
-
-
-def joint_jacobians(model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray, zero: np.ndarray) -> None:
-    """Pinocchio's joint Jacobians into ``data.J`` and their rates along q̇ = ``v`` into ``data.dJ`` at q (and
-    the joint placements and velocities); ``zero`` is unused (kept for the callers' signature)."""
-    pin.computeJointJacobiansTimeVariation(model, data, q, v)
 
 
 def _skew(S: np.ndarray, x: float, y: float, z: float) -> None:
@@ -74,7 +68,7 @@ class FrameKinematics:
         self.pos: list[float] = []
 
     def update(self, q: np.ndarray, q_pin: np.ndarray, qdot: np.ndarray | None) -> None:
-        """At q and Pinocchio's q_pin (with q̇: after :func:`joint_jacobians` at q_pin)."""
+        """At q and Pinocchio's q_pin (with q̇: after ``computeJointJacobiansTimeVariation`` at q_pin)."""
         if qdot is None and self.path_nv:  # LOCAL_WORLD_ALIGNED: J_e0 itself, the frame placed on the way
             model, data, fid = self.path
             J = pin.computeFrameJacobian(
@@ -290,4 +284,4 @@ class FrameBlock:
         np.dot(self.JA, qdot, out=self.chi_dot)
 
 
-__all__ = ["FrameBlock", "FrameKinematics", "joint_jacobians"]
+__all__ = ["FrameBlock", "FrameKinematics"]

@@ -146,13 +146,18 @@ def expand_in_process(
     return text, messages
 
 
-def _caused_by_memory_error(exc: BaseException) -> bool:
-    seen: BaseException | None = exc
+def _causes(exc: BaseException) -> Iterator[BaseException]:
+    """``exc`` and what it wraps, 64 deep at most (xacro wraps errors of $(...) in XacroException.exc)."""
+    seen: object = exc
     for _ in range(64):
-        if seen is None or isinstance(seen, MemoryError):
-            return seen is not None
+        if not isinstance(seen, BaseException):
+            return
+        yield seen
         seen = getattr(seen, "exc", None) or seen.__cause__ or seen.__context__
-    return False
+
+
+def _caused_by_memory_error(exc: BaseException) -> bool:
+    return any(isinstance(seen, MemoryError) for seen in _causes(exc))
 
 
 def _arguments(args: object, source: str) -> dict[str, str]:
@@ -280,13 +285,9 @@ _PATTERNS = (  # (what xacro says, how kinengine says it)
 
 def _translate(exc: BaseException, source: str) -> URDFError:
     """One URDFError for whatever xacro raised: a wrapped URDFError as is, else its message on one line."""
-    seen: object = exc
-    for _ in range(64):  # xacro wraps errors raised in $(...) in XacroException(exc=...)
-        if isinstance(seen, URDFError):
-            return seen
-        if not isinstance(seen, BaseException):
-            break
-        seen = getattr(seen, "exc", None) or seen.__cause__ or seen.__context__
+    wrapped = next((seen for seen in _causes(exc) if isinstance(seen, URDFError)), None)
+    if wrapped is not None:
+        return wrapped
     file = failing_file(source)
     if isinstance(exc, xml.parsers.expat.ExpatError):
         return URDFError(f"not well-formed XML: {exc}", source=file)

@@ -127,10 +127,10 @@ def base_placements(
     step = max(1, 2_000_000 // len(T_w))  # candidates scored at once: bounded temporary memory
     for a in range(0, len(poses), step):
         local = np.einsum("cij,njk->cnik", inverse[a : a + step], T_w).reshape(-1, 4, 4)
-        hit = np.asarray(rmap.reachable(local)).reshape(-1, len(T_w))
+        voxel, hit = rmap.lookup(local)
+        hit = hit.reshape(-1, len(T_w))
         scores[a : a + step] = hit.sum(axis=1)
-        voxel_index = index[rmap.grid.lookup(local[:, :3, 3])].reshape(-1, len(T_w))
-        depth[a : a + step] = np.where(hit, voxel_index, 0.0).sum(axis=1)
+        depth[a : a + step] = np.where(hit, index[voxel].reshape(hit.shape), 0.0).sum(axis=1)
     if isinstance(top, bool) or not isinstance(top, (int, np.integer)) or top < 1:
         raise OptionError(f"`top` must be a positive count, got {top!r}")
     verified = np.full(len(poses), -1, dtype=np.int64)

@@ -74,8 +74,14 @@ class ReachabilityMap:
     def reachable(self, T: npt.ArrayLike) -> bool | npt.NDArray[np.bool_]:
         """Whether the map reached the cell of pose T (4, 4) (or of each of (N, 4, 4)): the voxel holding its
         position and the map's orientation nearest its rotation. False outside the map."""
+        single = np.ndim(T) == 2
+        out = self.lookup(T)[1]
+        return bool(out[0]) if single else out
+
+    def lookup(self, T: npt.ArrayLike) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
+        """(voxel index (N,), −1 outside the map; reached (N,)) of the cells of poses T (N, 4, 4) or (4, 4),
+        as :meth:`reachable` judges them."""
         T = np.asarray(T, dtype=np.float64)
-        single = T.ndim == 2
         T = T.reshape(-1, 4, 4) if T.shape[-2:] == (4, 4) else None  # type: ignore[assignment]
         if T is None:
             raise OptionError("`T` must be a pose (4, 4) or poses (N, 4, 4)")
@@ -88,8 +94,7 @@ class ReachabilityMap:
             raise OptionError("`T`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)")
         v = self.grid.lookup(T[:, :3, 3])
         k = nearest_orientation(self.orientations, T[:, :3, :3])
-        out = (v >= 0) & self.reached[np.maximum(v, 0), k]
-        return bool(out[0]) if single else out
+        return v, (v >= 0) & self.reached[np.maximum(v, 0), k]
 
     def slice(self, z: float) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
         """The voxel layer holding height z [m]: its centres (n, 3) and reachability indices (n,)."""
