@@ -34,8 +34,6 @@ ROW_SETS = {"all": (0, 1, 2, 3, 4, 5), "linear": (0, 1, 2), "angular": (3, 4, 5)
 DEFAULT_TOLERANCE = 1e-6
 """σ at or below which a direction counts as lost [m/rad for linear rows, 1 for angular rows]."""
 Rows = str | Sequence[str | int]
-
-
 """'all', 'linear', 'angular', or row labels (vx vy vz wx wy wz) / indices 0-5."""
 
 
@@ -221,30 +219,23 @@ def describe_twist(twist: np.ndarray, digits: int = 2) -> str:
 
 def _rows(rows: Rows) -> tuple[int, ...]:
     """Row indices of J for "all", "linear", "angular" or a sequence of labels (vx … wz) / indices."""
-    if isinstance(rows, str):
-        if rows in ROW_SETS:
-            return ROW_SETS[rows]
-        rows = (rows,)
-    if isinstance(rows, (bytes, dict)) or not hasattr(rows, "__iter__"):
-        raise ParameterizationError(
-            f"Expected `rows` to be 'all', 'linear', 'angular' or a sequence of labels "
-            f"from {ROW_LABELS} (or indices 0-5), got {type(rows).__name__}"
-        )
-    index = []
-    for row in rows:
-        if isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_)) and 0 <= row < 6:
-            index.append(int(row))
-        elif type(row) is str and row in ROW_LABELS:
-            index.append(ROW_LABELS.index(row))
-        else:
-            raise ParameterizationError(
-                f"Expected `rows` to be 'all', 'linear', 'angular' or labels from "
-                f"{ROW_LABELS} (or indices 0-5), got {' '.join(repr(row).split())[:40]}"
-            )
+    if isinstance(rows, str) and rows in ROW_SETS:
+        return ROW_SETS[rows]
+    items = (rows,) if isinstance(rows, str) else rows
+    index: list[int] = []
+    if not isinstance(items, (bytes, dict)) and hasattr(items, "__iter__"):
+        for row in items:
+            if isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_)) and 0 <= row < 6:
+                index.append(int(row))
+            elif type(row) is str and row in ROW_LABELS:
+                index.append(ROW_LABELS.index(row))
+            else:
+                index = []
+                break
     if not index or len(set(index)) != len(index):
         raise ParameterizationError(
-            f"Expected `rows` to name each row at most once and at least one row, "
-            f"got {' '.join(repr(rows).split())[:60]}"
+            f"Expected `rows` to be 'all', 'linear', 'angular' or distinct labels from {ROW_LABELS} "
+            f"(or indices 0-5), at least one, got {' '.join(repr(rows).split())[:60]}"
         )
     return tuple(index)
 

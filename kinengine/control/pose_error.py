@@ -52,14 +52,13 @@ def pose_error(
 
 
 def _single(T: np.ndarray, T_target: np.ndarray, frame: str) -> npt.NDArray[np.float64]:
-    M, M_target = pin.SE3(T[:3, :3], T[:3, 3]), pin.SE3(T_target[:3, :3], T_target[:3, 3])
-    xi = pin.log6(M.actInv(M_target))
-    if frame == "local":
-        return np.array(xi.vector)
+    M = pin.SE3(T)
+    xi = pin.log6(M.actInv(pin.SE3(T_target)))
     if frame == "world":
-        return np.array(M.act(xi).vector)
-    C = T[:3, :3]
-    return np.concatenate([C @ xi.linear, C @ xi.angular])
+        xi = M.act(xi)
+    elif frame == "local_world_aligned":  # the same twist in I's axes: rotated by C_IF only
+        xi = pin.SE3(M.rotation, np.zeros(3)).act(xi)
+    return np.array(xi.vector)
 
 
 __all__ = ["FRAMES", "pose_error"]

@@ -17,7 +17,6 @@ from ..urdf import RobotDescription
 
 if TYPE_CHECKING:  # manipulability types its own argument against RobotLike
     from ..collision import CollisionChecker
-    from ..kinematics.handle import FrameHandle
     from .ik import IKResult
     from .ik_batch import IKBatchResult
     from .manipulability import VelocityEllipsoid
@@ -108,8 +107,6 @@ class RobotLike(Protocol):
     def kinematic_hessian(
         self, q: npt.ArrayLike, frame: str | None = None, reference: Reference = "local_world_aligned"
     ) -> FloatArray: ...
-
-    def frame(self, name: str | None = None, *, check_inputs: bool = True) -> FrameHandle: ...
 
     def in_collision(self, q: npt.ArrayLike) -> bool | npt.NDArray[np.bool_]: ...
 
