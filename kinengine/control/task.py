@@ -91,9 +91,8 @@ class Task:
         self.check_inputs, self.continuous = check_inputs, continuous
         self.frame_tasks, self.frames = specs, tuple(f.frame for f in specs)
         kin = robot.engine
-        self._coords, self._model = kin.coordinates, kin.model
+        self._coords, self._model, self.dof = kin.coordinates, kin.model, robot.dof
         self._data = data = create_data(kin.model, "a Task")
-        self.dof = robot.dof
         self._qp, self._vp = np.empty(kin.model.nq), np.empty(kin.model.nv)
         kinematics: dict[int, FrameKinematics] = {}
 
@@ -103,7 +102,7 @@ class Task:
                 kinematics[fid] = FrameKinematics(kin, data, fid)
             return kinematics[fid]
 
-        self._blocks = [
+        self._blocks = blocks = [
             FrameBlock(
                 spec,
                 pose_map(spec.position, spec.rotation, as_rows(spec.rows)),
@@ -114,34 +113,27 @@ class Task:
         ]
         self._kinematics = tuple(kinematics.values())
         self._mapped = not self._coords.identity and any(f.mapped or not f.path_nv for f in self._kinematics)
-        self._stacked = len(self._blocks) > 1
-        blocks = self._blocks
-        uniform = all(
-            not isinstance(f, FrameTask)
-            for f in ((frames,) if isinstance(frames, (str, FrameTask)) else frames)
+        single = isinstance(frames, (str, FrameTask))
+        named = all(
+            isinstance(f, str) for f in ((frames,) if isinstance(frames, (str, FrameTask)) else frames)
         )
-        self.labels = (
-            blocks[0].pmap.labels if uniform else tuple(lab for b in blocks for lab in b.pmap.labels)
-        )
+        self.labels = blocks[0].pmap.labels if named else tuple(lab for b in blocks for lab in b.pmap.labels)
         self.row_labels = tuple(f"{b.spec.frame}:{lab}" for b in blocks for lab in b.pmap.labels)
         self.singularity_labels = tuple(f"{b.spec.frame}:{part.name}" for b in blocks for part in b.parts)
-        self._weights = np.concatenate([np.full(b.pmap.size, b.spec.weight) for b in blocks])
-        # one block: the Task's arrays are the block's own; a stack: copies of each block's (see _gather)
+        # one block: the Task's arrays are the block's own; a stack: copies of the blocks' (see _gather)
         names = ("pose", "J", "JA", "chi", "distances", "Jdot", "JAdot", "twist", "chi_dot")
         if len(blocks) == 1:
-            arrays = [getattr(blocks[0], name) for name in names]
+            arrays, self._stack = [getattr(blocks[0], name) for name in names], []
         else:
-            arrays = [np.stack([b.pose for b in blocks])]
-            arrays += [np.concatenate([getattr(b, name) for b in blocks]) for name in names[1:]]
-        self._arrays = dict(zip(names, arrays, strict=True))
+            arrays = [np.concatenate([getattr(b, name) for b in blocks]) for name in names]
+            self._stack = list(zip(names, arrays, strict=True))
         pose, J, JA, chi, distances, Jdot, JAdot, twist, chi_dot = arrays
-        single = isinstance(frames, (str, FrameTask))
         self.pose = _readonly(pose if single else pose.reshape(len(blocks), 4, 4))
         self.jacobian, self.jacobian_dot = _readonly(J), _readonly(Jdot)
         self.twist, self.chi = _readonly(twist), _readonly(chi)
         self.analytic_jacobian, self.analytic_jacobian_dot = _readonly(JA), _readonly(JAdot)
-        self.chi_dot, self.weights = _readonly(chi_dot), _readonly(self._weights)
-        self.singularity_distances = _readonly(distances)
+        self.chi_dot, self.singularity_distances = _readonly(chi_dot), _readonly(distances)
+        self.weights = _readonly(np.concatenate([np.full(b.pmap.size, b.spec.weight) for b in blocks]))
         self._rates = (Jdot, JAdot, twist, chi_dot)
         self._invalidate_rates()
 
@@ -168,7 +160,7 @@ class Task:
             if qdot is not None and not coords.ready(qdot):
                 qdot = coords.check(qdot, name="qdot", allow_batch=False)
         q_pin = q
-        if qdot is not None:  # q_pin = M q + b and q̇_pin = M q̇ (written in place) for the joint Jacobians
+        if qdot is not None:  # q_pin = M q + b and q̇_pin = M q̇ (in place) for the joint Jacobians
             v = qdot
             if not coords.identity:
                 q_pin, v = self._to_pinocchio(q), np.dot(coords.matrix, qdot, out=self._vp)
@@ -182,7 +174,7 @@ class Task:
         for block in self._blocks:
             found = block.update(qdot, threshold, continuous)
             error = error or found  # the first block's error
-        if self._stacked:
+        if self._stack:
             self._gather(qdot is not None)
         if qdot is None and self._rates_valid:
             self._invalidate_rates()
@@ -190,23 +182,14 @@ class Task:
             raise error
 
     def _to_pinocchio(self, q: np.ndarray) -> np.ndarray:
-        """q_pin = M q + b into a preallocated array."""
-        coords = self._coords
-        q_pin = np.dot(coords.matrix, q, out=self._qp)
-        return np.add(q_pin, coords.offset, out=q_pin) if coords.has_offset else q_pin
+        """q_pin = M q + b into a preallocated array (``coordinates.to_pinocchio`` allocates)."""
+        q_pin = np.dot(self._coords.matrix, q, out=self._qp)
+        return np.add(q_pin, self._coords.offset, out=q_pin) if self._coords.has_offset else q_pin
 
     def _gather(self, rates: bool) -> None:
         """Copy each block's arrays into the stacked ones (rates only with q̇)."""
-        names = ("pose", "J", "JA", "chi", "distances") + (
-            ("Jdot", "JAdot", "twist", "chi_dot") if rates else ()
-        )
-        for name in names:
-            target = self._arrays[name]
-            if name == "pose":
-                for i, block in enumerate(self._blocks):
-                    target[i] = block.pose
-            else:
-                np.concatenate([getattr(b, name) for b in self._blocks], out=target)
+        for name, target in self._stack if rates else self._stack[:5]:
+            np.concatenate([getattr(b, name) for b in self._blocks], out=target)
 
     def _invalidate_rates(self) -> None:
         """NaN in every rate attribute (until an update with q̇ fills them)."""
