@@ -110,23 +110,20 @@ def analyze_jacobian(
 ) -> SingularityReport:
     """The :class:`SingularityReport` of a geometric Jacobian J_e0 (6, dof) in "local_world_aligned"."""
     tolerance = checked_tolerance(tolerance)
-    index = _rows(rows)
+    index = list(_rows(rows))
     J = np.asarray(J, dtype=float)
     if J.ndim != 2 or J.shape[0] != 6:
         raise ConfigurationError(f"Expected `J` to have shape (6, dof), got {J.shape}")
-    Js = J[list(index)]
-    m = len(index)
+    Js, fits = J[index], len(index) <= J.shape[1]  # fits: m <= dof, else w = 0 and κ = inf
     U, s, _ = np.linalg.svd(Js, full_matrices=True)
     rank = int(np.count_nonzero(s > tolerance))
-    w = float(np.prod(s)) if m <= J.shape[1] else 0.0
-    kappa = float(s[0] / s[-1]) if s.size and s[-1] > 0 and m <= J.shape[1] else float("inf")
-    lost = []
-    for u in _readable_basis(U[:, rank:]):
-        twist = np.zeros(6)
-        twist[list(index)] = u
-        lost.append(LostDirection(twist, float(np.linalg.norm(Js.T @ u)), describe_twist(twist)))
+    w = float(np.prod(s)) if fits else 0.0
+    kappa = float(s[0] / s[-1]) if fits and s.size and s[-1] > 0 else float("inf")
+    twists = np.zeros((len(index) - rank, 6))  # the lost directions, rows [linear; angular] in I
+    twists[:, index] = _readable_basis(U[:, rank:])
+    lost = tuple(LostDirection(t, float(np.linalg.norm(Js.T @ t[index])), describe_twist(t)) for t in twists)
     labels = tuple(ROW_LABELS[i] for i in index)
-    return SingularityReport(frame, labels, s, w, kappa, rank, tolerance, tuple(lost))
+    return SingularityReport(frame, labels, s, w, kappa, rank, tolerance, lost)
 
 
 def singularity_report(
@@ -187,9 +184,7 @@ def velocity_ellipsoid(robot: RobotLike, q: npt.ArrayLike, frame: str | None = N
     q = robot.check_configuration(q, check_limits=False, batch=False)
     T = robot.frame_pose(q, frame)
     U, s, _ = np.linalg.svd(robot.jacobian(q, frame)[:3], full_matrices=True)
-    semi = np.zeros(3)
-    semi[: s.size] = s
-    return VelocityEllipsoid(T[:3, 3].copy(), U, semi)
+    return VelocityEllipsoid(T[:3, 3].copy(), U, np.pad(s, (0, 3 - s.size)))
 
 
 def require_regular(robot: RobotLike, q: npt.ArrayLike, *options: Any, **keywords: Any) -> SingularityReport:

@@ -1,43 +1,28 @@
-"""The controller's hot path: one ``update(q, qdot)`` computes everything, into preallocated arrays.
+"""The controller's hot path: one ``update(q, qdot)`` computes everything, into preallocated arrays
+(docs/controller.md lists every attribute with its shape).
 
 >>> task = robot.task("tool0", position="cartesian", rotation="euler_zyz")
 >>> task.update(q, qdot)                       # into preallocated read-only arrays
 >>> task.chi, task.analytic_jacobian, task.jacobian_dot, task.analytic_jacobian_dot
-
-A task stack: several :class:`~kinengine.FrameTask` entries, each with its own parameterizations,
-rows, reference frame and weight, stacked in the given order:
-
->>> task = robot.task([kinengine.FrameTask("tool0", rotation="euler_zyz"),
+>>> task = robot.task([kinengine.FrameTask("tool0", rotation="euler_zyz"),      # a stack, in this order
 ...                    kinengine.FrameTask("link_4", rotation=None, rows=("x", "y"))])
 
-Frames: per entry, ``pose`` is T_IA in the root frame I (T_BA with ``relative_to`` B); ``jacobian`` is J_e0
-in "local_world_aligned" (origin velocity and angular velocity in I, rows [linear; angular]; with
-``relative_to`` the relative Jacobian expressed in B, see :mod:`kinengine.kinematics.relative`);
-``twist`` = J·q̇; ``jacobian_dot`` = dJ/dt; ``analytic_jacobian`` = E(χ)·J and
-``analytic_jacobian_dot`` = Ė·J + E·J̇ with Ė = dE/dt along (v, ω); ``chi_dot`` = J_A·q̇. Stacked over
-the k entries: ``chi`` (M,), ``analytic_jacobian`` (M, dof) with M the total of the entries' selected
-rows, ``jacobian`` (6k, dof), ``pose`` (k, 4, 4) ((4, 4) for a single frame given as a name or a FrameTask),
-``weights`` (M,) each entry's weight repeated over its rows, ``row_labels`` ("frame:label", ...).
+Frames, per entry: ``pose`` is T_IA in the root frame I (T_BA with ``relative_to`` B); ``jacobian`` is J_e0
+in "local_world_aligned" (rows [v; ω] in I; with ``relative_to`` the relative Jacobian in B, see
+:mod:`kinengine.kinematics.relative`); ``twist`` = J·q̇; ``analytic_jacobian`` = E(χ)·J;
+``analytic_jacobian_dot`` = Ė·J + E·J̇; ``chi_dot`` = J_A·q̇. A stack concatenates its entries' rows
+(``row_labels`` "frame:label"; ``weights`` each entry's weight over its rows).
 
-Singularities: ``singularity_distances`` (P,) is, per entry and per parameterization in
-``singularity_labels`` order ("frame:parameterization"), the distance of the current χ to that
-parameterization's singular set (|cos χ2| for Tait–Bryan angles, ρ for cylindrical, inf if never
-singular), updated every update, so a controller can switch parameterization before reaching it. A
-parameterization closer than ``singularity_threshold`` gets NaN in its rows of ``analytic_jacobian``,
-``analytic_jacobian_dot`` and ``chi_dot`` (its χ rows keep the finite angles; every other row is exact);
-with ``on_singularity="raise"`` (default) the update then raises RepresentationSingularityError *after*
-writing every attribute: a failed update leaves the Task consistent, holding all the new configuration's
-values (so the next update continues from it), never a mix of old and new.
+Singularities: ``singularity_distances`` holds, per entry and parameterization (``singularity_labels``),
+the distance of χ to that parameterization's singular set. Closer than ``singularity_threshold``: NaN in
+its rows of ``analytic_jacobian``, ``analytic_jacobian_dot`` and ``chi_dot`` (χ keeps the finite angles),
+and with ``on_singularity="raise"`` RepresentationSingularityError *after* every attribute is written (the
+Task never holds a mix of old and new values).
 
-How: per frame Pinocchio's frame Jacobian on the frame's cheapest exact model
-(:meth:`~kinengine.kinematics.engine.Kinematics.frame_path`); with q̇ one Pinocchio call for the joint
-Jacobians and their rates (``computeJointJacobiansTimeVariation``); per entry
-:mod:`kinengine.control.task_frame` does the rest. Pinocchio's model has plain joints only; with mimic joints
-q_pin = M q + b and q̇_pin = M q̇ are written into preallocated arrays and the Jacobians are folded, J·M (see
-:mod:`kinengine.model.coordinates`), except for a frame that no mimic joint moves, whose model takes q.
-
-A Task owns its own Pinocchio Data: use one Task per thread. The attributes are read-only
-views that the next update overwrites; copy what you keep.
+How: per frame Pinocchio's frame Jacobian on the frame's cheapest exact model (``Kinematics.frame_path``);
+with q̇ one ``computeJointJacobiansTimeVariation`` call; per entry :mod:`kinengine.control.task_frame`. With
+mimic joints q_pin = M q + b and q̇_pin = M q̇ go to Pinocchio and the Jacobians are folded, J·M.
+A Task owns its Pinocchio Data: use one Task per thread; copy the attributes you keep.
 """
 
 from __future__ import annotations

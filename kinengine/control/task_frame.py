@@ -1,17 +1,12 @@
 """The per-frame work of a :class:`~kinengine.control.task.Task` update, all into preallocated arrays.
 
-:class:`FrameKinematics` — one Pinocchio frame F: J_e0 (rows [v; ω] in I, "local_world_aligned") and the
-pose C_IF, p [m]. Without q̇, J_e0 is Pinocchio's frame Jacobian (which also places the frame); with q̇,
-J_e0 and J̇_e0 are ``getFrameJacobian`` and ``getFrameJacobianTimeVariation`` from the joint Jacobians and
-their rates that ``computeJointJacobiansTimeVariation`` left in the Task's Data, and the twist is J_e0·q̇.
-Mimic joints fold every Jacobian, J·M (see :mod:`kinengine.model.coordinates`).
-
-:class:`FrameBlock` — one :class:`~kinengine.FrameTask`: its pose (T_IA, or T_BA with ``relative_to`` B),
-its Jacobian J (J_e0 of A, or the relative Jacobian in B: see :mod:`kinengine.kinematics.relative`, with
-J̇_rel = C_IBᵀ(d/dt inner − [ω_B]× inner), inner = [J_A,v − J_B,v + [p_A − p_B]× J_B,ω; J_A,ω − J_B,ω]),
-χ (continuous if asked), E(χ) (:meth:`RotationParameterization.chart` at a canonical χ), [J; J_A] = [I; E]·J
-by one product, J̇_A = Ė·J + E·J̇ and χ̇ = J_A·q̇. A parameterization within the threshold of its singular
-set gets NaN entries in E (so NaN rows in J_A, J̇_A, χ̇); its χ rows keep the (finite) angles.
+:class:`FrameKinematics`: one frame F's J_e0 (rows [v; ω] in I, "local_world_aligned"), C_IF and p [m]; with
+q̇ also J̇_e0 (Pinocchio's ``getFrameJacobianTimeVariation``) and the twist J_e0·q̇.
+:class:`FrameBlock`: one :class:`~kinengine.FrameTask`'s pose, J (J_e0, or the relative Jacobian in B:
+J_rel = C_IBᵀ inner, inner = [J_A,v − J_B,v + [p_A − p_B]× J_B,ω; J_A,ω − J_B,ω], and
+J̇_rel = C_IBᵀ(d/dt inner − [ω_B]× inner)), χ, [J; J_A] = [I; E(χ)]·J by one product, J̇_A = Ė·J + E·J̇ and
+χ̇ = J_A·q̇. A parameterization within the threshold of its singular set gets NaN entries in E (so NaN rows
+in J_A, J̇_A, χ̇); its χ rows keep the (finite) angles.
 """
 
 from __future__ import annotations
