@@ -23,13 +23,10 @@ def _unwrap(angle: float, previous: float) -> float:
     return angle + TWO_PI * round((previous - angle) / TWO_PI)
 
 
-def _angles(indices: tuple[int, ...]) -> Rule:
-    def rule(chi: list[float], previous: list[float]) -> list[float]:
-        for i in indices:
-            chi[i] = _unwrap(chi[i], previous[i])
-        return chi
-
-    return rule
+def _azimuth(chi: list[float], previous: list[float]) -> list[float]:
+    """Cylindrical and spherical coordinates: the azimuth θ (χ2) unwrapped next to the previous one."""
+    chi[1] = _unwrap(chi[1], previous[1])
+    return chi
 
 
 def _euler(proper: bool) -> Rule:
@@ -87,8 +84,8 @@ def continuity_rule(name: str) -> Rule:
     if name.startswith("euler_"):
         return _euler(name[6] == name[8])
     return {
-        "cylindrical": _angles((1,)),
-        "spherical": _angles((1,)),
+        "cylindrical": _azimuth,
+        "spherical": _azimuth,
         "quaternion": _quaternion,
         "rotation_vector": _rotation_vector,
         "angle_axis": _angle_axis,

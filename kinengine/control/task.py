@@ -79,20 +79,14 @@ class Task:
         self._coords, self._model, self.dof = kin.coordinates, kin.model, robot.dof
         self._data = data = create_data(kin.model, "a Task")
         self._qp, self._vp = np.empty(kin.model.nq), np.empty(kin.model.nv)
-        kinematics: dict[int, FrameKinematics] = {}
-
-        def frame_kinematics(name: str) -> FrameKinematics:
-            fid = robot.frame_id(name)
-            if fid not in kinematics:
-                kinematics[fid] = FrameKinematics(kin, data, fid)
-            return kinematics[fid]
-
+        fids = {name: robot.frame_id(name) for f in specs for name in (f.frame, f.relative_to) if name}
+        kinematics = {fid: FrameKinematics(kin, data, fid) for fid in dict.fromkeys(fids.values())}
         self._blocks = blocks = [
             FrameBlock(
                 spec,
                 pose_map(spec.position, spec.rotation, as_rows(spec.rows)),
-                frame_kinematics(spec.frame),
-                None if spec.relative_to is None else frame_kinematics(spec.relative_to),
+                kinematics[fids[spec.frame]],
+                None if spec.relative_to is None else kinematics[fids[spec.relative_to]],
             )
             for spec in specs
         ]
