@@ -211,7 +211,7 @@ class DifferentialIK:
         if previous_qdot is not None:
             self._qdot = self._coords.check(previous_qdot, name="previous_qdot", allow_batch=False).copy()
         model, data, n = self._model, self._data, self.dof
-        qp = q if self._coords.identity else self._coords.to_pinocchio(q)
+        qp = self._coords.to_pinocchio(q)  # q itself without mimic joints
         if self._pose_terms:
             if n:
                 pin.computeJointJacobians(model, data, qp)

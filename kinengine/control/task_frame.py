@@ -152,8 +152,7 @@ class FrameBlock:
             dinner[:3] += np.dot(_skew(S, *dd), b.J[3:], out=t3)  # [ḋ]× J_B,ω
             dinner[:3] += np.dot(_skew(S, *d), b.Jdot[3:], out=t3)  # [d]× J̇_B,ω
             _skew(S, *b.twist[3:].tolist())  # − [ω_B]× inner
-            for half in (slice(0, 3), slice(3, 6)):
-                dinner[half] -= np.dot(S, inner[half], out=t3)
+            dinner.reshape(2, 3, dof)[...] -= np.matmul(S, inner.reshape(2, 3, dof))
             np.matmul(CBt, dinner.reshape(2, 3, dof), out=self.Jdot.reshape(2, 3, dof))
         return np.dot(CBt, a.R).tolist(), np.dot(CBt, d).tolist()
 
@@ -237,9 +236,8 @@ class FrameBlock:
             Edot[rows, columns] = np.nan if self.singular[k] else part.E_dot(chi[rows], self.twist[columns])
         if self.selected is not None:
             Edot = np.take(Edot, self.selected, axis=0, out=self.Edot_selected)
-        np.dot(Edot, self.J, out=self.tmp)
         np.dot(self.E, self.Jdot, out=self.JAdot)
-        np.add(self.JAdot, self.tmp, out=self.JAdot)
+        self.JAdot += np.dot(Edot, self.J, out=self.tmp)
         np.dot(self.JA, qdot, out=self.chi_dot)
 
 
