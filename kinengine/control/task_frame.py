@@ -132,16 +132,16 @@ class FrameBlock:
         self.JAdot, self.chi_dot, self.tmp = np.zeros((ms, dof)), np.zeros(ms), np.zeros((ms, dof))
         self.Edot, self.Edot_selected, self.singular = np.zeros((m, 6)), np.zeros((ms, 6)), [False] * k
         if b is not None:  # relative: buffers for J_rel and its rate
-            self.CBt, self.skew, self.t3 = np.zeros((3, 3)), np.zeros((3, 3)), np.zeros((3, dof))
+            self.skew, self.t3 = np.zeros((3, 3)), np.zeros((3, dof))
             self.inner, self.dinner, self.Jrel = np.zeros((6, dof)), np.zeros((6, dof)), np.zeros((6, dof))
 
     def _relative(self, qdot: np.ndarray | None) -> tuple[list[list[float]], list[float]]:
         """(C_BA, B_p_BA [m]) and J_rel = blockdiag(C_IBᵀ, C_IBᵀ)·inner; with q̇ the twist and J̇_rel."""
         a, b = self.a, self.b
         assert b is not None
-        d = [x - y for x, y in zip(a.pos, b.pos, strict=True)]
-        CBt, S, inner, t3, dof = self.CBt, self.skew, self.inner, self.t3, self.Jrel.shape[1]
-        np.copyto(CBt, b.R.T)
+        (ax, ay, az), (bx, by, bz) = a.pos, b.pos
+        d = dx, dy, dz = ax - bx, ay - by, az - bz
+        CBt, S, inner, t3, dof = b.R.T, self.skew, self.inner, self.t3, self.Jrel.shape[1]
         np.subtract(a.J, b.J, out=inner)
         inner[:3] += np.dot(_skew(S, *d), b.J[3:], out=t3)
         np.matmul(CBt, inner.reshape(2, 3, dof), out=self.Jrel.reshape(2, 3, dof))
@@ -154,7 +154,7 @@ class FrameBlock:
             _skew(S, *b.twist[3:].tolist())  # − [ω_B]× inner
             dinner.reshape(2, 3, dof)[...] -= np.matmul(S, inner.reshape(2, 3, dof))
             np.matmul(CBt, dinner.reshape(2, 3, dof), out=self.Jdot.reshape(2, 3, dof))
-        return np.dot(CBt, a.R).tolist(), np.dot(CBt, d).tolist()
+        return np.dot(CBt, a.R).tolist(), [x * dx + y * dy + z * dz for x, y, z in zip(*b.C, strict=True)]
 
     def _general(
         self, k: int, C: list[list[float]], p: list[float], before: list[float] | None, threshold: float
