@@ -47,7 +47,7 @@ def pose_error(
     A, B = _as_pose(T, "T"), _as_pose(T_target, "T_target")
     if A.ndim == 2 and B.ndim == 2:
         return _single(A, B, frame)
-    A, B = np.broadcast_arrays(A if A.ndim == 3 else A[None], B if B.ndim == 3 else B[None])
+    A, B = np.broadcast_arrays(A.reshape(-1, 4, 4), B.reshape(-1, 4, 4))  # a single pose as a batch of one
     return np.array([_single(a, b, frame) for a, b in zip(A, B, strict=False)]).reshape(-1, 6)
 
 

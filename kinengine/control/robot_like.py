@@ -1,7 +1,6 @@
 """What the layers below the facade read of a robot: :class:`RobotLike`, the public members of
 :class:`kinengine.Robot` that the Task, inverse kinematics, the QP step, the singularity measures, the
-pictures and ``kinengine verify`` use. They type their
-argument against it, never against the facade's ``Robot`` (a higher layer), which satisfies it."""
+pictures and ``kinengine verify`` use, typing their argument against it, never against the facade."""
 
 from __future__ import annotations
 
