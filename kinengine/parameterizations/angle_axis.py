@@ -16,12 +16,8 @@ UserWarning when θ <= 1e-7 (axis ill-defined).
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-
 from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries
-from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where
+from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where, where
 from .euler import GIMBAL_LOCK_TOLERANCE
 
 
@@ -44,11 +40,9 @@ class AngleAxis(RotationParameterization):
                 f"{self.name}: rotation angle θ <= "
                 f"{GIMBAL_LOCK_TOLERANCE:g} rad, the axis is ill-defined (n = (1, 0, 0) at θ = 0)",
             )
-        if xp is math:
-            return (theta, x / s, y / s, z / s) if s > 0.0 else (theta, 1.0, 0.0, 0.0)
         zero = s == 0.0
-        s = np.where(zero, 1.0, s)
-        return theta, np.where(zero, 1.0, x / s), y / s, z / s
+        s = where(xp, zero, 1.0, s)
+        return theta, where(xp, zero, 1.0, x / s), y / s, z / s
 
     def _to_rotation(
         self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component

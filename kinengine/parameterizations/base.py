@@ -34,10 +34,8 @@ relative truncation error < 1e-14 there). Decided on θ², never on θ."""
 Namespace: TypeAlias = ModuleType
 """The namespace the formulas run over: :mod:`math` (one sample) or :mod:`numpy` (a batch)."""
 Component: TypeAlias = Any
-"""One scalar component in a formula: a Python float when ``xp`` is math, a float64 array of the batch
-shape when ``xp`` is numpy. ``Any`` because which of the two is decided at run time by ``xp`` (the
-formulas branch on ``xp is math``), which a type checker cannot follow: a union would flag every
-``math.*`` call on an array and every ``bool()`` of an array comparison."""
+"""One scalar component in a formula: a Python float (xp = math) or a float64 array of the batch shape
+(xp = numpy). ``Any``: which one is decided at run time by ``xp``, which a type checker cannot follow."""
 Entries: TypeAlias = tuple[Component, ...]
 """Row-major entries of a formula's result (a vector or matrix), each a Component."""
 Values: TypeAlias = Sequence[Component]
@@ -60,25 +58,22 @@ def as_float_array(value: npt.ArrayLike, tail: tuple[int, ...], what: str) -> Fl
     return array
 
 
-def columns(array: FloatArray, n: int) -> list[FloatArray]:
-    """The n entries of the last axis of a batch (..., n), each of shape (...,)."""
-    return [array[..., k] for k in range(n)]
-
-
-def stack(entries: Entries, batch: tuple[int, ...], shape: tuple[int, ...]) -> FloatArray:
-    """Assemble row-major ``entries`` (arrays of shape batch, or constants) into (*batch, *shape)."""
+def apply(formula: Callable[..., Entries], values: FloatArray, shape: tuple[int, ...]) -> FloatArray:
+    """A formula of the components of the last axis of ``values``: one sample (n,) -> ``shape`` (on Python
+    floats, ``xp`` = math), a batch (..., n) -> (..., *shape) (on arrays, ``xp`` = numpy)."""
+    if values.ndim == 1:
+        return np.array(formula(math, *values.tolist())).reshape(shape)
+    batch = values.shape[:-1]
+    entries = formula(np, *np.moveaxis(values, -1, 0))
     out = np.empty(batch + (len(entries),))
     for k, entry in enumerate(entries):
         out[..., k] = entry
     return out.reshape(batch + shape)
 
 
-def apply(formula: Callable[..., Entries], values: FloatArray, shape: tuple[int, ...]) -> FloatArray:
-    """A formula of the components of the last axis of ``values``: one sample (n,) -> ``shape`` (on Python
-    floats, ``xp`` = math), a batch (..., n) -> (..., *shape) (on arrays, ``xp`` = numpy)."""
-    if values.ndim == 1:
-        return np.array(formula(math, *values.tolist())).reshape(shape)
-    return stack(formula(np, *columns(values, values.shape[-1])), values.shape[:-1], shape)
+def where(xp: Namespace, condition: Component, a: Component, b: Component) -> Component:
+    """``a`` where ``condition`` holds, else ``b``: one sample (``xp`` = math) or each entry of a batch."""
+    return (a if condition else b) if xp is math else np.where(condition, a, b)
 
 
 def is_singular(distance: float, threshold: float) -> bool:
@@ -142,15 +137,11 @@ class Parameterization(ABC):
         Batched: (..., m) and (..., 3) broadcast to (..., m, 3). J̇_A = Ė·J_e0 + E·J̇_e0.
         """
         m = self.size
-        chi = as_float_array(chi, (m,), "chi")
-        u = as_float_array(velocity, (3,), "velocity")
-        if chi.ndim == 1 and u.ndim == 1:  # one sample (a controller's step): the formula on Python floats
-            try:
-                return np.array(self._E_dot(math, chi.tolist(), u.tolist())).reshape(m, 3)
-            except ZeroDivisionError:
-                raise self._singular_error() from None
-        batch = np.broadcast_shapes(chi.shape[:-1], u.shape[:-1])
-        both = np.concatenate((np.broadcast_to(chi, batch + (m,)), np.broadcast_to(u, batch + (3,))), axis=-1)
+        chi, u = as_float_array(chi, (m,), "chi"), as_float_array(velocity, (3,), "velocity")
+        if chi.ndim > 1 or u.ndim > 1:
+            batch = np.broadcast_shapes(chi.shape[:-1], u.shape[:-1])
+            chi, u = np.broadcast_to(chi, batch + (m,)), np.broadcast_to(u, batch + (3,))
+        both = np.concatenate((chi, u), axis=-1)
         return self._evaluate(lambda xp, *c: self._E_dot(xp, c[:m], c[m:]), (m, 3), both)
 
     def singularity_distance(self, chi: npt.ArrayLike) -> float | FloatArray:
@@ -166,12 +157,14 @@ class Parameterization(ABC):
     ) -> FloatArray:
         """:func:`apply` of a rate formula; RepresentationSingularityError where an entry has no finite value
         (the sample is on the singular set)."""
-        try:
-            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                out = apply(formula, values, shape)
-        except ZeroDivisionError:
-            raise self._singular_error() from None
-        if values.ndim > 1 and not np.isfinite(out).all():
+        if values.ndim == 1:  # Python floats: no errstate to set up; a division by zero raises
+            try:
+                return apply(formula, values, shape)
+            except ZeroDivisionError:
+                raise self._singular_error() from None
+        with np.errstate(all="ignore"):
+            out = apply(formula, values, shape)
+        if not np.isfinite(out).all():
             raise self._singular_error()
         return out
 
@@ -184,13 +177,10 @@ class Parameterization(ABC):
 
     @abstractmethod
     def _E(self, xp: Namespace, *chi: Component) -> Entries: ...
-
     @abstractmethod
     def _E_inverse(self, xp: Namespace, *chi: Component) -> Entries: ...
-
     @abstractmethod
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries: ...
-
     @abstractmethod
     def _distance(self, xp: Namespace, *chi: Component) -> Component: ...
 
@@ -221,7 +211,6 @@ class PositionParameterization(Parameterization):
 
     @abstractmethod
     def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries: ...
-
     @abstractmethod
     def _to_position(self, xp: Namespace, *chi: Component) -> Entries: ...
 
@@ -266,6 +255,5 @@ class RotationParameterization(Parameterization):
 
     @abstractmethod
     def _from_rotation(self, xp: Namespace, warn: bool, *c: Component) -> Entries: ...
-
     @abstractmethod
     def _to_rotation(self, xp: Namespace, *chi: Component) -> Entries: ...

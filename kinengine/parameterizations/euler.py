@@ -22,10 +22,8 @@ from __future__ import annotations
 import math
 from operator import itemgetter
 
-import numpy as np
-
 from ..errors import ParameterizationError
-from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where
+from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where, where
 
 EULER_SEQUENCES = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz")
 GIMBAL_LOCK_TOLERANCE = 1e-7
@@ -98,26 +96,18 @@ class EulerAngles(RotationParameterization):
 
     def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
         tb, bb = self._index[7:]
-        eps = self._eps
         chi1, chi2, locked = self._leading(xp, C)
-        if xp is np or locked:
-            if warn:
-                warn_where(
-                    xp,
-                    locked,
-                    f"{self.name}: gimbal lock detected. Setting third angle to zero "
-                    "since it is not possible to uniquely determine all angles.",
-                )
-            # χ3 = 0: C = R_a(χ1) R_b(χ2), whose column b is R_a(χ1) e_b = c1 e_b + ε s1 e_t
-            chi1 = (
-                xp.atan2(eps * C[tb], C[bb])
-                if xp is math
-                else np.where(locked, np.arctan2(eps * C[tb], C[bb]), chi1)
+        if warn:
+            warn_where(
+                xp,
+                locked,
+                f"{self.name}: gimbal lock detected. Setting third angle to zero "
+                "since it is not possible to uniquely determine all angles.",
             )
+        # locked: χ3 = 0, C = R_a(χ1) R_b(χ2), whose column b is R_a(χ1) e_b = c1 e_b + ε s1 e_t
+        chi1 = where(xp, locked, xp.atan2(self._eps * C[tb], C[bb]), chi1)
         chi3 = self._third(xp, xp.cos(chi1), xp.sin(chi1), C)
-        if xp is math:
-            return chi1, chi2, 0.0 if locked else chi3
-        return chi1, chi2, np.where(locked, 0.0, chi3)
+        return chi1, chi2, where(xp, locked, 0.0, chi3)
 
     def _third(self, xp: Namespace, c1: Component, s1: Component, C: Values) -> Component:
         """χ3 from row b of R_a(χ1)^T C = R_b(χ2) R_c(χ3), c1, s1 of the χ1 chosen (as Eigen's eulerAngles):
