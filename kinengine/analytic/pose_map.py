@@ -1,22 +1,17 @@
-"""Pose parameters χ_e(q) and analytic Jacobians J_eA = E_e(χ_e) · J_e0.
+"""Pose parameters χ_e(q) and analytic Jacobians J_eA = E_e(χ_e)·J_e0 (Robot Dynamics lecture notes, ETH
+Zurich, section 2.8, eqs. 2.180–2.181).
 
-Robot Dynamics lecture notes, ETH Zurich, section 2.8 (Kinematics of Systems of Bodies), eqs. 2.180–2.181.
-
-J_e0 is the geometric Jacobian in the inertial frame ("local_world_aligned": origin velocity
-and angular velocity in I) and E_e = blockdiag(E_P(χ_P), E_R(χ_R)) maps that twist to χ̇_e.
-A :class:`PoseMap` binds one position and one rotation parameterization (either may be
-absent) and, optionally, a selection of rows by label (the operational-space coordinates of
-lecture notes, section 2.8.2). It is resolved once per (position, rotation, rows) and cached.
-
-The formulas are the parameterizations' own, written once over ``xp`` (see
-:mod:`kinengine.parameterizations.base`): one configuration evaluates them on Python floats
-(:meth:`PoseMap.jacobian_single`), a batch on numpy arrays over a chunk of configurations
-(:meth:`PoseMap.fill_columns`, called by :mod:`kinengine.analytic.evaluate`).
+J_e0 is the geometric Jacobian in the inertial frame ("local_world_aligned": origin velocity and angular
+velocity in I); E_e = blockdiag(E_P(χ_P), E_R(χ_R)) maps that twist to χ̇_e. A :class:`PoseMap` binds a
+position and a rotation parameterization (either may be absent) and a selection of rows by label (the
+operational-space coordinates of section 2.8.2). It evaluates the parameterizations' own formulas on
+Python floats for one configuration and on numpy arrays for a batch (:meth:`PoseMap.fill_columns`).
 """
 
 from __future__ import annotations
 
 import math
+import struct
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -35,13 +30,43 @@ from ..parameterizations.base import (
     is_singular,
     singular_where,
 )
-from .layout import Layout, combine
 from .singular import pose_of, singularity_error
 
 DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 """analytic_jacobian raises RepresentationSingularityError when the distance to the singular set
 (e.g. |cos χ2| for Tait–Bryan angles, ρ for cylindrical) is below this; E's entries grow like
 1/distance, so 1e-6 admits entries up to about 1e6."""
+
+
+class Layout:
+    """Where E's computed entries go in the (m, 6) matrix E = blockdiag(E_P, E_R) of one PoseMap.
+
+    ``template`` holds the constant entries (zeros, the identity of Cartesian rows); ``pack_into`` writes the
+    computed ones (float64, native byte order) from ``offset``: E_P's entries in columns 0-2 of the position
+    rows (unless Cartesian), then E_R's in columns 3-5 of the rotation rows.
+    """
+
+    def __init__(
+        self, position: PositionParameterization | None, rotation: RotationParameterization | None
+    ) -> None:
+        cartesian = position is not None and position.name == "cartesian"
+        m_P, m_R = (0 if part is None else part.size for part in (position, rotation))
+        self.shape: tuple[int, int] = (m_P + m_R, 6)
+        template = np.zeros(self.shape)
+        if cartesian:
+            template[:3, :3] = np.eye(3)
+        self.template = template.tobytes()
+        self.offset = 48 * m_P if cartesian else 0  # 48 bytes: one row of 6 float64
+        rows = "24x3d" * m_R if cartesian else "3d24x" * m_P + "24x3d" * m_R
+        self.pack_into: Callable[..., None] = struct.Struct("=" + rows).pack_into
+
+
+def _combine(entries: Entries, block: np.ndarray, out: np.ndarray, scratch: np.ndarray) -> None:
+    """out = Σ_k entries[k]·block[k]: a row of E (entries (n,) or constants) times J's rows (3, dof, n)."""
+    out[...] = 0.0
+    for entry, row in zip(entries, block, strict=True):
+        if not (isinstance(entry, float) and entry == 0.0):
+            out += np.multiply(row, entry, out=scratch)
 
 
 @dataclass(frozen=True)
@@ -60,10 +85,9 @@ class PoseMap:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layout", Layout(self.position, self.rotation))
-        selected = tuple(range(len(self.labels))) if self.rows is None else self.rows
-        spans: list[tuple[int, ...]] = []
-        start = 0
-        for part in (p for p in (self.position, self.rotation) if p is not None):
+        selected = range(len(self.labels)) if self.rows is None else self.rows
+        spans, start = [], 0
+        for part in self.parts:
             spans.append(tuple(i for i, r in enumerate(selected) if start <= r < start + part.size))
             start += part.size
         object.__setattr__(self, "part_rows", tuple(spans))
@@ -186,7 +210,7 @@ class PoseMap:
                 E_rows += [(E[k : k + 3], block) for k in range(0, len(E), 3)]
             scratch = np.empty(out.shape[1:])
             for target, source in enumerate(range(len(E_rows)) if self.rows is None else self.rows):
-                combine(*E_rows[source], out[target], scratch)
+                _combine(*E_rows[source], out[target], scratch)
         return distances
 
     def singular_rows(
