@@ -51,12 +51,6 @@ def rotation_entries(alpha: Component, beta: Component, x: Component, y: Compone
     )  # fmt: skip
 
 
-def matrix_from_quaternion(w: Component, x: Component, y: Component, z: Component) -> Entries:
-    """Row-major entries of C_IE(q) for q = (w, x, y, z), normalized first (any nonzero q)."""
-    s = 2.0 / (w * w + x * x + y * y + z * z)
-    return rotation_entries(s * w, s, x, y, z)
-
-
 def series_or_closed(
     xp: Namespace,
     t: Component,

@@ -48,12 +48,10 @@ _KINENGINE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + o
 def as_float_array(value: npt.ArrayLike, tail: tuple[int, ...], what: str) -> FloatArray:
     """``value`` as a float64 array of shape tail or (..., *tail); ParameterizationError otherwise."""
     array = np.asarray(value, dtype=np.float64)
-    n = len(tail)
-    if array.ndim < n or array.shape[array.ndim - n :] != tail:
-        expected = str(tail) if n > 1 else f"({tail[0]},)"
-        batched = "(..., " + ", ".join(str(t) for t in tail) + ")"
+    if array.shape[max(0, array.ndim - len(tail)) :] != tail:
+        batched = ", ".join(map(str, tail))
         raise ParameterizationError(
-            f"Expected `{what}` to have shape {expected} or {batched}, got {array.shape}"
+            f"Expected `{what}` to have shape {tail} or (..., {batched}), got {array.shape}"
         )
     return array
 
@@ -236,13 +234,10 @@ class RotationParameterization(Parameterization):
         return apply(self._to_rotation, as_float_array(chi, (self.size,), "chi"), (3, 3))
 
     def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
-        """(χ, its distance to the singular set, E(χ)'s row-major entries) at one pose C_IE given by its 9
-        row-major entries (Python floats), χ in the canonical ranges of :meth:`from_rotation`. None where
-        χ is not unique (gimbal lock) or E has no finite value: the caller's general path then decides.
-
-        The single-pose rate map that the analytic Jacobian and the Task call: :meth:`_from_rotation`,
-        :meth:`_distance` and :meth:`_E` (a family may share their intermediate values, as Euler angles do).
-        """
+        """(χ in the ranges of :meth:`from_rotation`, its distance to the singular set, E(χ)'s row-major
+        entries) at one pose C_IE given by its 9 row-major entries (Python floats): the single-pose rate map
+        of the analytic Jacobian and the Task. None where χ is not unique (gimbal lock) or E is not finite:
+        the caller's general path then decides. A family may override it to share intermediate values."""
         chi = list(self._from_rotation(math, False, *C))
         try:
             distance = self._distance(math, *chi)

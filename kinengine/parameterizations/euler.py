@@ -23,6 +23,7 @@ import math
 from operator import itemgetter
 
 from ..errors import ParameterizationError
+from ._so3 import rotation_entries
 from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where, where
 
 EULER_SEQUENCES = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz")
@@ -30,14 +31,7 @@ GIMBAL_LOCK_TOLERANCE = 1e-7
 """[rad]; scipy's tolerance on χ2 for declaring gimbal lock in ``as_euler``."""
 
 
-def _elementary(xp: Namespace, axis: int, angle: Component) -> Entries:
-    """Row-major entries of the rotation by ``angle`` [rad] about the basis axis ``axis``."""
-    c, s = xp.cos(angle), xp.sin(angle)
-    if axis == 0:
-        return (1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
-    if axis == 1:
-        return (c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
-    return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+_UNIT = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
 def _matmul(A: Entries, B: Entries) -> Entries:
@@ -132,8 +126,11 @@ class EulerAngles(RotationParameterization):
         return chi, distance, self._rate_entries(c1, s1, c2, s2)
 
     def _to_rotation(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
-        a, b, c = self._axes
-        return _matmul(_matmul(_elementary(xp, a, chi1), _elementary(xp, b, chi2)), _elementary(xp, c, chi3))
+        R1, R2, R3 = (  # the rotation by χk about the basis axis k: I + sin χk [e]x + (1 − cos χk) [e]x²
+            rotation_entries(xp.sin(x), 1.0 - xp.cos(x), *_UNIT[axis])
+            for axis, x in zip(self._axes, (chi1, chi2, chi3), strict=True)
+        )
+        return _matmul(_matmul(R1, R2), R3)
 
     def _E(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         return self._rate_entries(xp.cos(chi1), xp.sin(chi1), xp.cos(chi2), xp.sin(chi2))
