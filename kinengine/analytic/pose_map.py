@@ -30,7 +30,7 @@ from ..parameterizations.base import (
     is_singular,
     singular_where,
 )
-from .singular import pose_of, singularity_error
+from .singular import singularity_error
 
 DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 """analytic_jacobian raises RepresentationSingularityError when the distance to the singular set
@@ -181,7 +181,9 @@ class PoseMap:
                 distance, E = 0.0, None
             if E is None:
                 if not nan:
-                    raise singularity_error(param, distance, threshold, pose_of(C, p), row, J)
+                    T = np.eye(4)
+                    T[:3, :3], T[:3, 3] = C, p
+                    raise singularity_error(param, distance, threshold, T, row, J)
                 E = (math.nan,) * (3 * param.size)
             entries += E
         buffer = bytearray(layout.template)
