@@ -56,12 +56,11 @@ def series_or_closed(
     t: Component,
     series: Callable[[Component], Component],
     closed: Callable[[Namespace, Component], Component],
-    below: float = SMALL_ANGLE_SQ,
 ) -> Component:
-    """series(t) where t < ``below``, else closed(xp, t) (jaxlie's small-angle branch, decided on t = θ²)."""
+    """series(t) where t < SMALL_ANGLE_SQ, else closed(xp, t) (jaxlie's small-angle branch, on t = θ²)."""
     if xp is math:
-        return series(t) if t < below else closed(math, t)
-    small = t < below
+        return series(t) if t < SMALL_ANGLE_SQ else closed(math, t)
+    small = t < SMALL_ANGLE_SQ
     return np.where(small, series(t), closed(np, np.where(small, 1.0, t)))
 
 

@@ -22,8 +22,6 @@ from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries, series
 from .base import Component, Entries, Namespace, RotationParameterization, Values
 
 _TWO_PI = 2.0 * math.pi
-_TINY_SIN2 = 1e-12
-"""sin²(θ/2) below which θ/sin(θ/2) uses its Taylor series in from_rotation (truncation O(1e-24))."""
 
 
 # Coefficients as functions of t = θ²: the Taylor series (Horner, through θ⁸) used for t < SMALL_ANGLE_SQ
@@ -80,15 +78,11 @@ def _inverse_left_jacobian(xp: Namespace, t: Component, x: Component, y: Compone
 
 
 def _log_by_quaternion(xp: Namespace, *C: Component) -> Entries:
-    """φ from the canonical quaternion of C (scipy's ``as_rotvec``, θ <= π, its sign rule at θ = π)."""
+    """φ from the canonical quaternion of C (scipy's ``as_rotvec``, θ <= π, its sign rule at θ = π); called
+    for θ near π only, where sin(θ/2) ≈ 1."""
     w, x, y, z = quaternion_from_matrix(xp, *C)
-    scale = series_or_closed(  # θ / sin(θ/2) of s2 = sin²(θ/2)
-        xp,
-        x * x + y * y + z * z,
-        lambda s2: 2.0 / w * (1.0 - s2 / (3.0 * w * w)),
-        lambda xp, s2: 2.0 * xp.atan2(xp.sqrt(s2), w) / xp.sqrt(s2),
-        _TINY_SIN2,
-    )
+    s = xp.sqrt(x * x + y * y + z * z)  # sin(θ/2)
+    scale = 2.0 * xp.atan2(s, w) / s  # θ / sin(θ/2)
     return scale * x, scale * y, scale * z
 
 
