@@ -144,12 +144,8 @@ class PoseMap:
         threshold: float,
         nan: bool = False,
     ) -> npt.NDArray[np.float64]:
-        """J_A = E(χ) · J_e0 for one pose T_IF (4, 4) and J_e0 (6, dof) in "local_world_aligned" -> (m, dof).
-
-        Raises RepresentationSingularityError when χ is within ``threshold`` of its singular set
-        (``nan``: NaN in that parameterization's rows instead).
-        Batches: :func:`kinengine.batch.analytic_jacobian` (with :meth:`fill_columns`).
-        """
+        """J_A = E(χ)·J_e0 (m, dof) for one pose T_IF (4, 4) and J_e0 (6, dof) in "local_world_aligned": see
+        :meth:`jacobian_single`."""
         rows = T.tolist()[:3]
         return self.jacobian_single([r[:3] for r in rows], [r[3] for r in rows], J, threshold, nan=nan)
 
@@ -162,13 +158,10 @@ class PoseMap:
         row: int | None = None,
         nan: bool = False,
     ) -> npt.NDArray[np.float64]:
-        """J_A for C_IF and p [m] given as Python floats (the fast path of one configuration).
+        """J_A = E·J_e0 for C_IF and p [m] given as Python floats, E's entries by scalar math into the layout.
 
-        Scalar math gives E's entries, packed straight into an (m, 6) array (zeros and the identity
-        of Cartesian rows come from a template); J_A = E·J_e0 is one product. ``row`` (a batch row)
-        only goes into the error message. ``nan``: a part within ``threshold`` of its singular set gets NaN
-        entries in E, hence NaN rows in J_A (no error). The error message states J_e0's rank.
-        """
+        A part within ``threshold`` of its singular set raises RepresentationSingularityError (stating J_e0's
+        rank; ``row``, a batch row, only goes into its message) or, with ``nan``, gets NaN rows."""
         layout = self.layout
         flat = (*C[0], *C[1], *C[2])
         entries: tuple[float, ...] = ()
@@ -188,19 +181,15 @@ class PoseMap:
             entries += E
         buffer = bytearray(layout.template)
         layout.pack_into(buffer, layout.offset, *entries)
-        JA = np.ndarray(layout.shape, _F64, buffer).dot(J)
+        JA = np.frombuffer(buffer).reshape(layout.shape).dot(J)
         return JA if self.rows is None else JA[self.rows, :]
 
     def fill_columns(
         self, p: Sequence[np.ndarray], C: Sequence[np.ndarray], J: np.ndarray, out: np.ndarray
     ) -> list[np.ndarray | float]:
-        """The batch kernel, on n configurations laid out sample-last (contiguous over the batch).
-
-        p: 3 arrays (n,) [m]; C: the 9 entries of C_IF row-major, arrays (n,); J: J_e0 (6, dof, n) in
-        "local_world_aligned"; out: (m, dof, n) receives J_A. The formulas are the parameterizations'
-        own, evaluated with numpy. Returns each parameterization's distance to its singular set,
-        (n,) or a float, in χ's order; the caller decides (see :meth:`singular_rows`).
-        """
+        """The batch kernel on n configurations, sample-last: p, 3 arrays (n,) [m]; C, the 9 entries of C_IF
+        row-major, arrays (n,); J, J_e0 (6, dof, n) in "local_world_aligned"; out (m, dof, n) receives J_A.
+        Returns each part's distance to its singular set, (n,) or a float (see :meth:`singular_rows`)."""
         E_rows: list[tuple[Entries, npt.NDArray[np.float64]]] = []
         distances: list[npt.NDArray[np.float64] | float] = []
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -225,13 +214,9 @@ class PoseMap:
         jacobian: Callable[[int], np.ndarray] | None = None,
         single: bool = False,
     ) -> None:
-        """What the batch rows closer than ``threshold`` to a part's singular set get: NaN in that part's rows
-        of out (N, m, ...) (``nan``), or the RepresentationSingularityError one call at the first such row
-        raises (position checked before rotation; ``single``: not named as a batch row).
-
-        distances: (N, len(parts)) from :meth:`fill_columns`; pose(row) gives that row's T_IF (4, 4) and
-        jacobian(row) its J_e0 (6, dof) (for the robot's rank in the message).
-        """
+        """Batch rows closer than ``threshold`` to a part's singular set (distances: (N, len(parts))) get NaN
+        in that part's rows of out (N, m, ...) (``nan``), or the first raises RepresentationSingularityError
+        with pose(row) T_IF (4, 4) and jacobian(row) J_e0 (6, dof) (``single``: not named as a batch row)."""
         below = singular_where(distances, threshold)
         if nan:
             for k, rows in enumerate(self.part_rows):
@@ -249,9 +234,6 @@ class PoseMap:
                 None if single else row,
                 None if jacobian is None else jacobian(row),
             )
-
-
-_F64 = np.dtype(np.float64)
 
 
 @lru_cache(maxsize=256)
