@@ -30,11 +30,12 @@ def quaternion_from_matrix(xp: Namespace, *C: Component) -> tuple[Component, Com
     if xp is math:
         diagonal = (c00, c11, c22, trace)
         x, y, z, w = cases[diagonal.index(max(diagonal))]  # the first maximum, like numpy's argmax
+        negative = w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0)))))
     else:
         choice = np.argmax(np.stack([c00, c11, c22, trace], axis=-1), axis=-1)
         x, y, z, w = (np.choose(choice, [case[k] for case in cases]) for k in range(4))
+        negative = (w < 0) | ((w == 0) & ((x < 0) | ((x == 0) & ((y < 0) | ((y == 0) & (z < 0))))))
     norm = xp.sqrt(x * x + y * y + z * z + w * w)
-    negative = (w < 0.0) | ((w == 0.0) & ((x < 0.0) | ((x == 0.0) & ((y < 0.0) | ((y == 0.0) & (z < 0.0))))))
     norm = where(xp, negative, -norm, norm)
     return w / norm, x / norm, y / norm, z / norm
 

@@ -16,15 +16,13 @@ UserWarning when θ <= 1e-7 (axis ill-defined).
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
+
 from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries
-from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where, where
+from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where
 from .euler import GIMBAL_LOCK_TOLERANCE
-
-
-def _minus_identity(M: Entries) -> Entries:
-    """Row-major entries of M − I for a 3x3 M given by its row-major entries."""
-    m00, m01, m02, m10, m11, m12, m20, m21, m22 = M
-    return (m00 - 1.0, m01, m02, m10, m11 - 1.0, m12, m20, m21, m22 - 1.0)
 
 
 class AngleAxis(RotationParameterization):
@@ -46,9 +44,11 @@ class AngleAxis(RotationParameterization):
                 f"{self.name}: rotation angle θ <= "
                 f"{GIMBAL_LOCK_TOLERANCE:g} rad, the axis is ill-defined (n = (1, 0, 0) at θ = 0)",
             )
+        if xp is math:
+            return (theta, x / s, y / s, z / s) if s > 0.0 else (theta, 1.0, 0.0, 0.0)
         zero = s == 0.0
-        s = where(xp, zero, 1.0, s)
-        return theta, where(xp, zero, 1.0, x / s), y / s, z / s
+        s = np.where(zero, 1.0, s)
+        return theta, np.where(zero, 1.0, x / s), y / s, z / s
 
     def _to_rotation(
         self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component
@@ -58,15 +58,15 @@ class AngleAxis(RotationParameterization):
         return rotation_entries(xp.sin(theta) / xp.sqrt(n2), 2.0 * half * half / n2, nx, ny, nz)
 
     def _E(self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component) -> Entries:
-        D = _minus_identity(rotation_entries(-0.5, -0.5 / xp.tan(0.5 * theta), nx, ny, nz))
-        return (nx, ny, nz, *D)  # D = −½ [n]x − ½ cot(θ/2) [n]x²
+        M = rotation_entries(-0.5, -0.5 / xp.tan(0.5 * theta), nx, ny, nz)  # I − ½ [n]x − ½ cot(θ/2) [n]x²
+        return (nx, ny, nz, M[0] - 1.0, M[1], M[2], M[3], M[4] - 1.0, M[5], M[6], M[7], M[8] - 1.0)
 
     def _E_inverse(
         self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component
     ) -> Entries:
-        half = xp.sin(0.5 * theta)  # D = sin θ (I − n n^T) + (1 − cos θ)[n]x, |n| = 1
-        D = _minus_identity(rotation_entries(2.0 * half * half, -xp.sin(theta), nx, ny, nz))
-        return (nx, *D[0:3], ny, *D[3:6], nz, *D[6:9])
+        half = xp.sin(0.5 * theta)  # M − I = sin θ (I − n n^T) + (1 − cos θ)[n]x, |n| = 1
+        M = rotation_entries(2.0 * half * half, -xp.sin(theta), nx, ny, nz)
+        return (nx, M[0] - 1.0, M[1], M[2], ny, M[3], M[4] - 1.0, M[5], nz, M[6], M[7], M[8] - 1.0)
 
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         theta, nx, ny, nz = chi
