@@ -131,10 +131,4 @@ def analytic_relative(
     return out
 
 
-__all__ = [
-    "ANALYTIC_CALLS",
-    "analytic_batch",
-    "analytic_function",
-    "analytic_relative",
-    "analytic_single",
-]
+__all__ = ["ANALYTIC_CALLS", "analytic_batch", "analytic_function", "analytic_relative", "analytic_single"]

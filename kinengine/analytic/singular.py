@@ -72,10 +72,4 @@ def singularity_error(
     )
 
 
-__all__ = [
-    "ON_SINGULARITY",
-    "RANK_TOLERANCE",
-    "check_on_singularity",
-    "robot_rank",
-    "singularity_error",
-]
+__all__ = ["ON_SINGULARITY", "RANK_TOLERANCE", "check_on_singularity", "robot_rank", "singularity_error"]
