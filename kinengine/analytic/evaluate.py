@@ -18,8 +18,8 @@ from .pose_map import PoseMap
 
 LWA = pin.LOCAL_WORLD_ALIGNED
 ANALYTIC_CALLS = 100
-"""About the numpy calls for χ, E and E·J_e0 over a chunk (a row of the single-call loop costs about twice
-one of Pinocchio's pose and Jacobian loop)."""
+"""How many numpy calls χ, E and E·J_e0 take over a chunk, about (a row of the single-call loop costs about
+twice one of Pinocchio's pose and Jacobian loop)."""
 
 
 def analytic_single(
