@@ -127,9 +127,7 @@ class PoseMap:
         chi = chi if self.rows is None else chi[..., self.rows]
         if threshold is None:
             return chi
-        distances = [
-            np.asarray(param.singularity_distance(x)) for param, x in zip(self.parts, parts, strict=True)
-        ]
+        distances = [param.singularity_distance(x) for param, x in zip(self.parts, parts, strict=True)]
         distance = np.stack(distances, axis=-1).reshape(-1, len(parts))  # (N, parts), N = 1 for one pose
         single, poses = T.ndim == 2, T.reshape(-1, 4, 4)
         jacobian = None if J is None else (lambda row: J(None if single else row))
@@ -270,8 +268,6 @@ def pose_map(
 
 def as_rows(rows: Sequence[str | int] | str | None) -> tuple[str | int, ...] | None:
     """A hashable row selection (a single label is accepted as a one-row selection)."""
-    if rows is None:
-        return None
     if isinstance(rows, str):
         return (rows,)
-    return tuple(rows)
+    return None if rows is None else tuple(rows)

@@ -136,10 +136,13 @@ class Parameterization(ABC):
         """
         m = self.size
         chi, u = as_float_array(chi, (m,), "chi"), as_float_array(velocity, (3,), "velocity")
-        if chi.ndim > 1 or u.ndim > 1:
-            batch = np.broadcast_shapes(chi.shape[:-1], u.shape[:-1])
-            chi, u = np.broadcast_to(chi, batch + (m,)), np.broadcast_to(u, batch + (3,))
-        both = np.concatenate((chi, u), axis=-1)
+        if chi.ndim == 1 and u.ndim == 1:  # one sample (a controller's step): the formula on Python floats
+            try:
+                return np.array(self._E_dot(math, chi.tolist(), u.tolist())).reshape(m, 3)
+            except ZeroDivisionError:
+                raise self._singular_error() from None
+        batch = np.broadcast_shapes(chi.shape[:-1], u.shape[:-1])
+        both = np.concatenate((np.broadcast_to(chi, batch + (m,)), np.broadcast_to(u, batch + (3,))), axis=-1)
         return self._evaluate(lambda xp, *c: self._E_dot(xp, c[:m], c[m:]), (m, 3), both)
 
     def singularity_distance(self, chi: npt.ArrayLike) -> float | FloatArray:
