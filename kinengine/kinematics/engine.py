@@ -12,9 +12,8 @@ Frames and conventions
   - WORLD: the spatial velocity in I: the linear rows are the velocity of the body point that
     currently coincides with I's origin, v_O = v_F − ω × p_F.
 
-Every method here takes an already checked q (see :meth:`CoordinateMap.check`); the Robot facade
-and the frame handles check it once. Pinocchio's Data is per thread, so one object serves several
-threads at once.
+Every method here takes an already checked q (:meth:`CoordinateMap.check`). Pinocchio's Data is per
+thread, so one object serves several threads at once.
 """
 
 from __future__ import annotations
@@ -45,8 +44,10 @@ _forward, _place, _frame_jacobian = pin.forwardKinematics, pin.updateFramePlacem
 def resolve_reference(reference: object) -> pin.ReferenceFrame:
     """Pinocchio's ReferenceFrame for "world", "local", "local_world_aligned" (or the enum itself).
     Anything else — including True, 1.0 and numpy integers — is an OptionError."""
-    if type(reference) is str and reference in REFERENCES:
+    try:
         return REFERENCES[reference]
+    except (KeyError, TypeError):  # TypeError: unhashable
+        pass
     if type(reference) is pin.ReferenceFrame and reference in _ENUMS:
         return reference
     raise OptionError(
@@ -69,30 +70,20 @@ class Kinematics:
 
     def __init__(self, description: RobotDescription) -> None:
         self.description = description
-        self.model = build_pinocchio_model(description)
+        self.model = model = build_pinocchio_model(description)
         self.coordinates = CoordinateMap(description)
         self.dof = self.coordinates.dof
         self.frame_ids = _frame_ids(self.model)
         self.frame_names: tuple[str, ...] = tuple(self.frame_ids)
-        self._tls = threading.local()
+        self._tls, self.data = thread_data(lambda: create_data(model, f"robot {description.name!r}"))
+        """``data()``: this thread's Pinocchio Data (made on first use)."""
         self._memo: dict[object, object] = {}
 
-    def data(self) -> pin.Data:
-        """This thread's Pinocchio Data (created on first use)."""
-        try:
-            return self._tls.data
-        except AttributeError:
-            data = self._tls.data = create_data(self.model, f"robot {self.description.name!r}")
-            return data
-
     def frame_path(self, fid: int) -> FramePath:
-        """The cheapest exact way to frame ``fid``. Without mimic joints: the model itself, q untouched.
-        With mimic joints, for a frame that no mimic joint moves (an arm's flange and hand, not the
-        mimicking finger): Pinocchio's reduced model with the mimic joints locked, whose nq = dof joints are
-        q's coordinates in q's order — the frame's pose and Jacobian there equal the full model's at
-        q_pin = M q + b (its J_pin columns of mimic joints are zero), so again q passes untouched. A frame
-        that a mimic joint moves gets a model of its own joints alone when they are q's coordinates one for
-        one (:meth:`_frame_joints_only`); only the others take the map (``mapped``)."""
+        """The cheapest exact way to frame ``fid``: the model itself without mimic joints; for a frame that
+        no mimic joint moves, the model with the mimic joints locked (its joints are q's coordinates, so q
+        passes untouched); for one that a mimic joint moves, a model of its own joints alone when they are
+        q's coordinates one for one (:meth:`_frame_joints_only`); the others take the map (``mapped``)."""
         if self.coordinates.identity:
             return FramePath(self.model, fid, self.data, False)
         model, independent = self.model, self.coordinates.names
@@ -118,15 +109,12 @@ class Kinematics:
         reduced = _reduced(model, mimic_joints)
         if reduced is None or tuple(reduced.names)[1:] != self.coordinates.names or reduced.nq != self.dof:
             return None
-        return reduced, self._data_of(reduced)
+        return reduced, self._reduced_data(reduced)
 
     def _frame_joints_only(self, fid: int) -> tuple[pin.Model, Callable[[], pin.Data]] | None:
-        """For a frame that a mimic joint moves: Pinocchio's model with every joint that does not move the
-        frame locked, when its joints are q's coordinates one for one — the k-th is coordinate k itself or
-        a mimic of it with multiplier 1 and offset 0 (the Panda's right finger: the arm and the mimicking
-        finger joint, whose leader moves only the other finger). The frame's q_pin is then q and its J_pin
-        is J: no map at all. None when the frame needs the map (another multiplier or offset, a leader and
-        its mimic both moving the frame, coordinates that do not move it)."""
+        """Pinocchio's model with every joint that does not move frame ``fid`` locked, when its joints are q's
+        coordinates one for one: the k-th is coordinate k or a mimic of it with multiplier 1 and offset 0
+        (the Panda's right finger). Then q_pin = q and J_pin = J; None when the frame needs the map."""
         model, coords = self.model, self.coordinates
         supports = self._supports(fid)
         if len(supports) != self.dof:
@@ -140,20 +128,11 @@ class Kinematics:
         reduced = _reduced(model, others)
         if reduced is None or reduced.nq != self.dof:
             return None
-        return reduced, self._data_of(reduced)
+        return reduced, self._reduced_data(reduced)
 
-    def _data_of(self, reduced: pin.Model) -> Callable[[], pin.Data]:
-        """``data()``: this thread's Data of a reduced model."""
-        local = threading.local()
-
-        def data() -> pin.Data:
-            try:
-                return local.data
-            except AttributeError:
-                local.data = create_data(reduced, f"robot {self.description.name!r}")
-                return local.data
-
-        return data
+    def _reduced_data(self, reduced: pin.Model) -> Callable[[], pin.Data]:
+        what = f"robot {self.description.name!r}"
+        return thread_data(lambda: create_data(reduced, what))[1]
 
     def pinocchio_q(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio's configuration (nq,) for a checked q (dof,): q itself without mimic joints, else
@@ -209,6 +188,20 @@ class Kinematics:
             J = _frame_jacobian(self.model, data, q, fid, ref)
             return J if self.dof > 1 else J.reshape(6, 1)
         return coords.fold(_frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref).reshape(6, -1))
+
+
+def thread_data(make: Callable[[], pin.Data]) -> tuple[threading.local, Callable[[], pin.Data]]:
+    """(local, data): ``data()`` is this thread's ``local.data``, made by ``make()`` on first use."""
+    local = threading.local()
+
+    def data() -> pin.Data:
+        try:
+            return local.data
+        except AttributeError:
+            local.data = make()
+            return local.data
+
+    return local, data
 
 
 def _frame_ids(model: pin.Model) -> dict[str, int]:

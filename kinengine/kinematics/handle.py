@@ -5,33 +5,30 @@
 >>> J = fk.jacobian(q, reference="local")      # (6, dof), rows [linear; angular]
 >>> T, J = fk.kinematics(q)                    # both from one pass, equal to the two calls above
 
-Same frames, units and references as :mod:`kinengine.kinematics.engine`. The handle binds the
-frame's Pinocchio model (:meth:`Kinematics.frame_path`), its frame index and Pinocchio's functions
-once; each thread gets its own Pinocchio Data (a frame that a mimic joint moves gets a fresh
-q_pin = M q + b per call), so one handle serves several threads. With ``check_inputs=True`` every
-call runs the one input check: :attr:`CoordinateMap.ready` first (a float64 vector of the right
-length and magnitude passes with one scalar test), :meth:`CoordinateMap.check` for anything else
-(converted, or refused with a ConfigurationError). With ``check_inputs=False`` the caller promises a
-float64 array of shape (dof,) with finite entries; anything else is undefined behaviour of Pinocchio
-(wrong numbers or an exception), never checked. ``batches=True`` (the Robot's own handles) also
-takes checked batches q (N, dof) to the vectorized batch path. Where the C accelerator runs
-(:mod:`kinengine.model.accelerator`), a plain frame's ``pose``, ``jacobian`` and ``kinematics`` are its
-C calls, which make the same Pinocchio calls and hand every other call to the closures below.
+Same frames, units and references as :mod:`kinengine.kinematics.engine`. The handle binds the frame's
+Pinocchio model (:meth:`Kinematics.frame_path`) and index once; each thread gets its own Data, so one
+handle serves several threads. ``check_inputs=True``: every call runs the one input check
+(:attr:`CoordinateMap.ready` first, :meth:`CoordinateMap.check` for anything else); ``False``: the caller
+promises a finite float64 array (dof,), anything else is undefined behaviour of Pinocchio. ``batches=True``
+(the Robot's own handles) also takes batches (N, dof) to the vectorized path. Where the C accelerator runs
+(:mod:`kinengine.model.accelerator`), a plain frame's calls are its C calls: the same Pinocchio calls,
+handing every other call to the closures below.
 """
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from ..arrays import Reference
+from ..errors import OptionError
 from ..model import accelerator
 from ..model.coordinates import MAX_MAGNITUDE
 from . import batch
-from .engine import REFERENCES, Kinematics, resolve_reference
+from .engine import REFERENCES, Kinematics, resolve_reference, thread_data
 
 
 class FrameHandle:
@@ -51,8 +48,6 @@ class FrameHandle:
     ) -> None:
         for option, value in (("check_inputs", check_inputs), ("batches", batches)):
             if type(value) is not bool:
-                from ..errors import OptionError
-
                 raise OptionError(f"`{option}` must be True or False, got {value!r}")
         self.name, self.frame_id, self.dof = frame, kin.frame_id(frame), kin.dof
         self.check_inputs = check_inputs
@@ -64,30 +59,16 @@ class FrameHandle:
         return f"<FrameHandle {self.name!r}: {self.dof} dof, check_inputs={self.check_inputs}>"
 
 
-PoseFunction = Callable[..., np.ndarray]
-JacobianFunction = Callable[..., np.ndarray]
-KinematicsFunction = Callable[..., tuple[np.ndarray, np.ndarray]]
-PlacementFunction = Callable[[], tuple[np.ndarray, np.ndarray]]
-Calls = tuple[PoseFunction, JacobianFunction, KinematicsFunction]
+Calls = tuple[Callable[..., np.ndarray], Callable[..., np.ndarray], Callable[..., tuple]]
 
 
-def _bind(
-    kin: Kinematics, fid: int, checking: bool, batches: bool
-) -> tuple[PoseFunction, JacobianFunction, KinematicsFunction, PlacementFunction]:
+def _bind(kin: Kinematics, fid: int, checking: bool, batches: bool) -> tuple[Callable[..., Any], ...]:
     """The closures ``pose(q)``, ``jacobian(q, reference="local_world_aligned")``,
     ``kinematics(q, reference="local_world_aligned")`` and ``placement()``: :func:`_single_calls` at one
     configuration, behind :func:`_checked_calls`; for a plain frame (q as it is, dof > 1) the C accelerator's
     calls, which hand every call that is not plain back to these closures."""
     model, pfid, new_data, mapped = kin.frame_path(fid)
-    local = threading.local()
-
-    def data() -> pin.Data:
-        """This thread's Data of the frame's model."""
-        try:
-            return local.data
-        except AttributeError:
-            local.data = new_data()
-            return local.data
+    local, data = thread_data(new_data)  # the C calls read local.data and call data() when it is missing
 
     def placement() -> tuple[np.ndarray, np.ndarray]:
         frame = data().oMf[pfid]
@@ -162,14 +143,7 @@ def _checked_calls(kin: Kinematics, fid: int, single: Calls, checking: bool, bat
     (:attr:`CoordinateMap.ready` first, :meth:`CoordinateMap.check` for anything else); a checked batch
     (N, dof), allowed with ``batches``, goes to :func:`kinengine.kinematics.batch.evaluate`."""
     pose1, jacobian1, kinematics1 = single
-    ready, full_check = kin.coordinates.ready, kin.coordinates.check
-    references = dict(REFERENCES)
-
-    def resolve(reference: Reference) -> pin.ReferenceFrame:
-        try:
-            return references[reference]
-        except (KeyError, TypeError):
-            return resolve_reference(reference)
+    ready, full_check, resolve = kin.coordinates.ready, kin.coordinates.check, resolve_reference
 
     def pose(q: np.ndarray) -> np.ndarray:
         if checking and not ready(q):
