@@ -169,21 +169,15 @@ def _pinocchio_loop(
     jac: np.ndarray | None,
     reference: pin.ReferenceFrame | None,
 ) -> None:
-    """The same outputs from a Python loop over Pinocchio (faster for small batches)."""
-    model, data, coords = kin.model, kin.data(), kin.coordinates
-    if kin.dof == 0 and jac is not None:
-        jac[...] = 0.0
-        jac = None  # nothing to fill (and Pinocchio 4.1's getFrameJacobian crashes when nv = 0)
-    if pose is None and jac is None:
-        return
-    place_first = jac is None or (pose is not None and reference == pin.LOCAL)
-    for i, qi in enumerate(coords.to_pinocchio(Q)):  # the single-q calls' algorithms: equal bit for bit
-        if place_first:  # computeFrameJacobian leaves data.oMi stale in LOCAL: place the joints first
-            pin.forwardKinematics(model, data, qi)
-        if jac is not None:
-            jac[i] = coords.fold(pin.computeFrameJacobian(model, data, qi, fid, reference).reshape(6, -1))
-        if pose is not None:
-            pose[i] = pin.updateFramePlacement(model, data, fid).homogeneous
+    """The same outputs from a loop over the single-configuration calls (faster for small batches)."""
+    pose1, jacobian1, both = kin.frame_calls(fid)
+    for i, q in enumerate(Q):
+        if pose is not None and jac is not None:
+            pose[i], jac[i] = both(q, reference)
+        elif pose is not None:
+            pose[i] = pose1(q)
+        elif jac is not None:
+            jac[i] = jacobian1(q, reference)
 
 
 def evaluate(

@@ -38,7 +38,6 @@ REFERENCES: dict[object, pin.ReferenceFrame] = {
     "local_world_aligned": pin.LOCAL_WORLD_ALIGNED,
 }
 _ENUMS = (pin.WORLD, pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
-_forward, _place, _frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
 
 
 def resolve_reference(reference: object) -> pin.ReferenceFrame:
@@ -166,28 +165,67 @@ class Kinematics:
             raise FrameNotFoundError(frame, self.frame_names) from None
 
     # -- single configurations (q checked by the caller) ----------------------------------------
+    def frame_calls(self, fid: int) -> Calls:
+        """(pose(q), jacobian(q, ref), kinematics(q, ref)) of frame ``fid`` on :meth:`frame_path`'s model,
+        made once (:func:`single_calls`)."""
+        return self.memoized(
+            ("single calls", fid), lambda: single_calls(self.coordinates, *self.frame_path(fid))
+        )
+
     def pose(self, q: np.ndarray, fid: int) -> np.ndarray:
         """T_IF (4, 4) at a checked q (dof,)."""
-        try:
-            data = self._tls.data
-        except AttributeError:
-            data = self.data()
-        _forward(self.model, data, q if self.coordinates.identity else self.pinocchio_q(q))
-        return _place(self.model, data, fid).homogeneous
+        return self.frame_calls(fid)[0](q)
 
     def jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> np.ndarray:
         """J (6, dof) in ``ref`` at a checked q (dof,)."""
-        if self.dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
-            return np.zeros((6, 0))
-        try:
-            data = self._tls.data
-        except AttributeError:
-            data = self.data()
-        coords = self.coordinates
-        if coords.identity:
-            J = _frame_jacobian(self.model, data, q, fid, ref)
-            return J if self.dof > 1 else J.reshape(6, 1)
-        return coords.fold(_frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref).reshape(6, -1))
+        return self.frame_calls(fid)[1](q, ref)
+
+
+Calls = tuple[Callable[..., np.ndarray], Callable[..., np.ndarray], Callable[..., tuple]]
+
+
+def single_calls(
+    coords: CoordinateMap, model: pin.Model, pfid: int, data: Callable[[], pin.Data], mapped: bool
+) -> Calls:
+    """The single-configuration calls on a frame's model (see :class:`FramePath`), for a q (dof,) already
+    checked: ``pose(q)``, ``jacobian(q, ref)``, ``kinematics(q, ref)`` with ``ref`` a pin.ReferenceFrame. A
+    ``mapped`` frame takes q_pin = M q + b and J_pin · M; a 1-dof Jacobian comes back from eigenpy as (6,)
+    and is reshaped; Pinocchio 4.1 crashes on a frame Jacobian with nv = 0: a 0-dof one is zeros (6, 0)."""
+    forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
+    local_frame, dof = pin.LOCAL, coords.dof
+    pinocchio_q: Callable[[np.ndarray], np.ndarray] = coords.to_pinocchio if mapped else _same
+    fold: Callable[[np.ndarray], np.ndarray] = _same if dof > 1 else (lambda J: J.reshape(6, dof))
+    if mapped:
+        fold = lambda J: coords.fold(J.reshape(6, -1))  # noqa: E731
+    if dof == 0:
+        frame_jacobian = _no_columns
+
+    def pose(q: np.ndarray) -> np.ndarray:
+        state = data()
+        forward(model, state, pinocchio_q(q))
+        return place(model, state, pfid).homogeneous
+
+    def jacobian(q: np.ndarray, ref: pin.ReferenceFrame) -> np.ndarray:
+        return fold(frame_jacobian(model, data(), pinocchio_q(q), pfid, ref))
+
+    def kinematics(q: np.ndarray, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
+        state, qp = data(), pinocchio_q(q)
+        if ref == local_frame or dof == 0:  # the LOCAL frame Jacobian does not place the joints
+            forward(model, state, qp)
+            return place(model, state, pfid).homogeneous, fold(frame_jacobian(model, state, qp, pfid, ref))
+        J = fold(frame_jacobian(model, state, qp, pfid, ref))  # places the joints and the frame
+        return place(model, state, pfid).homogeneous, J
+
+    return pose, jacobian, kinematics
+
+
+def _same(x: np.ndarray) -> np.ndarray:
+    return x
+
+
+def _no_columns(model: pin.Model, data: pin.Data, q: np.ndarray, fid: int, ref: object) -> np.ndarray:
+    """The frame Jacobian of a 0-dof model, (6, 0): Pinocchio 4.1 crashes computing it."""
+    return np.zeros((6, 0))
 
 
 def thread_data(make: Callable[[], pin.Data]) -> tuple[threading.local, Callable[[], pin.Data]]:
@@ -227,4 +265,4 @@ def _reduced(model: pin.Model, locked: list[int]) -> pin.Model | None:
         return None
 
 
-__all__ = ["REFERENCES", "FramePath", "Kinematics", "resolve_reference"]
+__all__ = ["REFERENCES", "FramePath", "Kinematics", "resolve_reference", "single_calls", "thread_data"]

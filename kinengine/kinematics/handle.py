@@ -28,7 +28,7 @@ from ..errors import OptionError
 from ..model import accelerator
 from ..model.coordinates import MAX_MAGNITUDE
 from . import batch
-from .engine import REFERENCES, Kinematics, resolve_reference, thread_data
+from .engine import REFERENCES, Calls, Kinematics, resolve_reference, single_calls, thread_data
 
 
 class FrameHandle:
@@ -59,14 +59,11 @@ class FrameHandle:
         return f"<FrameHandle {self.name!r}: {self.dof} dof, check_inputs={self.check_inputs}>"
 
 
-Calls = tuple[Callable[..., np.ndarray], Callable[..., np.ndarray], Callable[..., tuple]]
-
-
 def _bind(kin: Kinematics, fid: int, checking: bool, batches: bool) -> tuple[Callable[..., Any], ...]:
     """The closures ``pose(q)``, ``jacobian(q, reference="local_world_aligned")``,
-    ``kinematics(q, reference="local_world_aligned")`` and ``placement()``: :func:`_single_calls` at one
-    configuration, behind :func:`_checked_calls`; for a plain frame (q as it is, dof > 1) the C accelerator's
-    calls, which hand every call that is not plain back to these closures."""
+    ``kinematics(q, reference="local_world_aligned")`` and ``placement()``: the engine's single calls behind
+    :func:`_checked_calls`; for a plain frame (q as it is, dof > 1) the C accelerator's calls, which hand
+    every call that is not plain back to these closures."""
     model, pfid, new_data, mapped = kin.frame_path(fid)
     local, data = thread_data(new_data)  # the C calls read local.data and call data() when it is missing
 
@@ -76,8 +73,9 @@ def _bind(kin: Kinematics, fid: int, checking: bool, batches: bool) -> tuple[Cal
         rotation.flags.writeable = translation.flags.writeable = False
         return rotation, translation
 
-    single = _single_calls(kin, model, pfid, data, mapped)
-    calls = _checked_calls(kin, fid, single, checking, batches)
+    calls = _checked_calls(
+        kin, fid, single_calls(kin.coordinates, model, pfid, data, mapped), checking, batches
+    )
     if mapped or kin.dof <= 1:
         return (*calls, placement)
     native = accelerator.frame_calls(
@@ -99,43 +97,6 @@ def _bind(kin: Kinematics, fid: int, checking: bool, batches: bool) -> tuple[Cal
         slow_kinematics=calls[2],
     )  # the same Pinocchio calls in C, which hands these closures every call that is not plain
     return (*(calls if native is None else native), placement)
-
-
-def _single_calls(
-    kin: Kinematics, model: pin.Model, pfid: int, data: Callable[[], pin.Data], mapped: bool
-) -> Calls:
-    """The single-configuration calls on the frame's model, for a q (dof,) already checked:
-    ``pose(q)``, ``jacobian(q, ref)``, ``kinematics(q, ref)`` with ``ref`` a pin.ReferenceFrame. A frame moved
-    by mimic joints takes q_pin = M q + b and J_pin · M (only the mimic joints that move it); a 1-dof Jacobian
-    comes back from eigenpy as (6,) and is reshaped; Pinocchio 4.1 crashes on a frame Jacobian with nv = 0,
-    so a 0-dof Jacobian is zeros (6, 0)."""
-    forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
-    local_frame, dof = pin.LOCAL, kin.dof
-    coords = kin.coordinates
-    pinocchio_q: Callable[[np.ndarray], np.ndarray] = coords.to_pinocchio if mapped else _same
-    fold: Callable[[np.ndarray], np.ndarray] = _same if dof > 1 else (lambda J: J.reshape(6, dof))
-    if mapped:
-        fold = lambda J: coords.fold(J.reshape(6, -1))  # noqa: E731
-    if dof == 0:
-        frame_jacobian = _no_columns
-
-    def pose(q: np.ndarray) -> np.ndarray:
-        state = data()
-        forward(model, state, pinocchio_q(q))
-        return place(model, state, pfid).homogeneous
-
-    def jacobian(q: np.ndarray, ref: pin.ReferenceFrame) -> np.ndarray:
-        return fold(frame_jacobian(model, data(), pinocchio_q(q), pfid, ref))
-
-    def kinematics(q: np.ndarray, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
-        state, qp = data(), pinocchio_q(q)
-        if ref == local_frame or dof == 0:  # the LOCAL frame Jacobian does not place the joints
-            forward(model, state, qp)
-            return place(model, state, pfid).homogeneous, fold(frame_jacobian(model, state, qp, pfid, ref))
-        J = fold(frame_jacobian(model, state, qp, pfid, ref))  # places the joints and the frame
-        return place(model, state, pfid).homogeneous, J
-
-    return pose, jacobian, kinematics
 
 
 def _checked_calls(kin: Kinematics, fid: int, single: Calls, checking: bool, batches: bool) -> Calls:
@@ -171,15 +132,6 @@ def _checked_calls(kin: Kinematics, fid: int, single: Calls, checking: bool, bat
         return kinematics1(q, ref)
 
     return pose, jacobian, kinematics
-
-
-def _same(x: np.ndarray) -> np.ndarray:
-    return x
-
-
-def _no_columns(model: pin.Model, data: pin.Data, q: np.ndarray, fid: int, ref: object) -> np.ndarray:
-    """The frame Jacobian of a 0-dof model, (6, 0): Pinocchio 4.1 crashes computing it."""
-    return np.zeros((6, 0))
 
 
 __all__ = ["FrameHandle"]
