@@ -52,7 +52,7 @@ def jacobian_time_variation(
     Jw = coords.fold(pin.getFrameJacobian(model, data, fid, pin.WORLD).reshape(6, -1))
     dJw = coords.fold(pin.getFrameJacobianTimeVariation(model, data, fid, pin.WORLD).reshape(6, -1))
     M = pin.updateFramePlacement(model, data, fid)
-    return _change_reference(Jw, dJw[:, :, None], qdot[:, None], M.rotation, M.translation, ref)[:, :, 0]
+    return _change_reference(Jw, dJw[:, :, None], qdot[:, None], M, ref)[:, :, 0]
 
 
 def kinematic_hessian(
@@ -75,9 +75,9 @@ def kinematic_hessian(
     bracket[3:] = np.moveaxis(np.cross(w[:, None], w[None]), -1, 0)
     bracket *= chain.above  # only joints b above a turn a
     Hw = chain.A.T @ np.swapaxes(bracket, 1, 2) @ chain.A  # Σ_ab A[a,j]·bracket[:,b,a]·A[b,k]: O(6·p²·dof)
-    Jw = S @ chain.A
-    M = pin.updateFramePlacement(model, data, fid)
-    return _change_reference(Jw, Hw, np.eye(kin.dof), M.rotation, M.translation, ref)
+    return _change_reference(
+        S @ chain.A, Hw, np.eye(kin.dof), pin.updateFramePlacement(model, data, fid), ref
+    )
 
 
 # -- internals ----------------------------------------------------------------------------------
@@ -90,8 +90,7 @@ class _Chain:
     """
 
     def __init__(self, kin: Kinematics, fid: int) -> None:
-        model = kin.model
-        joints = [j for j in model.supports[model.frames[fid].parentJoint] if j > 0]
+        model, joints = kin.model, kin.supports(fid)
         self.columns = [model.joints[j].idx_v for j in joints]
         self.A = kin.coordinates.matrix[self.columns].reshape(len(joints), kin.dof)
         self.above = np.array(
@@ -100,17 +99,13 @@ class _Chain:
 
 
 def _change_reference(
-    Jw: np.ndarray,
-    dJw: np.ndarray,
-    directions: np.ndarray,
-    C: np.ndarray,
-    p: np.ndarray,
-    ref: pin.ReferenceFrame,
+    Jw: np.ndarray, dJw: np.ndarray, directions: np.ndarray, M: pin.SE3, ref: pin.ReferenceFrame
 ) -> npt.NDArray[np.float64]:
     """Derivatives dJw (6, dof, K) of the WORLD Jacobian Jw (6, dof) along K directions of q (dof, K)
-    turned into derivatives of the Jacobian in ``ref`` (see the module doc), (6, dof, K)."""
+    turned into derivatives of the Jacobian in ``ref`` (see the module doc), (6, dof, K); M: T_IF."""
     if ref == pin.WORLD:
         return dJw
+    C, p = M.rotation, M.translation
     J = Jw.copy()
     J[:3] += np.cross(Jw[3:].T, p).T  # J_lwa: v_F = v_O + ω × p
     twist = J @ directions  # (6, K): (∂p, ω) of F along each direction

@@ -86,7 +86,7 @@ class Kinematics:
         if self.coordinates.identity:
             return FramePath(self.model, fid, self.data, False)
         model, independent = self.model, self.coordinates.names
-        if any(model.names[k] not in independent for k in self._supports(fid)):
+        if any(model.names[k] not in independent for k in self.supports(fid)):
             locked = self.memoized(("frame's joints only", fid), lambda: self._frame_joints_only(fid))
         else:
             locked = self.memoized("mimic joints locked", self._locked_mimics)
@@ -96,7 +96,7 @@ class Kinematics:
         frame = model.frames[fid]
         return FramePath(reduced, reduced.getFrameId(frame.name, frame.type), reduced_data, False)
 
-    def _supports(self, fid: int) -> list[int]:
+    def supports(self, fid: int) -> list[int]:
         """Pinocchio joint indices (1-based) that move frame ``fid``."""
         return [k for k in self.model.supports[self.model.frames[fid].parentJoint] if k > 0]
 
@@ -115,7 +115,7 @@ class Kinematics:
         coordinates one for one: the k-th is coordinate k or a mimic of it with multiplier 1 and offset 0
         (the Panda's right finger). Then q_pin = q and J_pin = J; None when the frame needs the map."""
         model, coords = self.model, self.coordinates
-        supports = self._supports(fid)
+        supports = self.supports(fid)
         if len(supports) != self.dof:
             return None
         position = {name: k for k, name in enumerate(coords.pinocchio_names)}
