@@ -178,11 +178,7 @@ class Outputs(NamedTuple):
 
 
 def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
-    """Fill ``outputs`` for the chunk qT (dof, n).
-
-    qT may be a strided view (``Q[a:b].T``): only its rows are read. Results go straight into the
-    outputs' strided views.
-    """
+    """Fill ``outputs`` for the chunk qT (dof, n), which may be a strided view (``Q[a:b].T``)."""
     pose, jac, reference, analytic = outputs
     dof, n, m, plan = chain.dof, qT.shape[1], len(chain.steps), chain.plan
     jacobian = jac is not None or analytic is not None

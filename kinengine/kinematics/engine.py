@@ -212,8 +212,7 @@ def single_calls(
         state, qp = data(), pinocchio_q(q)
         if ref == local_frame or dof == 0:  # the LOCAL frame Jacobian does not place the joints
             forward(model, state, qp)
-            return place(model, state, pfid).homogeneous, fold(frame_jacobian(model, state, qp, pfid, ref))
-        J = fold(frame_jacobian(model, state, qp, pfid, ref))  # places the joints and the frame
+        J = fold(frame_jacobian(model, state, qp, pfid, ref))  # otherwise it places them
         return place(model, state, pfid).homogeneous, J
 
     return pose, jacobian, kinematics
@@ -245,13 +244,9 @@ def thread_data(make: Callable[[], pin.Data]) -> tuple[threading.local, Callable
 def _frame_ids(model: pin.Model) -> dict[str, int]:
     """Frame name -> index for every frame but 'universe'; a link wins over a joint of the same name."""
     ids: dict[str, int] = {}
-    for kind_first in (True, False):
-        for fid in range(model.nframes):
-            frame = model.frames[fid]
-            if frame.name == "universe" or frame.name in ids:
-                continue
-            if (frame.type == pin.FrameType.BODY) == kind_first:
-                ids[frame.name] = fid
+    for fid in sorted(range(model.nframes), key=lambda k: model.frames[k].type != pin.FrameType.BODY):
+        ids.setdefault(model.frames[fid].name, fid)  # links first, each kind in index order
+    ids.pop("universe", None)
     return dict(sorted(ids.items(), key=lambda kv: kv[1]))
 
 
