@@ -197,16 +197,14 @@ def evaluate(
     T, J = out if out is not None else (None, None)
     if out is not None and any(a is not None and np.may_share_memory(Q, a) for a in out):
         Q = Q.copy()  # the outputs are written while Q is still read: read a copy
-    if pose and T is None:
-        T = np.empty((n, 4, 4))
-    if jacobian and J is None:
-        J = np.empty((n, 6, kin.dof))
+    T = (np.empty((n, 4, 4)) if T is None else T) if pose else None
+    J = (np.empty((n, 6, kin.dof)) if J is None else J) if jacobian else None
     chain = numpy_chain(kin, fid, n, True)  # one choice for poses, Jacobians or both: equal bit for bit
     if chain is None:
-        _pinocchio_loop(kin, Q, fid, T if pose else None, J if jacobian else None, reference)
+        _pinocchio_loop(kin, Q, fid, T, J, reference)
     else:
-        run_chain(chain, Q, T if pose else None, J if jacobian else None, reference, workers=workers)
-    return (T if pose else None), (J if jacobian else None)
+        run_chain(chain, Q, T, J, reference, workers=workers)
+    return T, J
 
 
 def checked_workers(workers: object) -> int | None:

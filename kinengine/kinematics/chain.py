@@ -49,11 +49,10 @@ class Step(NamedTuple):
 class Plan:
     """The chain's work on M (4, 3, n): slots 0-2 the columns of S up to sign, slot 3 p. M starts as
     ``start`` (the first step's K and t folded in); ``moves``, one per step: (matrix (4, 4): M' = matrix ·
-    M into the other buffer, K_i and t_i in one product (one call beats a multiply and an add per entry
-    of t_i, even at 1000 rows), or None when K_i is a signed permutation and t_i = 0: slots renamed; pair:
-    M[pair] = the slots of columns 0 and 1, ordered so that Rz is (a c + b s, b c − a s); axis: slot and
-    sign of column 2). Last, M' = ``matrix`` · M holds C_IF's columns and p_f in order (or, None: the
-    columns are ``slots`` × ``signs``)."""
+    M into the other buffer, K_i and t_i in one product, or None when K_i is a signed permutation and
+    t_i = 0: slots renamed; pair: M[pair] = the slots of columns 0 and 1, ordered so that Rz is
+    (a c + b s, b c − a s); axis: slot and sign of column 2). Last, M' = ``matrix`` · M holds C_IF's
+    columns and p_f in order (or, None: the columns are ``slots`` × ``signs``)."""
 
     def __init__(self, steps: tuple[Step, ...], rotation: Terms, translation: tuple) -> None:
         slots: tuple[int, ...] = (0, 1, 2)
@@ -141,10 +140,8 @@ def _cross(a: np.ndarray, b: np.ndarray, out: np.ndarray, temp: np.ndarray | Non
 
 
 def _cos_sin(q: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """cos q and sin q from t = tan(q/2): cos = (1 − t²)/(1 + t²), sin = 2t/(1 + t²). One tan and six cheap
-    passes cost ~30 ns per angle where numpy's cos and sin take ~40; within 2.3e-16 of them (q/2 is exact;
-    measured on 3e6 angles, ±π and ±π/2 included). ``rows`` (4 k, n) end up as the blocks cos, cos, −sin,
-    sin (Rz's coefficients, see evaluate_chain)."""
+    """cos q and sin q from t = tan(q/2): cos = (1 − t²)/(1 + t²), sin = 2t/(1 + t²) (one tan and cheap
+    passes, within 2.3e-16 of numpy's cos and sin). ``rows`` (4 k, n) end as cos, cos, −sin, sin."""
     k = len(q)
     cos, cos2, d, sin = rows[:k], rows[k : 2 * k], rows[2 * k : 3 * k], rows[3 * k :]
     t = np.tan(np.multiply(q, 0.5, out=sin), out=sin)
@@ -170,11 +167,8 @@ class Outputs(NamedTuple):
     def rows(self, a: int, b: int) -> Outputs:
         """The outputs of rows a..b (views)."""
         pose, jac, reference, analytic = self
-        if analytic is not None:
-            analytic = (analytic[0], analytic[1][a:b], analytic[2][a:b])
-        return Outputs(
-            None if pose is None else pose[a:b], None if jac is None else jac[a:b], reference, analytic
-        )
+        cut = None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b])
+        return Outputs(None if pose is None else pose[a:b], None if jac is None else jac[a:b], reference, cut)
 
 
 def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
