@@ -64,6 +64,9 @@ class FramePath(NamedTuple):
     mapped: bool  # True: q goes through q_pin = M q + b and J through J_pin · M; False: both as they are
 
 
+Locked = tuple[pin.Model, Callable[[], pin.Data]] | None  # a reduced model and its per-thread Data
+
+
 class Kinematics:
     """Pinocchio model + coordinate map of one robot; poses and Jacobians at checked configurations."""
 
@@ -100,17 +103,14 @@ class Kinematics:
         """Pinocchio joint indices (1-based) that move frame ``fid``."""
         return [k for k in self.model.supports[self.model.frames[fid].parentJoint] if k > 0]
 
-    def _locked_mimics(self) -> tuple[pin.Model, Callable[[], pin.Data]] | None:
+    def _locked_mimics(self) -> Locked:
         """Pinocchio's model with every mimic joint locked at 0 and its per-thread Data (None if its joints
         were not q's coordinates in q's order)."""
         model, names = self.model, set(self.coordinates.names)
         mimic_joints = [k for k in range(1, model.njoints) if model.names[k] not in names]
-        reduced = _reduced(model, mimic_joints)
-        if reduced is None or tuple(reduced.names)[1:] != self.coordinates.names or reduced.nq != self.dof:
-            return None
-        return reduced, self._reduced_data(reduced)
+        return self._locked(mimic_joints, in_order=True)
 
-    def _frame_joints_only(self, fid: int) -> tuple[pin.Model, Callable[[], pin.Data]] | None:
+    def _frame_joints_only(self, fid: int) -> Locked:
         """Pinocchio's model with every joint that does not move frame ``fid`` locked, when its joints are q's
         coordinates one for one: the k-th is coordinate k or a mimic of it with multiplier 1 and offset 0
         (the Panda's right finger). Then q_pin = q and J_pin = J; None when the frame needs the map."""
@@ -123,15 +123,20 @@ class Kinematics:
             i = position[model.names[joint]]
             if coords.leader[i] != k or coords.multiplier[i] != 1.0 or coords.offset[i] != 0.0:
                 return None
-        others = [k for k in range(1, model.njoints) if k not in supports]  # their value moves no support
-        reduced = _reduced(model, others)
-        if reduced is None or reduced.nq != self.dof:
-            return None
-        return reduced, self._reduced_data(reduced)
+        return self._locked([k for k in range(1, model.njoints) if k not in supports])  # moving no support
 
-    def _reduced_data(self, reduced: pin.Model) -> Callable[[], pin.Data]:
+    def _locked(self, joints: list[int], in_order: bool = False) -> Locked:
+        """Pinocchio's model with ``joints`` held at 0 and its per-thread Data; None where Pinocchio cannot
+        build it (a locked joint's frame would take an existing frame's name: the callers then map q) or
+        its joints are not dof coordinates (``in_order``: q's own, in q's order)."""
+        try:
+            reduced = pin.buildReducedModel(self.model, joints, np.zeros(self.model.nq))
+        except (ValueError, RuntimeError):
+            return None
+        if reduced.nq != self.dof or (in_order and tuple(reduced.names)[1:] != self.coordinates.names):
+            return None
         what = f"robot {self.description.name!r}"
-        return thread_data(lambda: create_data(reduced, what))[1]
+        return reduced, thread_data(lambda: create_data(reduced, what))[1]
 
     def pinocchio_q(self, q: np.ndarray) -> np.ndarray:
         """Pinocchio's configuration (nq,) for a checked q (dof,): q itself without mimic joints, else
@@ -197,8 +202,8 @@ def single_calls(
     fold: Callable[[np.ndarray], np.ndarray] = _same if dof > 1 else (lambda J: J.reshape(6, dof))
     if mapped:
         fold = lambda J: coords.fold(J.reshape(6, -1))  # noqa: E731
-    if dof == 0:
-        frame_jacobian = _no_columns
+    if dof == 0:  # Pinocchio 4.1 crashes computing a frame Jacobian with nv = 0
+        frame_jacobian = lambda *_: np.zeros((6, 0))  # noqa: E731
 
     def pose(q: np.ndarray) -> np.ndarray:
         state = data()
@@ -222,11 +227,6 @@ def _same(x: np.ndarray) -> np.ndarray:
     return x
 
 
-def _no_columns(model: pin.Model, data: pin.Data, q: np.ndarray, fid: int, ref: object) -> np.ndarray:
-    """The frame Jacobian of a 0-dof model, (6, 0): Pinocchio 4.1 crashes computing it."""
-    return np.zeros((6, 0))
-
-
 def thread_data(make: Callable[[], pin.Data]) -> tuple[threading.local, Callable[[], pin.Data]]:
     """(local, data): ``data()`` is this thread's ``local.data``, made by ``make()`` on first use."""
     local = threading.local()
@@ -248,16 +248,6 @@ def _frame_ids(model: pin.Model) -> dict[str, int]:
         ids.setdefault(model.frames[fid].name, fid)  # links first, each kind in index order
     ids.pop("universe", None)
     return dict(sorted(ids.items(), key=lambda kv: kv[1]))
-
-
-def _reduced(model: pin.Model, locked: list[int]) -> pin.Model | None:
-    """Pinocchio's model with the joints ``locked`` held at 0, or None where Pinocchio cannot build it (a
-    locked joint's frame would take the name of an existing frame, e.g. a joint named like a link): the
-    callers then take the general path, which maps q to Pinocchio's q."""
-    try:
-        return pin.buildReducedModel(model, locked, np.zeros(model.nq))
-    except (ValueError, RuntimeError):
-        return None
 
 
 __all__ = ["REFERENCES", "FramePath", "Kinematics", "resolve_reference", "single_calls", "thread_data"]
