@@ -95,8 +95,7 @@ def run_chain(
         workers = max(1, min(WORKERS if workers is None else workers, len(Q) // KERNEL_MIN_PER_WORKER))
         code = REFERENCE_CODES.get(reference, 0)  # reference None: no Jacobian asked
         run = chain.kernel.run
-        # The C chain reads and writes aligned float64: other layouts (np.frombuffer at an odd offset) go
-        # through an aligned copy.
+        # the C chain reads and writes aligned float64: other layouts go through an aligned copy
         Q = Q if Q.flags.aligned else Q.copy()
         T, J = (a if a is None or a.flags.aligned else np.empty_like(a) for a in (pose, jac))
 

@@ -27,9 +27,8 @@ SIN_COS_TOLERANCE = 1e-15
 
 
 def _kernel_type() -> tuple[type | None, str | None]:
-    """The C chain (kinengine/kinematics/chainkernel.c), or None and why: not built (the ImportError), its
-    sin and cos disagree with the C library's (then one RuntimeWarning says so too), or
-    KINENGINE_PURE_PYTHON (then no reason: accelerator.status says it)."""
+    """The C chain (chainkernel.c), or None and why: not built (the ImportError), its sin and cos disagree
+    with the C library's (one RuntimeWarning too), or KINENGINE_PURE_PYTHON (no reason)."""
     if accelerator.SWITCHED_OFF:
         return None, None
     try:
@@ -62,8 +61,7 @@ def sin_cos_error(sin_check: Callable[[bytes], bytes]) -> float:
 
 
 KERNEL, KERNEL_ERROR = _kernel_type()
-"""The C chain's type, or None: then every batch runs on numpy (tests set it to None to compare); and the
-ImportError's text when it did not load."""
+"""The C chain's type, or None: every batch runs on numpy (tests set it to compare); and why it is None."""
 
 
 def accelerator_status() -> str:

@@ -8,13 +8,12 @@ of *that* matrix. q (and q̇) are checked by the caller.
 * ``jacobian_time_variation``: J̇ = dJ/dt along q̇, (6, dof); entries in [m/(rad·s)], [1/s].
 * ``kinematic_hessian``: H (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, so J̇ = H @ q̇.
 
-How: everything starts from the WORLD Jacobian J_w (the spatial velocity of the body point at I's
-origin) of Pinocchio's plain-joint model, folded by the coordinate map (J = J_pin·M, and
-J̇ = J̇_pin·M with q̇_pin = M q̇), so mimic joints take no special path. The Hessian
-uses the Lie bracket of the joint axes: moving joint b turns every joint a below it, so
-∂S_a/∂θ_b = ad(S_b)·S_a = (ω_b × v_a + v_b × ω_a, ω_b × ω_a) for b above a, 0 otherwise, and
-θ = M q gives H = Σ_ab M[a, j]·ad(S_b)S_a·M[b, k]. Pinocchio's own ``getFrameKinematicHessian``
-gives the same numbers (after ``np.reshape(H.ravel(), (6, nv, nv), order="F")``).
+How: everything starts from the WORLD Jacobian J_w (the spatial velocity of the body point at I's origin)
+of Pinocchio's plain-joint model, folded by the coordinate map (J = J_pin·M, and J̇ = J̇_pin·M with
+q̇_pin = M q̇), so mimic joints take no special path. The Hessian uses the Lie bracket of the joint axes:
+moving joint b turns every joint a below it, so ∂S_a/∂θ_b = ad(S_b)·S_a = (ω_b × v_a + v_b × ω_a, ω_b × ω_a)
+for b above a, 0 otherwise, and θ = M q gives H = Σ_ab M[a, j]·ad(S_b)S_a·M[b, k]. Pinocchio's own
+``getFrameKinematicHessian`` gives the same numbers (after ``np.reshape(H.ravel(), (6, nv, nv), order="F")``).
 From J_w, with v = ∂p, ω = the frame's angular velocity along the differentiation direction:
 J_lwa = [[I, −[p]×], [0, I]]·J_w, ∂J_lwa = ∂J_w + [∂J_w,ang × p + J_w,ang × v; 0] and
 J_local = blockdiag(Cᵀ, Cᵀ)·J_lwa, ∂J_local = blockdiag(Cᵀ, Cᵀ)·(∂J_lwa − ω × J_lwa).

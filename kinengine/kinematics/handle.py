@@ -10,9 +10,8 @@ Pinocchio model (:meth:`Kinematics.frame_path`) and index once; each thread gets
 handle serves several threads. ``check_inputs=True``: every call runs the one input check
 (:attr:`CoordinateMap.ready` first, :meth:`CoordinateMap.check` for anything else); ``False``: the caller
 promises a finite float64 array (dof,), anything else is undefined behaviour of Pinocchio. ``batches=True``
-(the Robot's own handles) also takes batches (N, dof) to the vectorized path. Where the C accelerator runs
-(:mod:`kinengine.model.accelerator`), a plain frame's calls are its C calls: the same Pinocchio calls,
-handing every other call to the closures below.
+(the Robot's own handles) also takes batches (N, dof) to the vectorized path. A plain frame's calls are
+the C accelerator's (:mod:`kinengine.model.accelerator`) where it runs: the same Pinocchio calls.
 """
 
 from __future__ import annotations

@@ -53,12 +53,11 @@ def checked_frames(frames: object, kinds: tuple[type, ...]) -> None:
     of them (an empty one is left to the task to refuse)."""
     if frames is None or isinstance(frames, kinds):
         return
-    entries = frames if isinstance(frames, (list, tuple)) else [frames]
-    bad = next((f for f in entries if not isinstance(f, kinds)), None)
-    if bad is not None or not isinstance(frames, (list, tuple)):
-        raise OptionError(
-            f"a task's frames are frame names or kinengine.FrameTask entries, got {_short(bad)}"
-        )
+    for bad in frames if isinstance(frames, (list, tuple)) else [frames]:
+        if not isinstance(bad, kinds):
+            raise OptionError(
+                f"a task's frames are frame names or kinengine.FrameTask entries, got {_short(bad)}"
+            )
 
 
 def checked_rng(rng: object) -> np.random.Generator:

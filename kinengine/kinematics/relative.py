@@ -61,12 +61,8 @@ def relative_terms(TA: np.ndarray, JA: np.ndarray, TB: np.ndarray, JB: np.ndarra
     """[v_rel; ω_rel] Jacobian (6, dof) or (N, 6, dof) in I's axes from the frames' poses and
     "local_world_aligned" Jacobians (see the module doc)."""
     d = TA[..., :3, 3] - TB[..., :3, 3]
-    out = np.empty(np.broadcast_shapes(JA.shape, JB.shape))
-    Jw_B = JB[..., 3:, :]
-    # [d]× J_B,ω column by column: d × (J_B,ω e_k)
-    cross = np.cross(d[..., None, :], np.swapaxes(Jw_B, -1, -2))
-    out[..., :3, :] = JA[..., :3, :] - JB[..., :3, :] + np.swapaxes(cross, -1, -2)
-    out[..., 3:, :] = JA[..., 3:, :] - Jw_B
+    out = JA - JB  # and [d]× J_B,ω on the linear rows, column by column: d × (J_B,ω e_k)
+    out[..., :3, :] += np.swapaxes(np.cross(d[..., None, :], np.swapaxes(JB[..., 3:, :], -1, -2)), -1, -2)
     return out
 
 
