@@ -80,6 +80,7 @@ class Kinematics:
         self._tls, self.data = thread_data(lambda: create_data(model, f"robot {description.name!r}"))
         """``data()``: this thread's Pinocchio Data (made on first use)."""
         self._memo: dict[object, object] = {}
+        self._single: dict[int, Calls] = {}  # frame_calls, by frame index
 
     def frame_path(self, fid: int) -> FramePath:
         """The cheapest exact way to frame ``fid``: the model itself without mimic joints; for a frame that
@@ -173,17 +174,18 @@ class Kinematics:
     def frame_calls(self, fid: int) -> Calls:
         """(pose(q), jacobian(q, ref), kinematics(q, ref)) of frame ``fid`` on :meth:`frame_path`'s model,
         made once (:func:`single_calls`)."""
-        return self.memoized(
-            ("single calls", fid), lambda: single_calls(self.coordinates, *self.frame_path(fid))
-        )
+        try:
+            return self._single[fid]
+        except KeyError:
+            return self._single.setdefault(fid, single_calls(self.coordinates, *self.frame_path(fid)))
 
     def pose(self, q: np.ndarray, fid: int) -> np.ndarray:
         """T_IF (4, 4) at a checked q (dof,)."""
-        return self.frame_calls(fid)[0](q)
+        return (self._single.get(fid) or self.frame_calls(fid))[0](q)
 
     def jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> np.ndarray:
         """J (6, dof) in ``ref`` at a checked q (dof,)."""
-        return self.frame_calls(fid)[1](q, ref)
+        return (self._single.get(fid) or self.frame_calls(fid))[1](q, ref)
 
 
 Calls = tuple[Callable[..., np.ndarray], Callable[..., np.ndarray], Callable[..., tuple]]
@@ -198,7 +200,6 @@ def single_calls(
     and is reshaped; Pinocchio 4.1 crashes on a frame Jacobian with nv = 0: a 0-dof one is zeros (6, 0)."""
     forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
     local_frame, dof = pin.LOCAL, coords.dof
-    pinocchio_q: Callable[[np.ndarray], np.ndarray] = coords.to_pinocchio if mapped else _same
     fold: Callable[[np.ndarray], np.ndarray] = _same if dof > 1 else (lambda J: J.reshape(6, dof))
     if mapped:
         fold = lambda J: coords.fold(J.reshape(6, -1))  # noqa: E731
@@ -207,14 +208,14 @@ def single_calls(
 
     def pose(q: np.ndarray) -> np.ndarray:
         state = data()
-        forward(model, state, pinocchio_q(q))
+        forward(model, state, coords.to_pinocchio(q) if mapped else q)
         return place(model, state, pfid).homogeneous
 
     def jacobian(q: np.ndarray, ref: pin.ReferenceFrame) -> np.ndarray:
-        return fold(frame_jacobian(model, data(), pinocchio_q(q), pfid, ref))
+        return fold(frame_jacobian(model, data(), coords.to_pinocchio(q) if mapped else q, pfid, ref))
 
     def kinematics(q: np.ndarray, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
-        state, qp = data(), pinocchio_q(q)
+        state, qp = data(), coords.to_pinocchio(q) if mapped else q
         if ref == local_frame or dof == 0:  # the LOCAL frame Jacobian does not place the joints
             forward(model, state, qp)
         J = fold(frame_jacobian(model, state, qp, pfid, ref))  # otherwise it places them
