@@ -140,8 +140,7 @@ class Kinematics:
         return reduced, thread_data(lambda: create_data(reduced, what))[1]
 
     def pinocchio_q(self, q: np.ndarray) -> np.ndarray:
-        """Pinocchio's configuration (nq,) for a checked q (dof,): q itself without mimic joints, else
-        M q + b (:meth:`CoordinateMap.to_pinocchio`)."""
+        """Pinocchio's configuration (nq,) for a checked q (dof,): M q + b (CoordinateMap.to_pinocchio)."""
         return self.coordinates.to_pinocchio(q)
 
     def memoized(self, key: object, make: Callable[[], T]) -> T:
@@ -172,8 +171,7 @@ class Kinematics:
 
     # -- single configurations (q checked by the caller) ----------------------------------------
     def frame_calls(self, fid: int) -> Calls:
-        """(pose(q), jacobian(q, ref), kinematics(q, ref)) of frame ``fid`` on :meth:`frame_path`'s model,
-        made once (:func:`single_calls`)."""
+        """pose(q), jacobian(q, ref), kinematics(q, ref) of frame ``fid``: :func:`single_calls`, made once."""
         try:
             return self._single[fid]
         except KeyError:
