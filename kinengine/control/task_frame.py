@@ -116,16 +116,17 @@ class FrameBlock:
         self.S = S = self.values[: 6 * (6 + ms)].reshape(6 + ms, 6)
         S[:6] = np.eye(6)
         self.E = S[6:]
-        run = self.values[S.size :]
-        self.chi, self.distances, self.pose = run[:ms], run[ms : ms + k], run[ms + k :].reshape(4, 4)
+        tail = self.values[S.size :]
+        self.chi, self.distances, self.pose = tail[:ms], tail[ms : ms + k], tail[ms + k :].reshape(4, 4)
         self.pose[3, 3] = 1.0
-        self.write_run, self.run_at = struct.Struct(f"={ms + k + 12}d").pack_into, 8 * S.size
         layout = pmap.layout  # E = blockdiag(E_P, E_R) (m, 6): all of it, its rows then selected into S
         self.write_E, self.E_offset = layout.pack_into, layout.offset
         self.E_all: np.ndarray = np.frombuffer(bytearray(layout.template)).reshape(layout.shape)
-        if pmap.rows is None:  # no selection: the layout writes straight into S's E rows
+        run = f"{ms + k + 12}d"  # after S: χ, distances, the pose's rows 0-2
+        self.write, self.write_at = struct.Struct("=" + run).pack_into, 8 * S.size
+        if pmap.rows is None:  # no selection: E's entries and the run in one write, from S's E rows on
             self.E[:] = self.E_all
-            self.E_all, self.E_offset = S, 8 * 36 + layout.offset
+            self.write, self.write_at = struct.Struct(layout.format + run).pack_into, 8 * 36 + layout.offset
         self.out = np.zeros((6 + ms, dof))
         self.J, self.JA = self.out[:6], self.out[6:]
         self.Jdot, self.twist = (a.Jdot, a.twist) if b is None else (np.zeros((6, dof)), np.zeros(6))
@@ -205,16 +206,16 @@ class FrameBlock:
             chi += found[0]
             distances.append(found[1])
             entries += found[2]
-        self.write_E(self.E_all, self.E_offset, *entries)
         selected = chi
-        if self.selected is not None:
+        if self.selected is not None:  # E's entries into the whole E, then its selected rows into S
+            self.write_E(self.E_all, self.E_offset, *entries)
             np.take(self.E_all, self.selected, axis=0, out=self.E)
-            selected = [chi[i] for i in self.selected]
+            entries, selected = (), [chi[i] for i in self.selected]
         px, py, pz = p
-        self.write_run(
+        self.write(
             self.values,  # type: ignore[arg-type]  # a buffer; numpy declares __buffer__ for Python >= 3.12 only
-            self.run_at,
-            *selected, *distances, c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz,
+            self.write_at,
+            *entries, *selected, *distances, c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz,
         )  # fmt: skip
         self.S.dot(J, self.out)  # [J; J_A] = [I; E]·J
         if continuous:
