@@ -130,8 +130,11 @@ def test_string_entries_take_the_call_arguments_and_single_calls_keep_working(st
     assert single.pose.shape == (4, 4)
     with pytest.raises(kinengine.OptionError, match="FrameTask"):
         robot.task([3])
-    with pytest.raises(kinengine.OptionError, match="weight"):
-        FrameTask("tool0", weight=-1.0)
+    for bad in (-1.0, True, np.nan, "1"):
+        with pytest.raises(kinengine.OptionError, match="weight"):
+            FrameTask("tool0", weight=bad)
+    weighted = FrameTask("tool0", rows="x", weight=np.float32(2.5))  # numpy scalars, one label as a row
+    assert type(weighted.weight) is float and weighted.weight == 2.5 and weighted.rows == ("x",)
     with pytest.raises(kinengine.OptionError, match="on_singularity"):
         robot.task("tool0", on_singularity="ignore")
     with pytest.raises(kinengine.FrameNotFoundError):

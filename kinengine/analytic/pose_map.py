@@ -57,8 +57,8 @@ class Layout:
             template[:3, :3] = np.eye(3)
         self.template = template.tobytes()
         self.offset = 48 * m_P if cartesian else 0  # 48 bytes: one row of 6 float64
-        rows = "24x3d" * m_R if cartesian else "3d24x" * m_P + "24x3d" * m_R
-        self.pack_into: Callable[..., None] = struct.Struct("=" + rows).pack_into
+        self.format = "=" + ("24x3d" * m_R if cartesian else "3d24x" * m_P + "24x3d" * m_R)
+        self.pack_into: Callable[..., None] = struct.Struct(self.format).pack_into
 
 
 def _combine(entries: Entries, block: np.ndarray, out: np.ndarray, scratch: np.ndarray) -> None:

@@ -23,13 +23,10 @@ def _unwrap(angle: float, previous: float) -> float:
     return angle + TWO_PI * round((previous - angle) / TWO_PI)
 
 
-def _angles(indices: tuple[int, ...]) -> Rule:
-    def rule(chi: list[float], previous: list[float]) -> list[float]:
-        for i in indices:
-            chi[i] = _unwrap(chi[i], previous[i])
-        return chi
-
-    return rule
+def _azimuth(chi: list[float], previous: list[float]) -> list[float]:
+    """Cylindrical and spherical coordinates: the azimuth θ (χ2) unwrapped next to the previous one."""
+    chi[1] = _unwrap(chi[1], previous[1])
+    return chi
 
 
 def _euler(proper: bool) -> Rule:
@@ -45,49 +42,37 @@ def _euler(proper: bool) -> Rule:
         p1, p2, p3 = previous
         if abs(chi[0] - p1) < 1.0 and abs(chi[1] - p2) < 1.0 and abs(chi[2] - p3) < 1.0:
             return chi
-        a1, a2, a3 = _unwrap(chi[0], p1), _unwrap(chi[1], p2), _unwrap(chi[2], p3)
-        b1, b2, b3 = _unwrap(chi[0] + math.pi, p1), _unwrap(shift - chi[1], p2), _unwrap(chi[2] + math.pi, p3)
-        if (b1 - p1) ** 2 + (b2 - p2) ** 2 + (b3 - p3) ** 2 < (a1 - p1) ** 2 + (a2 - p2) ** 2 + (
-            a3 - p3
-        ) ** 2:
-            return [b1, b2, b3]
-        return [a1, a2, a3]
+        same = [_unwrap(chi[0], p1), _unwrap(chi[1], p2), _unwrap(chi[2], p3)]
+        other = [_unwrap(chi[0] + math.pi, p1), _unwrap(shift - chi[1], p2), _unwrap(chi[2] + math.pi, p3)]
+        return other if math.dist(other, previous) < math.dist(same, previous) else same
 
     return rule
 
 
 def _quaternion(chi: list[float], previous: list[float]) -> list[float]:
     """q and −q are the same rotation: keep the sign of the previous quaternion."""
-    if sum(a * b for a, b in zip(chi, previous, strict=False)) < 0.0:
+    if sum(a * b for a, b in zip(chi, previous, strict=True)) < 0.0:
         return [-c for c in chi]
     return chi
 
 
 def _rotation_vector(chi: list[float], previous: list[float]) -> list[float]:
     """φ = θn equals (θ + 2πk)n for every integer k: pick the k closest to the previous φ."""
-    theta = math.sqrt(sum(c * c for c in chi))
+    theta = math.hypot(*chi)
     if theta < 1e-9:  # at the identity the axis is undefined: candidates are 2πk·n for any n
-        p = math.sqrt(sum(c * c for c in previous))
+        p = math.hypot(*previous)
         k = round(p / TWO_PI)
         return [c * (k * TWO_PI / p) for c in previous] if k and p > 0 else chi
     n = [c / theta for c in chi]
-    along = sum(a * b for a, b in zip(n, previous, strict=False))
-    best = min(
-        (round((along - theta) / TWO_PI) + d for d in (-1, 0, 1)),
-        key=lambda k: sum((x * (theta + TWO_PI * k) - p) ** 2 for x, p in zip(n, previous, strict=False)),
-    )
-    return [x * (theta + TWO_PI * best) for x in n]
+    k = round((sum(a * b for a, b in zip(n, previous, strict=True)) - theta) / TWO_PI)
+    candidates = [[x * (theta + TWO_PI * j) for x in n] for j in (k - 1, k, k + 1)]
+    return min(candidates, key=lambda c: math.dist(c, previous))
 
 
 def _angle_axis(chi: list[float], previous: list[float]) -> list[float]:
     """(θ, n) equals (θ + 2πk, n) and (−θ + 2πk, −n): pick the candidate closest to the previous one."""
-    theta, n = chi[0], chi[1:]
-    candidates = []
-    for sign in (1.0, -1.0):
-        axis = [sign * x for x in n]
-        angle = _unwrap(sign * theta, previous[0])
-        candidates.append([angle, *axis])
-    return min(candidates, key=lambda c: sum((a - b) ** 2 for a, b in zip(c, previous, strict=False)))
+    candidates = [[_unwrap(s * chi[0], previous[0]), *(s * x for x in chi[1:])] for s in (1.0, -1.0)]
+    return min(candidates, key=lambda c: math.dist(c, previous))
 
 
 def _identity(chi: list[float], previous: list[float]) -> list[float]:
@@ -99,8 +84,8 @@ def continuity_rule(name: str) -> Rule:
     if name.startswith("euler_"):
         return _euler(name[6] == name[8])
     return {
-        "cylindrical": _angles((1,)),
-        "spherical": _angles((1,)),
+        "cylindrical": _azimuth,
+        "spherical": _azimuth,
         "quaternion": _quaternion,
         "rotation_vector": _rotation_vector,
         "angle_axis": _angle_axis,

@@ -8,12 +8,11 @@ J⁺ e). λ is the same Tikhonov weight as ``DifferentialIK(damping=...)``; the 
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import numpy.typing as npt
 
 from ..errors import OptionError
+from ..kinematics.options import checked_nonnegative
 
 
 def damped_solve(J: npt.ArrayLike, e: npt.ArrayLike, damping: float = 1e-6) -> npt.NDArray[np.float64]:
@@ -22,31 +21,19 @@ def damped_solve(J: npt.ArrayLike, e: npt.ArrayLike, damping: float = 1e-6) -> n
     damping >= 0 (units of J²: [m²/rad²] for linear rows). Never raises at a singular J; OptionError for
     non-finite or wrongly shaped input.
     """
-    if isinstance(damping, (bool, np.bool_)) or not isinstance(
-        damping, (int, float, np.integer, np.floating)
-    ):
-        raise OptionError(f"damping must be a number >= 0, got {damping!r:.60}")
-    lam = float(damping)
-    if not (math.isfinite(lam) and lam >= 0.0):
-        raise OptionError(f"damping must be a finite number >= 0, got {damping!r:.60}")
+    lam = checked_nonnegative(damping, "damping")
     try:
-        A = np.asarray(J, dtype=float)
-        b = np.asarray(e, dtype=float)
+        A, b = np.asarray(J, dtype=float), np.asarray(e, dtype=float)
     except (TypeError, ValueError):
         raise OptionError("damped_solve takes real arrays J (m, n) and e (m,) or (m, k)") from None
     if A.ndim != 2 or b.ndim not in (1, 2) or b.shape[0] != A.shape[0]:
         raise OptionError(f"damped_solve needs J (m, n) and e (m,) or (m, k), got {A.shape} and {b.shape}")
     if not (np.isfinite(A).all() and np.isfinite(b).all()):
         raise OptionError("damped_solve: J and e must be finite (no NaN or inf)")
-    if A.size == 0:
-        return np.zeros((A.shape[1],) + b.shape[1:])
-    U, s, Vt = np.linalg.svd(A, full_matrices=False)
-    denominator = s * s + lam
-    cutoff = np.finfo(float).eps * max(A.shape) * (float(s[0]) if len(s) else 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        gain = np.where(s > cutoff, s / np.where(denominator > 0, denominator, 1.0), 0.0)
-    projected = U.T @ b  # (r,) or (r, k)
-    x: npt.NDArray[np.float64] = Vt.T @ (gain[:, None] * projected if b.ndim == 2 else gain * projected)
+    U, s, Vt = np.linalg.svd(A, full_matrices=False)  # numpy's SVD takes empty matrices too
+    kept = s > np.finfo(float).eps * max(A.shape) * s.max(initial=0.0)  # numerically nonzero σ_i
+    gain = np.divide(s, s * s + lam, out=np.zeros_like(s), where=kept)
+    x: npt.NDArray[np.float64] = Vt.T @ (gain.reshape((-1,) + (1,) * (b.ndim - 1)) * (U.T @ b))
     return x
 
 

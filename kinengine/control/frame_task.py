@@ -9,11 +9,12 @@ them into preallocated arrays.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from ..analytic.pose_map import as_rows
 from ..errors import OptionError
+from ..kinematics.options import checked_nonnegative
 
 
 @dataclass(frozen=True)
@@ -38,12 +39,8 @@ class FrameTask:
     def __post_init__(self) -> None:
         if not isinstance(self.frame, str):
             raise OptionError(f"FrameTask.frame must be a frame name (str), got {self.frame!r}")
-        if self.rows is not None:
-            rows = (self.rows,) if isinstance(self.rows, str) else tuple(self.rows)
-            object.__setattr__(self, "rows", rows)
-        if not (isinstance(self.weight, (int, float)) and math.isfinite(self.weight) and self.weight >= 0):
-            raise OptionError(f"FrameTask.weight must be a finite number >= 0, got {self.weight!r}")
-        object.__setattr__(self, "weight", float(self.weight))
+        object.__setattr__(self, "rows", as_rows(self.rows))
+        object.__setattr__(self, "weight", checked_nonnegative(self.weight, "FrameTask.weight"))
 
 
 def as_frame_tasks(
@@ -54,24 +51,14 @@ def as_frame_tasks(
     relative_to: str | None,
 ) -> tuple[FrameTask, ...]:
     """FrameTask entries for each item of ``frames`` (names take the other arguments)."""
-    items = (frames,) if isinstance(frames, (str, FrameTask)) else tuple(frames)
-    out = []
+    items, selected = (frames,) if isinstance(frames, (str, FrameTask)) else tuple(frames), as_rows(rows)
     for item in items:
-        if isinstance(item, FrameTask):
-            out.append(item)
-        elif isinstance(item, str):
-            out.append(
-                FrameTask(
-                    item,
-                    position,
-                    rotation,
-                    None if rows is None else tuple(rows) if not isinstance(rows, str) else (rows,),
-                    relative_to,
-                )
-            )
-        else:
+        if not isinstance(item, (str, FrameTask)):
             raise OptionError(f"a task's frames are frame names or kinengine.FrameTask entries, got {item!r}")
-    return tuple(out)
+    return tuple(
+        item if isinstance(item, FrameTask) else FrameTask(item, position, rotation, selected, relative_to)
+        for item in items
+    )
 
 
 __all__ = ["FrameTask", "as_frame_tasks"]

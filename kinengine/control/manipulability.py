@@ -34,8 +34,6 @@ ROW_SETS = {"all": (0, 1, 2, 3, 4, 5), "linear": (0, 1, 2), "angular": (3, 4, 5)
 DEFAULT_TOLERANCE = 1e-6
 """σ at or below which a direction counts as lost [m/rad for linear rows, 1 for angular rows]."""
 Rows = str | Sequence[str | int]
-
-
 """'all', 'linear', 'angular', or row labels (vx vy vz wx wy wz) / indices 0-5."""
 
 
@@ -112,23 +110,20 @@ def analyze_jacobian(
 ) -> SingularityReport:
     """The :class:`SingularityReport` of a geometric Jacobian J_e0 (6, dof) in "local_world_aligned"."""
     tolerance = checked_tolerance(tolerance)
-    index = _rows(rows)
+    index = list(_rows(rows))
     J = np.asarray(J, dtype=float)
     if J.ndim != 2 or J.shape[0] != 6:
         raise ConfigurationError(f"Expected `J` to have shape (6, dof), got {J.shape}")
-    Js = J[list(index)]
-    m = len(index)
+    Js, fits = J[index], len(index) <= J.shape[1]  # fits: m <= dof, else w = 0 and κ = inf
     U, s, _ = np.linalg.svd(Js, full_matrices=True)
     rank = int(np.count_nonzero(s > tolerance))
-    w = float(np.prod(s)) if m <= J.shape[1] else 0.0
-    kappa = float(s[0] / s[-1]) if s.size and s[-1] > 0 and m <= J.shape[1] else float("inf")
-    lost = []
-    for u in _readable_basis(U[:, rank:]):
-        twist = np.zeros(6)
-        twist[list(index)] = u
-        lost.append(LostDirection(twist, float(np.linalg.norm(Js.T @ u)), describe_twist(twist)))
+    w = float(np.prod(s)) if fits else 0.0
+    kappa = float(s[0] / s[-1]) if fits and s.size and s[-1] > 0 else float("inf")
+    twists = np.zeros((len(index) - rank, 6))  # the lost directions, rows [linear; angular] in I
+    twists[:, index] = _readable_basis(U[:, rank:])
+    lost = tuple(LostDirection(t, float(np.linalg.norm(Js.T @ t[index])), describe_twist(t)) for t in twists)
     labels = tuple(ROW_LABELS[i] for i in index)
-    return SingularityReport(frame, labels, s, w, kappa, rank, tolerance, tuple(lost))
+    return SingularityReport(frame, labels, s, w, kappa, rank, tolerance, lost)
 
 
 def singularity_report(
@@ -189,9 +184,7 @@ def velocity_ellipsoid(robot: RobotLike, q: npt.ArrayLike, frame: str | None = N
     q = robot.check_configuration(q, check_limits=False, batch=False)
     T = robot.frame_pose(q, frame)
     U, s, _ = np.linalg.svd(robot.jacobian(q, frame)[:3], full_matrices=True)
-    semi = np.zeros(3)
-    semi[: s.size] = s
-    return VelocityEllipsoid(T[:3, 3].copy(), U, semi)
+    return VelocityEllipsoid(T[:3, 3].copy(), U, np.pad(s, (0, 3 - s.size)))
 
 
 def require_regular(robot: RobotLike, q: npt.ArrayLike, *options: Any, **keywords: Any) -> SingularityReport:
@@ -221,30 +214,23 @@ def describe_twist(twist: np.ndarray, digits: int = 2) -> str:
 
 def _rows(rows: Rows) -> tuple[int, ...]:
     """Row indices of J for "all", "linear", "angular" or a sequence of labels (vx … wz) / indices."""
-    if isinstance(rows, str):
-        if rows in ROW_SETS:
-            return ROW_SETS[rows]
-        rows = (rows,)
-    if isinstance(rows, (bytes, dict)) or not hasattr(rows, "__iter__"):
-        raise ParameterizationError(
-            f"Expected `rows` to be 'all', 'linear', 'angular' or a sequence of labels "
-            f"from {ROW_LABELS} (or indices 0-5), got {type(rows).__name__}"
-        )
-    index = []
-    for row in rows:
-        if isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_)) and 0 <= row < 6:
-            index.append(int(row))
-        elif type(row) is str and row in ROW_LABELS:
-            index.append(ROW_LABELS.index(row))
-        else:
-            raise ParameterizationError(
-                f"Expected `rows` to be 'all', 'linear', 'angular' or labels from "
-                f"{ROW_LABELS} (or indices 0-5), got {' '.join(repr(row).split())[:40]}"
-            )
+    if isinstance(rows, str) and rows in ROW_SETS:
+        return ROW_SETS[rows]
+    items = (rows,) if isinstance(rows, str) else rows
+    index: list[int] = []
+    if not isinstance(items, (bytes, dict)) and hasattr(items, "__iter__"):
+        for row in items:
+            if isinstance(row, (int, np.integer)) and not isinstance(row, (bool, np.bool_)) and 0 <= row < 6:
+                index.append(int(row))
+            elif type(row) is str and row in ROW_LABELS:
+                index.append(ROW_LABELS.index(row))
+            else:
+                index = []
+                break
     if not index or len(set(index)) != len(index):
         raise ParameterizationError(
-            f"Expected `rows` to name each row at most once and at least one row, "
-            f"got {' '.join(repr(rows).split())[:60]}"
+            f"Expected `rows` to be 'all', 'linear', 'angular' or distinct labels from {ROW_LABELS} "
+            f"(or indices 0-5), at least one, got {' '.join(repr(rows).split())[:60]}"
         )
     return tuple(index)
 

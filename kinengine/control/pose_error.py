@@ -47,19 +47,18 @@ def pose_error(
     A, B = _as_pose(T, "T"), _as_pose(T_target, "T_target")
     if A.ndim == 2 and B.ndim == 2:
         return _single(A, B, frame)
-    A, B = np.broadcast_arrays(A if A.ndim == 3 else A[None], B if B.ndim == 3 else B[None])
+    A, B = np.broadcast_arrays(A.reshape(-1, 4, 4), B.reshape(-1, 4, 4))  # a single pose as a batch of one
     return np.array([_single(a, b, frame) for a, b in zip(A, B, strict=False)]).reshape(-1, 6)
 
 
 def _single(T: np.ndarray, T_target: np.ndarray, frame: str) -> npt.NDArray[np.float64]:
-    M, M_target = pin.SE3(T[:3, :3], T[:3, 3]), pin.SE3(T_target[:3, :3], T_target[:3, 3])
-    xi = pin.log6(M.actInv(M_target))
-    if frame == "local":
-        return np.array(xi.vector)
+    M = pin.SE3(T)
+    xi = pin.log6(M.actInv(pin.SE3(T_target)))
     if frame == "world":
-        return np.array(M.act(xi).vector)
-    C = T[:3, :3]
-    return np.concatenate([C @ xi.linear, C @ xi.angular])
+        xi = M.act(xi)
+    elif frame == "local_world_aligned":  # the same twist in I's axes: rotated by C_IF only
+        xi = pin.SE3(M.rotation, np.zeros(3)).act(xi)
+    return np.array(xi.vector)
 
 
 __all__ = ["FRAMES", "pose_error"]

@@ -1,5 +1,5 @@
 """Differential inverse kinematics as one quadratic program per control step (the velocity-level solver a
-controller calls each cycle), solved by DAQP (or ProxQP) through ``qpsolvers``.
+controller calls each cycle), solved by DAQP (or ProxQP) through ``qpsolvers``. See docs/controller.md.
 
 >>> ik = kinengine.DifferentialIK(robot, [kinengine.PoseTarget("tool0", T_target),
 ...                                       kinengine.PostureTarget(robot.neutral(), weight=1e-3)])
@@ -9,31 +9,18 @@ The step Δq = q̇·dt of one priority level minimizes
 
     Σ_i w_i ‖A_i Δq − (k_i e_i + V_i dt)‖² + w_p ‖Δq − k_p (q_ref − q)‖² + (λ + μ Σ_i w_i ‖k_i e_i‖²) ‖Δq‖²
 
-subject to lb ≤ Δq ≤ ub (joint position limits as bounds over the step, joint velocity limits q̇_max from
-the URDF's ``<limit velocity>``, optional acceleration limits around the previous q̇) and any extra linear
-inequality block G q̇ ≤ h (:class:`VelocityConstraint`). λ (``damping``) is a constant Tikhonov term; μ
-(``lm_damping``) the Levenberg–Marquardt term that grows with the error, so the step stays short and well
-conditioned far from the target and near singularities and vanishes at convergence (Newton steps there).
+subject to lb ≤ Δq ≤ ub (joint position limits over the step, velocity limits q̇_max, optional acceleration
+limits around the previous q̇) and G q̇ ≤ h (:class:`VelocityConstraint`). λ (``damping``) is a constant
+Tikhonov term, μ (``lm_damping``) a Levenberg–Marquardt term growing with the error. A :class:`PoseTarget`'s
+error e [m, rad]: position rows "x", "y", "z" p_target − p in the root frame I (in B with ``relative_to``
+B), A = J_v; rotation rows "rx", "ry", "rz" r = log3(C_Fᵀ C_target) in the frame F's axes,
+A = Jlog3(C_Fᵀ C_target) · C_targetᵀ J_ω (d r = −A dq). The gain k ∈ (0, 1] is the fraction of the error
+removed per step. Feed-forward: a target twist [v; ω] in I's axes ("local_world_aligned"; B's with
+``relative_to``) gives V = v on the position rows and Jlog3(C_Fᵀ C_target) C_targetᵀ ω on the rotation rows.
 
-A :class:`PoseTarget`'s error e is decoupled: position rows "x", "y", "z" are p_target − p in the root frame
-I (in B with ``relative_to`` B), with A = J_v (LOCAL_WORLD_ALIGNED linear rows, or the relative Jacobian's
-in B); rotation rows "rx", "ry", "rz" are r = log3(C_Fᵀ C_target), in the frame F's own axes, with
-A = Jlog3(C_Fᵀ C_target) · C_targetᵀ J_ω, the exact derivative (d r = −A dq), so a full target converges
-quadratically. Rows select a sub-task: ("x", "y", "z", "rx", "ry") leaves the rotation about F's z axis free
-(a 5-D target: position plus tool axis). The gain k ∈ (0, 1] is the fraction of the error removed per step
-(1: a full Newton step). Units: e in [m] and [rad].
-
-Feed-forward: a target's twist [v; ω] (``PoseTarget.twist``) is the velocity of the target's origin and its
-angular velocity, both in I's axes (in B's, relative to B, with ``relative_to`` B) — the convention of
-``robot.jacobian(q, frame)`` ("local_world_aligned"). It adds V dt to the wanted change of e: V = v on
-the position rows, Jlog3(C_Fᵀ C_target) C_targetᵀ ω on the rotation rows (the rate of r while the target
-turns), so a target moving at a known twist is followed without the lag e = V dt / k of a pure feedback.
-
-Priorities: ``DifferentialIK(robot, level_1, level_2, ...)``. Each level is solved as a QP with the bounds,
-then the next one only in the null space of every higher level's task rows: Δq = Δq_1 + Z z, Z an
-orthonormal basis of the null space of the stacked A of the levels above (SVD, singular values at or below
-``1e-9·max(1, σ_max)`` count as zero), so a lower level can never change what a higher one achieved, and
-the bounds still hold. See docs/controller.md.
+Priorities: ``DifferentialIK(robot, level_1, level_2, ...)``: each level after the first is solved only in the
+null space of the stacked A of the levels above (an orthonormal basis from their SVD, singular values at or
+below ``1e-9·max(1, σ_max)`` count as zero), so a lower level never changes what a higher one achieved.
 """
 
 from __future__ import annotations
@@ -224,7 +211,7 @@ class DifferentialIK:
         if previous_qdot is not None:
             self._qdot = self._coords.check(previous_qdot, name="previous_qdot", allow_batch=False).copy()
         model, data, n = self._model, self._data, self.dof
-        qp = q if self._coords.identity else self._coords.to_pinocchio(q)
+        qp = self._coords.to_pinocchio(q)  # q itself without mimic joints
         if self._pose_terms:
             if n:
                 pin.computeJointJacobians(model, data, qp)
@@ -258,7 +245,7 @@ class DifferentialIK:
         if ``stack`` (None for the last level: no lower level needs its null space) and the squared residual
         of its pose rows."""
         n = self.dof
-        H, c, diag, AtA = level.H, level.c, level.diag, level.AtA
+        H, c, diag, AtA, Atb = level.H, level.c, level.diag, level.AtA, level.Atb
         fresh = True  # H and c hold the last step's values until the first term writes them
         weighted_sq = residual_sq = on_diagonal = 0.0
         rows: list[np.ndarray] = []
@@ -276,20 +263,17 @@ class DifferentialIK:
             b = e + ff * dt if twist is not None else e
             if stack:
                 rows.append(A.copy())
-            if n:  # H (+)= w AᵀA, c (−)= w Aᵀb
-                if fresh:
-                    np.dot(A.T, A, out=H)
-                    np.dot(A.T, b, out=c)
-                    if w != 1.0:
-                        H *= w
-                    c *= -w
-                    fresh = False
-                else:
-                    np.dot(A.T, A, out=AtA)
-                    if w != 1.0:
-                        AtA *= w
+            if n:  # H (+)= w AᵀA and c (−)= w Aᵀb: the level's first term writes them, the next ones add
+                to_H, to_c = (H, c) if fresh else (AtA, Atb)
+                np.dot(A.T, A, out=to_H)
+                np.dot(A.T, b, out=to_c)
+                if w != 1.0:
+                    to_H *= w
+                to_c *= -w
+                if not fresh:
                     H += AtA
-                    c -= w * (A.T @ b)
+                    c += Atb
+                fresh = False
         if fresh:
             H.fill(0.0)
             c.fill(0.0)

@@ -278,7 +278,7 @@ class Level:
                 self.postures.append(task)
             else:
                 raise OptionError(f"tasks are PoseTarget or PostureTarget entries, got {task!r:.80}")
-        self.H, self.c, self.AtA = np.zeros((n, n)), np.zeros(n), np.zeros((n, n))
+        self.H, self.c, self.AtA, self.Atb = np.zeros((n, n)), np.zeros(n), np.zeros((n, n)), np.zeros(n)
         self.diag = self.H.reshape(-1)[:: n + 1]  # a view of H's diagonal
 
 

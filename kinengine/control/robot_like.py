@@ -1,7 +1,6 @@
 """What the layers below the facade read of a robot: :class:`RobotLike`, the public members of
 :class:`kinengine.Robot` that the Task, inverse kinematics, the QP step, the singularity measures, the
-pictures and ``kinengine verify`` use. They type their
-argument against it, never against the facade's ``Robot`` (a higher layer), which satisfies it."""
+pictures and ``kinengine verify`` use, typing their argument against it, never against the facade."""
 
 from __future__ import annotations
 
@@ -17,7 +16,6 @@ from ..urdf import RobotDescription
 
 if TYPE_CHECKING:  # manipulability types its own argument against RobotLike
     from ..collision import CollisionChecker
-    from ..kinematics.handle import FrameHandle
     from .ik import IKResult
     from .ik_batch import IKBatchResult
     from .manipulability import VelocityEllipsoid
@@ -108,8 +106,6 @@ class RobotLike(Protocol):
     def kinematic_hessian(
         self, q: npt.ArrayLike, frame: str | None = None, reference: Reference = "local_world_aligned"
     ) -> FloatArray: ...
-
-    def frame(self, name: str | None = None, *, check_inputs: bool = True) -> FrameHandle: ...
 
     def in_collision(self, q: npt.ArrayLike) -> bool | npt.NDArray[np.bool_]: ...
 

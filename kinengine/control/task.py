@@ -1,43 +1,28 @@
-"""The controller's hot path: one ``update(q, qdot)`` computes everything, into preallocated arrays.
+"""The controller's hot path: one ``update(q, qdot)`` computes everything, into preallocated arrays
+(docs/controller.md lists every attribute with its shape).
 
 >>> task = robot.task("tool0", position="cartesian", rotation="euler_zyz")
 >>> task.update(q, qdot)                       # into preallocated read-only arrays
 >>> task.chi, task.analytic_jacobian, task.jacobian_dot, task.analytic_jacobian_dot
-
-A task stack: several :class:`~kinengine.FrameTask` entries, each with its own parameterizations,
-rows, reference frame and weight, stacked in the given order:
-
->>> task = robot.task([kinengine.FrameTask("tool0", rotation="euler_zyz"),
+>>> task = robot.task([kinengine.FrameTask("tool0", rotation="euler_zyz"),      # a stack, in this order
 ...                    kinengine.FrameTask("link_4", rotation=None, rows=("x", "y"))])
 
-Frames: per entry, ``pose`` is T_IA in the root frame I (T_BA with ``relative_to`` B); ``jacobian`` is J_e0
-in "local_world_aligned" (origin velocity and angular velocity in I, rows [linear; angular]; with
-``relative_to`` the relative Jacobian expressed in B, see :mod:`kinengine.kinematics.relative`);
-``twist`` = J·q̇; ``jacobian_dot`` = dJ/dt; ``analytic_jacobian`` = E(χ)·J and
-``analytic_jacobian_dot`` = Ė·J + E·J̇ with Ė = dE/dt along (v, ω); ``chi_dot`` = J_A·q̇. Stacked over
-the k entries: ``chi`` (M,), ``analytic_jacobian`` (M, dof) with M the total of the entries' selected
-rows, ``jacobian`` (6k, dof), ``pose`` (k, 4, 4) ((4, 4) for a single frame given as a name or a FrameTask),
-``weights`` (M,) each entry's weight repeated over its rows, ``row_labels`` ("frame:label", ...).
+Frames, per entry: ``pose`` is T_IA in the root frame I (T_BA with ``relative_to`` B); ``jacobian`` is J_e0
+in "local_world_aligned" (rows [v; ω] in I; with ``relative_to`` the relative Jacobian in B, see
+:mod:`kinengine.kinematics.relative`); ``twist`` = J·q̇; ``analytic_jacobian`` = E(χ)·J;
+``analytic_jacobian_dot`` = Ė·J + E·J̇; ``chi_dot`` = J_A·q̇. A stack concatenates its entries' rows
+(``row_labels`` "frame:label"; ``weights`` each entry's weight over its rows).
 
-Singularities: ``singularity_distances`` (P,) is, per entry and per parameterization in
-``singularity_labels`` order ("frame:parameterization"), the distance of the current χ to that
-parameterization's singular set (|cos χ2| for Tait–Bryan angles, ρ for cylindrical, inf if never
-singular), updated every update, so a controller can switch parameterization before reaching it. A
-parameterization closer than ``singularity_threshold`` gets NaN in its rows of ``analytic_jacobian``,
-``analytic_jacobian_dot`` and ``chi_dot`` (its χ rows keep the finite angles; every other row is exact);
-with ``on_singularity="raise"`` (default) the update then raises RepresentationSingularityError *after*
-writing every attribute: a failed update leaves the Task consistent, holding all the new configuration's
-values (so the next update continues from it), never a mix of old and new.
+Singularities: ``singularity_distances`` holds, per entry and parameterization (``singularity_labels``),
+the distance of χ to that parameterization's singular set. Closer than ``singularity_threshold``: NaN in
+its rows of ``analytic_jacobian``, ``analytic_jacobian_dot`` and ``chi_dot`` (χ keeps the finite angles),
+and with ``on_singularity="raise"`` RepresentationSingularityError *after* every attribute is written (the
+Task never holds a mix of old and new values).
 
-How: per frame Pinocchio's frame Jacobian on the frame's cheapest exact model
-(:meth:`~kinengine.kinematics.engine.Kinematics.frame_path`); with q̇ one Pinocchio call for the joint
-Jacobians and their rates (``computeJointJacobiansTimeVariation``); per entry
-:mod:`kinengine.control.task_frame` does the rest. Pinocchio's model has plain joints only; with mimic joints
-q_pin = M q + b and q̇_pin = M q̇ are written into preallocated arrays and the Jacobians are folded, J·M (see
-:mod:`kinengine.model.coordinates`), except for a frame that no mimic joint moves, whose model takes q.
-
-A Task owns its own Pinocchio Data: use one Task per thread. The attributes are read-only
-views that the next update overwrites; copy what you keep.
+How: per frame Pinocchio's frame Jacobian on the frame's cheapest exact model (``Kinematics.frame_path``);
+with q̇ one ``computeJointJacobiansTimeVariation`` call; per entry :mod:`kinengine.control.task_frame`. With
+mimic joints q_pin = M q + b and q̇_pin = M q̇ go to Pinocchio and the Jacobians are folded, J·M.
+A Task owns its Pinocchio Data: use one Task per thread; copy the attributes you keep.
 """
 
 from __future__ import annotations
@@ -91,57 +76,43 @@ class Task:
         self.check_inputs, self.continuous = check_inputs, continuous
         self.frame_tasks, self.frames = specs, tuple(f.frame for f in specs)
         kin = robot.engine
-        self._coords, self._model = kin.coordinates, kin.model
+        self._coords, self._model, self.dof = kin.coordinates, kin.model, robot.dof
         self._data = data = create_data(kin.model, "a Task")
-        self.dof = robot.dof
         self._qp, self._vp = np.empty(kin.model.nq), np.empty(kin.model.nv)
-        kinematics: dict[int, FrameKinematics] = {}
-
-        def frame_kinematics(name: str) -> FrameKinematics:
-            fid = robot.frame_id(name)
-            if fid not in kinematics:
-                kinematics[fid] = FrameKinematics(kin, data, fid)
-            return kinematics[fid]
-
-        self._blocks = [
+        fids = {name: robot.frame_id(name) for f in specs for name in (f.frame, f.relative_to) if name}
+        kinematics = {fid: FrameKinematics(kin, data, fid) for fid in dict.fromkeys(fids.values())}
+        self._blocks = blocks = [
             FrameBlock(
                 spec,
                 pose_map(spec.position, spec.rotation, as_rows(spec.rows)),
-                frame_kinematics(spec.frame),
-                None if spec.relative_to is None else frame_kinematics(spec.relative_to),
+                kinematics[fids[spec.frame]],
+                None if spec.relative_to is None else kinematics[fids[spec.relative_to]],
             )
             for spec in specs
         ]
         self._kinematics = tuple(kinematics.values())
         self._mapped = not self._coords.identity and any(f.mapped or not f.path_nv for f in self._kinematics)
-        self._stacked = len(self._blocks) > 1
-        blocks = self._blocks
-        uniform = all(
-            not isinstance(f, FrameTask)
-            for f in ((frames,) if isinstance(frames, (str, FrameTask)) else frames)
+        single = isinstance(frames, (str, FrameTask))
+        named = all(
+            isinstance(f, str) for f in ((frames,) if isinstance(frames, (str, FrameTask)) else frames)
         )
-        self.labels = (
-            blocks[0].pmap.labels if uniform else tuple(lab for b in blocks for lab in b.pmap.labels)
-        )
+        self.labels = blocks[0].pmap.labels if named else tuple(lab for b in blocks for lab in b.pmap.labels)
         self.row_labels = tuple(f"{b.spec.frame}:{lab}" for b in blocks for lab in b.pmap.labels)
         self.singularity_labels = tuple(f"{b.spec.frame}:{part.name}" for b in blocks for part in b.parts)
-        self._weights = np.concatenate([np.full(b.pmap.size, b.spec.weight) for b in blocks])
-        # one block: the Task's arrays are the block's own; a stack: copies of each block's (see _gather)
+        # one block: the Task's arrays are the block's own; a stack: copies of the blocks' (see _gather)
         names = ("pose", "J", "JA", "chi", "distances", "Jdot", "JAdot", "twist", "chi_dot")
         if len(blocks) == 1:
-            arrays = [getattr(blocks[0], name) for name in names]
+            arrays, self._stack = [getattr(blocks[0], name) for name in names], []
         else:
-            arrays = [np.stack([b.pose for b in blocks])]
-            arrays += [np.concatenate([getattr(b, name) for b in blocks]) for name in names[1:]]
-        self._arrays = dict(zip(names, arrays, strict=True))
+            arrays = [np.concatenate([getattr(b, name) for b in blocks]) for name in names]
+            self._stack = list(zip(names, arrays, strict=True))
         pose, J, JA, chi, distances, Jdot, JAdot, twist, chi_dot = arrays
-        single = isinstance(frames, (str, FrameTask))
         self.pose = _readonly(pose if single else pose.reshape(len(blocks), 4, 4))
         self.jacobian, self.jacobian_dot = _readonly(J), _readonly(Jdot)
         self.twist, self.chi = _readonly(twist), _readonly(chi)
         self.analytic_jacobian, self.analytic_jacobian_dot = _readonly(JA), _readonly(JAdot)
-        self.chi_dot, self.weights = _readonly(chi_dot), _readonly(self._weights)
-        self.singularity_distances = _readonly(distances)
+        self.chi_dot, self.singularity_distances = _readonly(chi_dot), _readonly(distances)
+        self.weights = _readonly(np.concatenate([np.full(b.pmap.size, b.spec.weight) for b in blocks]))
         self._rates = (Jdot, JAdot, twist, chi_dot)
         self._invalidate_rates()
 
@@ -168,7 +139,7 @@ class Task:
             if qdot is not None and not coords.ready(qdot):
                 qdot = coords.check(qdot, name="qdot", allow_batch=False)
         q_pin = q
-        if qdot is not None:  # q_pin = M q + b and q̇_pin = M q̇ (written in place) for the joint Jacobians
+        if qdot is not None:  # q_pin = M q + b and q̇_pin = M q̇ (in place) for the joint Jacobians
             v = qdot
             if not coords.identity:
                 q_pin, v = self._to_pinocchio(q), np.dot(coords.matrix, qdot, out=self._vp)
@@ -182,7 +153,7 @@ class Task:
         for block in self._blocks:
             found = block.update(qdot, threshold, continuous)
             error = error or found  # the first block's error
-        if self._stacked:
+        if self._stack:
             self._gather(qdot is not None)
         if qdot is None and self._rates_valid:
             self._invalidate_rates()
@@ -190,23 +161,14 @@ class Task:
             raise error
 
     def _to_pinocchio(self, q: np.ndarray) -> np.ndarray:
-        """q_pin = M q + b into a preallocated array."""
-        coords = self._coords
-        q_pin = np.dot(coords.matrix, q, out=self._qp)
-        return np.add(q_pin, coords.offset, out=q_pin) if coords.has_offset else q_pin
+        """q_pin = M q + b into a preallocated array (``coordinates.to_pinocchio`` allocates)."""
+        q_pin = np.dot(self._coords.matrix, q, out=self._qp)
+        return np.add(q_pin, self._coords.offset, out=q_pin) if self._coords.has_offset else q_pin
 
     def _gather(self, rates: bool) -> None:
         """Copy each block's arrays into the stacked ones (rates only with q̇)."""
-        names = ("pose", "J", "JA", "chi", "distances") + (
-            ("Jdot", "JAdot", "twist", "chi_dot") if rates else ()
-        )
-        for name in names:
-            target = self._arrays[name]
-            if name == "pose":
-                for i, block in enumerate(self._blocks):
-                    target[i] = block.pose
-            else:
-                np.concatenate([getattr(b, name) for b in self._blocks], out=target)
+        for name, target in self._stack if rates else self._stack[:5]:
+            np.concatenate([getattr(b, name) for b in self._blocks], out=target)
 
     def _invalidate_rates(self) -> None:
         """NaN in every rate attribute (until an update with q̇ fills them)."""
