@@ -251,7 +251,10 @@ class Robot:
                 pass
             if not found:  # checked here (outside the handlers, so that an error reads plainly)
                 options = AnalyticOptions(position, rotation, rows, singularity_threshold, on_singularity)
-                path = self._analytic_path(frame, options)
+                options, fid = options.checked(), self._frame_id(frame)  # an error is raised, not kept
+                if not options.nan:  # "nan" takes the general path
+                    J_A = analytic_function(self._kin, fid, options.pose_map(), options.singularity_threshold)
+                    path = self._coords.ready, J_A
                 if len(self._analytic_paths) < 256:
                     self._analytic_paths[key] = path
             if path is not None:
@@ -266,16 +269,6 @@ class Robot:
         if qc.ndim == 2:
             return analytic_batch(kin, qc, fid, pmap, threshold, nan)
         return analytic_single(kin, qc, fid, pmap, threshold, nan)
-
-    def _analytic_path(self, frame: str | None, options: AnalyticOptions) -> FastPath | None:
-        """(ready, J_A) for these options (each checked here: an error is raised, not kept): J_A(q) answers a
-        float64 (dof,) array q that ``ready`` passed (any other q takes the general path, which checks it);
-        None where the general path is needed (on_singularity "nan")."""
-        options, fid = options.checked(), self._frame_id(frame)
-        if options.nan:
-            return None
-        evaluate = analytic_function(self._kin, fid, options.pose_map(), options.singularity_threshold)
-        return self._coords.ready, evaluate
 
     def analytic_hessian(
         self,
@@ -753,14 +746,8 @@ class Robot:
         ref = resolve_reference(reference)
         q = self._coords.check(q, check_limits=check_limits)
         if q.ndim == 2:
-            T, J = _batch.evaluate(
-                self._kin,
-                q,
-                handle.frame_id,
-                ref,
-                out=_batch.checked_out(out, len(q), self.dof),
-                workers=_batch.checked_workers(workers),
-            )
+            out, workers = _batch.checked_out(out, len(q), self.dof), _batch.checked_workers(workers)
+            T, J = _batch.evaluate(self._kin, q, handle.frame_id, ref, out=out, workers=workers)
             return T, J  # type: ignore[return-value]
         if out is not None:
             raise OptionError("`out=` is for batches q (N, dof); a single q returns fresh arrays")
