@@ -13,7 +13,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import kinengine
-from kinengine.control import ik, ik_seeds
+from kinengine.control import ik
 from kinengine.control.ik import inverse_kinematics
 
 
@@ -229,18 +229,6 @@ def test_five_dimensional_target_position_plus_tool_axis(abb):
         assert weighted.success
 
 
-def test_seed_tables_are_bounded(mixed):
-    frames = [f for f in mixed.frame_names if f != mixed.description.root]
-    for frame in frames * 2:
-        inverse_kinematics(
-            mixed, mixed.frame_pose(mixed.neutral(), frame), frame, max_iterations=1, restarts=0
-        )
-    tables = mixed.engine.memoized("ik seed tables", ik_seeds.SeedTables)
-    assert 0 < len(tables.tables) <= ik.SEED_TABLES
-    for configs, tree in tables.tables.values():
-        assert configs.nbytes + tree.data.nbytes <= 2 * ik.SEED_TABLE_BYTES
-
-
 @pytest.mark.parametrize("name", ["abb_irb120", "panda", "baxter"])
 def test_batched_ik_equals_single_ik_per_target(name):
     """Same algorithm vectorized: every target converges in both (to the same tolerance), within limits."""
@@ -328,7 +316,8 @@ def test_every_entry_of_a_pose_target_is_checked(abb):
 
 def test_stalled_attempts_give_way_after_stall_from_iterations(abb):
     """A target 5 m away (the IRB 120 reaches 0.58 m): no attempt's error shrinks by 20 % in 3 iterations, so
-    each one but the last gives way after STALL_FROM iterations and the last runs out max_iterations."""
+    each one but the last gives way after STALL_FROM iterations; the last never gives way, but ends when
+    stuck (STUCK_SPAN iterations without a new best score), well before max_iterations."""
     from kinengine.control import ik_step
     from kinengine.control.ik_seeds import frame_seeds
     from kinengine.control.ik_target import FrameGoal, Options, checked_problem
@@ -340,7 +329,8 @@ def test_stalled_attempts_give_way_after_stall_from_iterations(abb):
     problem = checked_problem(abb, None, None, None, options)
     attempts = len(frame_seeds(abb, [FrameGoal(problem, T[:3, 3], T[:3, :3])], None)) + 2
     assert not result.success
-    assert result.iterations == (attempts - 1) * ik_step.STALL_FROM + 50
+    last = result.iterations - (attempts - 1) * ik_step.STALL_FROM
+    assert ik_step.STUCK_SPAN <= last < 50
     ep, _ = _pose_errors(abb, result.q, "tool0", T)
     assert ep == pytest.approx(result.position_error, rel=1e-9) and ep > 4.0
 

@@ -31,9 +31,10 @@ import pinocchio as pin
 
 from ..kinematics import batch
 from ..parameterizations import ROTATION_PARAMETERIZATIONS
+from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
 from .ik_solver import IKResult, solve
-from .ik_step import POSE_ROW_DAMPING, STALL_SPAN, LimitWeights, damping, gives_way, limit_weights, take_steps
+from .ik_step import LimitWeights
 from .ik_target import FrameGoal, Problem, RandomSource
 
 if TYPE_CHECKING:  # named for the checker only
@@ -108,17 +109,19 @@ def solve_batch(
     rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
     tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
     lower, upper = joints.lower[:, None], joints.upper[:, None]
-    limits = limit_weights(robot.engine)
+    limits = step.limit_weights(robot.engine)
     # a full pose's rotation rows are weighted by ρ: |S e|² in the damping, λ² S⁻² on A's diagonal (ik_step)
-    row_damping = POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
+    row_damping = step.POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
     row_weight_sq = 1.0 / row_damping  # S²
     winner = np.full(n, attempts, dtype=np.intp)  # each target's first converged attempt (none yet)
     launched = np.zeros(n, dtype=np.intp)  # attempts started so far
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
     # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
     # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
-    # iterations (oldest first), the target's p_d (3) and C_d (9), the attempt's start (dof)
-    H, P, S = 2 * dof, 2 * dof + STALL_SPAN, 2 * dof + STALL_SPAN + 12  # history, p_d, start
+    # iterations (oldest first), the best score and the iterations since (ik_step.progress), the target's
+    # p_d (3) and C_d (9), the attempt's start (dof)
+    H, B = 2 * dof, 2 * dof + step.STALL_SPAN  # history, best
+    P, S = B + 2, B + 14  # p_d, start
     meta, state = np.empty((3, 0), dtype=np.intp), np.empty((S + dof, 0))
     space = _Workspace(max(n, SPECULATE), dof)
     new = np.arange(n)
@@ -132,7 +135,7 @@ def solve_batch(
             block[:dof, seeded] = seeds.starts(new[seeded], new_meta[1][seeded]).T
             if (~seeded).any():
                 block[:dof, ~seeded] = rng.configurations(robot, int((~seeded).sum())).T
-            block[dof:H], block[S:] = -1.0, block[:dof]
+            block[dof:H], block[B], block[B + 1], block[S:] = -1.0, np.inf, 0.0, block[:dof]
             block[P : P + 3], block[P + 3 : S] = p_d[new].T, C_d[new].reshape(-1, 9).T
             meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
         r, (tid, att, it) = meta.shape[1], meta
@@ -150,7 +153,7 @@ def solve_batch(
             break
         if r > space.capacity:
             space = _Workspace(r, dof)
-        q, history, pd, Cd = state[:dof], state[H:P], state[P : P + 3], state[P + 3 : S].reshape(3, 3, r)
+        q, history, pd, Cd = state[:dof], state[H:B], state[P : P + 3], state[P + 3 : S].reshape(3, 3, r)
         T, J = space.pose[..., :r], space.jac[..., :r]  # (4, 4, r), (6, dof, r): the chain writes rows
         batch.evaluate(
             kin, q.T, problem.fid, pin.LOCAL_WORLD_ALIGNED, out=(T.transpose(2, 0, 1), J.transpose(2, 0, 1))
@@ -167,7 +170,8 @@ def solve_batch(
             err = e_d if sqrt_w is None else e_d * sqrt_w[:, None]
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
-        end = done | (it == max_iterations) | (gives_way(it, score, history) & ~patient)
+        step.progress(score, state[B], state[B + 1])
+        end = done | (it == max_iterations) | step.gives_way(it, score, history, patient, state[B + 1])
         history[:-1], history[-1] = history[1:].copy(), score  # oldest first
         ended = np.empty(0, dtype=np.intp)
         if end.any():
@@ -186,10 +190,9 @@ def solve_batch(
             if limits.any:
                 w, state[dof:H] = limits.inverse_weights(q, state[dof:H])
             squared = row_weight_sq @ (err * err)  # |S e|²
-            diagonal = row_damping[:, None] * damping(squared, problem.damping_sq)
+            diagonal = row_damping[:, None] * step.damping(squared, problem.damping_sq)
             nullspace = (problem.q_ns, problem.gain, score)
-            step = take_steps(q, J, err, w, diagonal, nullspace, space.buffers)
-            np.clip(step, lower, upper, out=q)
+            np.clip(step.take_steps(q, J, err, w, diagonal, nullspace, space.buffers), lower, upper, out=q)
             meta[2] += 1
         # next attempts: one per target that needs one; when few columns run, several at once per target
         # (_resolve takes the outcomes in attempt order, as if the attempts had run one after another)
