@@ -30,11 +30,9 @@ SEED_TABLE_RNG = 0x5EED_7AB1E
 SEED_MARGIN = 0.05
 """Table configurations are drawn from the inner 1 − 2·this of each bounded joint's range: an attempt
 from a seed on a limit often stalls against it (on random targets, 10-25 % fewer iterations)."""
-SEED_EPS = 1.0
-"""Approximate nearest entries: within (1 + this) of the nearest distance (cKDTree's eps)."""
-SEED_FURTHER_EPS = 4.0
-"""... and for a batch target's further entries (wanted after its nearest failed: 9 % farther on average,
-a search of half the cost)."""
+SEED_EPS = 3.0
+"""Approximate nearest entries: within (1 + this) of the nearest distance (cKDTree's eps): on random targets
+4 % farther on average than the exact ones, a search of half the cost."""
 SEED_ROTATION_WEIGHT = 0.2
 """[m/rad]: pose distance |Δp| + 0.2·angle used to rank attempts and pick the stored seeds nearest a
 target."""
@@ -150,10 +148,9 @@ def frame_seeds(robot: RobotLike, goals: list[FrameGoal], q0: np.ndarray | None)
 
 class BatchSeeds:
     """The seeded starts for a batch (N targets), as :func:`frame_seeds` orders them (the nearest table
-    entries, then the middle of the ranges; or ``q0``), searched (SEED_EPS, SEED_FURTHER_EPS) only when
-    needed: every target's nearest entry at once, its
-    further ones when the target first needs a second attempt. :meth:`starts` gives (m, dof) for
-    (target, attempt) pairs, each attempt < ``count``."""
+    entries, then the middle of the ranges; or ``q0``), searched only when needed: every target's nearest
+    entry at once, its further ones when the target first needs a second attempt. :meth:`starts` gives
+    (m, dof) for (target, attempt) pairs, each attempt < ``count``."""
 
     def __init__(
         self, robot: RobotLike, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None
@@ -174,12 +171,8 @@ class BatchSeeds:
         self.depth = np.zeros(n, dtype=np.intp)  # table entries found so far, nearest first
 
     def _find(self, targets: np.ndarray, k: int) -> None:
-        _, index = self.tree.query(
-            self.points[targets],
-            k=k,
-            eps=SEED_EPS if k == 1 else SEED_FURTHER_EPS,
-            workers=-1 if len(targets) > 2048 else 1,
-        )
+        workers = -1 if len(targets) > 2048 else 1
+        _, index = self.tree.query(self.points[targets], k=k, eps=SEED_EPS, workers=workers)
         self.index[targets, :k] = np.asarray(index).reshape(len(targets), k)
         self.depth[targets] = k
 
@@ -203,7 +196,6 @@ class BatchSeeds:
 __all__ = [
     "NEAREST_SEEDS",
     "SEED_EPS",
-    "SEED_FURTHER_EPS",
     "SEED_MARGIN",
     "SEED_ROTATION_WEIGHT",
     "SEED_TABLES",
