@@ -11,10 +11,7 @@ target. :func:`take_step` takes one step for one configuration (LAPACK ``dposv``
 positive definite for λ > 0; least squares where it is not), :func:`take_steps` for columns of
 configurations (a Cholesky factorization over all columns at once; numpy's solve where it refuses).
 
-Attempts: an attempt other than the last gives way to the next seed when its score |e_p| + 0.2 m/rad·|e_R|
-is still above GIVE_UP after PROBE_ITERATIONS iterations, or when, from STALL_FROM iterations on, it has not
-fallen below STALL_RATIO × its value STALL_SPAN iterations earlier; any attempt, the last one too, ends when
-stuck: no new best score (below STUCK_RATIO × the best) for STUCK_SPAN iterations (:func:`gives_way`).
+Attempts: :func:`gives_way` tells when one makes way for the next seed (still far, stalled) or ends (stuck).
 """
 
 from __future__ import annotations
@@ -37,9 +34,8 @@ STALL_FROM, STALL_SPAN, STALL_RATIO = 4, 3, 0.8
 earlier gives way (stuck on a joint limit or in a local minimum: such attempts crawl for max_iterations,
 and on 1,000 random targets they cost the ABB IRB 120 more iterations than the converging ones)."""
 STUCK_SPAN, STUCK_RATIO = 10, 0.99
-"""An attempt whose score has not fallen below STUCK_RATIO × its best for STUCK_SPAN iterations ends, the
-last one too (caught in a local minimum or against a limit, it would crawl to max_iterations unchanged: on
-10,000 random targets the last attempts of the few unreached ones kept a batch running ~90 iterations)."""
+"""An attempt, the last one too, ends after STUCK_SPAN iterations without a score below STUCK_RATIO × its best
+(in a local minimum or against a limit: it would crawl to max_iterations unchanged)."""
 DAMPING_SCALE = 0.1
 """λ² = DAMPING_SCALE·|e|² + λ_min² (Sugihara's rule λ² = ½ eᵀW_E e + λ_min² with W_E = 0.2·I, e weighted as
 below): weaker than ½|e|², so the first steps from a stored seed go further."""
@@ -122,14 +118,10 @@ def gives_way(
     iterations without a new best, :func:`progress`). ``history``: the earlier scores, oldest first (a list
     for one attempt; rows (≥ STALL_SPAN, r) for columns of attempts, with the other arguments (r,): an
     array out)."""
-    if isinstance(iteration, int):
-        if since >= STUCK_SPAN:
-            return True
-        if patient:
-            return False
-        if iteration == PROBE_ITERATIONS and score > GIVE_UP:
-            return True
-        return iteration >= STALL_FROM and score > STALL_RATIO * history[-STALL_SPAN]
+    if isinstance(iteration, int):  # one attempt, in plain floats
+        probed = iteration == PROBE_ITERATIONS and score > GIVE_UP
+        stalled = iteration >= STALL_FROM and score > STALL_RATIO * history[-STALL_SPAN]
+        return since >= STUCK_SPAN or (not patient and (probed or stalled))
     probed = (iteration == PROBE_ITERATIONS) & (score > GIVE_UP)
     stalled = (iteration >= STALL_FROM) & (score > STALL_RATIO * history[-STALL_SPAN])
     return ((probed | stalled) & ~patient) | (since >= STUCK_SPAN)
@@ -140,8 +132,7 @@ def progress(score: np.ndarray, best: np.ndarray, since: np.ndarray) -> None:
     ``since`` ← 0), else ``since`` += 1 (the single solver does this in plain floats)."""
     improved = score < STUCK_RATIO * best
     np.copyto(best, score, where=improved)
-    since += 1
-    since[improved] = 0
+    since[:] = np.where(improved, 0.0, since + 1.0)
 
 
 def damping(squared: float | np.ndarray, damping_sq: float) -> float | np.ndarray:
