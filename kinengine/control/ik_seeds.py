@@ -27,12 +27,12 @@ SEED_TABLES = 8
 kept per robot, least recently used dropped: with their KD-trees ~130 MiB at most (kept per frame without
 bound, 60 frames of a 30-dof chain held 550 MiB)."""
 SEED_TABLE_RNG = 0x5EED_7AB1E
-SEED_MARGIN = 0.05
-"""Table configurations are drawn from the inner 1 − 2·this of each bounded joint's range: an attempt
-from a seed on a limit often stalls against it (on random targets, 10-25 % fewer iterations)."""
-SEED_EPS = 3.0
-"""Approximate nearest entries: within (1 + this) of the nearest distance (cKDTree's eps): on random targets
-4 % farther on average than the exact ones, a search of half the cost."""
+SEED_MARGIN = 0.03
+"""Table configurations are drawn from the inner 1 − 2·this of each bounded joint's range: an attempt from a
+seed on a limit often stalls against it (on random targets 10-25 % fewer iterations, as many reached; wider
+margins miss more of the targets whose solutions lie near a limit)."""
+SEED_EPS = 1.0
+"""Approximate nearest entries: within (1 + this) of the nearest distance (cKDTree's eps)."""
 SEED_ROTATION_WEIGHT = 0.2
 """[m/rad]: pose distance |Δp| + 0.2·angle used to rank attempts and pick the stored seeds nearest a
 target."""
