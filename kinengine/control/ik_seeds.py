@@ -27,12 +27,15 @@ SEED_TABLES = 8
 kept per robot, least recently used dropped: with their KD-trees ~130 MiB at most (kept per frame without
 bound, 60 frames of a 30-dof chain held 550 MiB)."""
 SEED_TABLE_RNG = 0x5EED_7AB1E
-SEED_MARGIN = 0.03
+SEED_MARGIN = 0.05
 """Table configurations are drawn from the inner 1 − 2·this of each bounded joint's range: an attempt from a
-seed on a limit often stalls against it (on random targets 10-25 % fewer iterations, as many reached; wider
-margins miss more of the targets whose solutions lie near a limit)."""
+seed on a limit often stalls against it (on random targets 15-25 % fewer iterations; a target whose only
+solutions lie near a limit is reached about as often, ~0.1 % of them are missed either way)."""
 SEED_EPS = 1.0
 """Approximate nearest entries: within (1 + this) of the nearest distance (cKDTree's eps)."""
+FIRST_SEED_EPS = 3.0
+"""... for every batch target's first entry at once (4 % farther on average, half the search; the further
+entries, wanted by the few targets whose first attempt fails, with SEED_EPS)."""
 SEED_ROTATION_WEIGHT = 0.2
 """[m/rad]: pose distance |Δp| + 0.2·angle used to rank attempts and pick the stored seeds nearest a
 target."""
@@ -172,7 +175,8 @@ class BatchSeeds:
 
     def _find(self, targets: np.ndarray, k: int) -> None:
         workers = -1 if len(targets) > 2048 else 1
-        _, index = self.tree.query(self.points[targets], k=k, eps=SEED_EPS, workers=workers)
+        eps = FIRST_SEED_EPS if k == 1 else SEED_EPS
+        _, index = self.tree.query(self.points[targets], k=k, eps=eps, workers=workers)
         self.index[targets, :k] = np.asarray(index).reshape(len(targets), k)
         self.depth[targets] = k
 
@@ -194,6 +198,7 @@ class BatchSeeds:
 
 
 __all__ = [
+    "FIRST_SEED_EPS",
     "NEAREST_SEEDS",
     "SEED_EPS",
     "SEED_MARGIN",
