@@ -33,7 +33,7 @@ STALL_FROM, STALL_SPAN, STALL_RATIO = 4, 3, 0.8
 """From iteration STALL_FROM on, an attempt whose score is above STALL_RATIO × its score STALL_SPAN iterations
 earlier gives way (stuck on a joint limit or in a local minimum: such attempts crawl for max_iterations,
 and on 1,000 random targets they cost the ABB IRB 120 more iterations than the converging ones)."""
-STUCK_SPAN, STUCK_RATIO = 10, 0.99
+STUCK_SPAN, STUCK_RATIO = 10, 0.9
 """An attempt, the last one too, ends after STUCK_SPAN iterations without a score below STUCK_RATIO × its best
 (in a local minimum or against a limit: it would crawl to max_iterations unchanged)."""
 DAMPING_SCALE = 0.1
