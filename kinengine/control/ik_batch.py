@@ -115,7 +115,7 @@ def solve_batch(
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
     # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
     # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
-    # iterations (oldest first), the best score and the iterations since (ik_step.progress), the target's
+    # iterations (oldest first), the best score and the iterations since (ik_step.gives_way), the target's
     # p_d (3) and C_d (9)
     H, B = 2 * dof, 2 * dof + step.STALL_SPAN  # history, best
     P, S = B + 2, B + 14  # p_d, C_d up to S
@@ -158,7 +158,8 @@ def solve_batch(
             err = e_d if sqrt_w is None else e_d * sqrt_w[:, None]
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
-        step.progress(score, state[B], state[B + 1])
+        best = score < step.STUCK_RATIO * state[B]  # a new best; the count of iterations since restarts
+        state[B], state[B + 1] = np.where(best, score, state[B]), np.where(best, 0.0, state[B + 1] + 1)
         end = done | (it == max_iterations) | step.gives_way(it, score, history, patient, state[B + 1])
         history[:-1], history[-1] = history[1:].copy(), score  # oldest first
         ended = np.empty(0, dtype=np.intp)

@@ -53,16 +53,13 @@ class SeedTables:
         self.tables: OrderedDict[tuple[str, bool, bool], SeedTable] = OrderedDict()
 
     def get(self, key: tuple[str, bool, bool], make: Callable[[], SeedTable]) -> SeedTable:
-        with self.lock:
-            if key in self.tables:
-                self.tables.move_to_end(key)
-                return self.tables[key]
-        table = make()
-        with self.lock:
-            self.tables[key] = table
-            while len(self.tables) > SEED_TABLES:
-                self.tables.popitem(last=False)
-        return table
+        with self.lock:  # made under the lock: another thread wanting a table waits for it
+            if key not in self.tables:
+                self.tables[key] = make()
+                while len(self.tables) > SEED_TABLES:
+                    self.tables.popitem(last=False)
+            self.tables.move_to_end(key)
+            return self.tables[key]
 
 
 def seed_table(robot: RobotLike, frame: str, use_p: bool, use_R: bool) -> SeedTable:

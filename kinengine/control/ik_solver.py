@@ -121,7 +121,6 @@ def solve(
     # a full pose's rows are weighted by S = diag(1, 1, 1, ρ, ρ, ρ): (S J W⁻¹Jᵀ S + λ² I) x = S e is
     # (J W⁻¹Jᵀ + λ² S⁻²)(S x) = e with Δq = W⁻¹Jᵀ (S x), so the weights only scale the damping's diagonal
     errors, jacobians, row_damping = _layout(goals, err)
-    alone = len(goals) == 1
     rotation_sq = step.ROTATION_ROW_WEIGHT**2
     limits = step.limit_weights(kin)
     weigh, bounds = limits.inverse_weights_one if limits.any else None, (joints.lower, joints.upper)
@@ -171,20 +170,17 @@ def solve(
                 break
             history.append(score)
             iteration += 1
-            J_step = J
             for fid, reference, S_w, start, stop in jacobians:
                 J_F = get_jacobian(model, data, fid, reference).reshape(6, -1)
                 if not identity:
                     J_F = fold(J_F)
-                if S_w is not None:
-                    np.dot(S_w, J_F, out=J[start:stop])
-                elif alone:  # one full pose: its Jacobian is J
-                    J_step = J_F
-                else:
+                if S_w is None:
                     J[start:stop] = J_F
+                else:
+                    np.dot(S_w, J_F, out=J[start:stop])
             diagonal = step.damping(squared, damping_sq) * row_damping
             previous = step.take_step(
-                q, J_step, err, normal, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
+                q, J, err, normal, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
             )
         total += iteration
         if best is None or score < best[2]:

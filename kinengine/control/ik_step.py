@@ -115,9 +115,9 @@ def gives_way(
     """Whether an attempt ends without converging at this iteration: one that is not ``patient`` (not the
     last) when its score is still above GIVE_UP after PROBE_ITERATIONS or stalled (from STALL_FROM on,
     above STALL_RATIO × its score STALL_SPAN iterations earlier); any when stuck (``since`` >= STUCK_SPAN
-    iterations without a new best, :func:`progress`). ``history``: the earlier scores, oldest first (a list
-    for one attempt; rows (≥ STALL_SPAN, r) for columns of attempts, with the other arguments (r,): an
-    array out)."""
+    iterations without a score below STUCK_RATIO × its best). ``history``: the earlier scores, oldest
+    first (a list for one attempt; rows (≥ STALL_SPAN, r) for columns of attempts, with the other
+    arguments (r,): an array out)."""
     if isinstance(iteration, int):  # one attempt, in plain floats
         probed = iteration == PROBE_ITERATIONS and score > GIVE_UP
         stalled = iteration >= STALL_FROM and score > STALL_RATIO * history[-STALL_SPAN]
@@ -125,14 +125,6 @@ def gives_way(
     probed = (iteration == PROBE_ITERATIONS) & (score > GIVE_UP)
     stalled = (iteration >= STALL_FROM) & (score > STALL_RATIO * history[-STALL_SPAN])
     return ((probed | stalled) & ~patient) | (since >= STUCK_SPAN)
-
-
-def progress(score: np.ndarray, best: np.ndarray, since: np.ndarray) -> None:
-    """For columns of attempts (r,), in place: ``best`` ← score where it fell below STUCK_RATIO × best (and
-    ``since`` ← 0), else ``since`` += 1 (the single solver does this in plain floats)."""
-    improved = score < STUCK_RATIO * best
-    np.copyto(best, score, where=improved)
-    since[:] = np.where(improved, 0.0, since + 1.0)
 
 
 def damping(squared: float | np.ndarray, damping_sq: float) -> float | np.ndarray:
@@ -292,7 +284,6 @@ __all__ = [
     "gives_way",
     "limit_weights",
     "nullspace_pull",
-    "progress",
     "take_step",
     "take_steps",
 ]
