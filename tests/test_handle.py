@@ -236,3 +236,21 @@ def test_ready_never_passes_an_entry_the_check_refuses(values):
 
 
 _ABB = kinengine.load("abb_irb120")
+
+
+def test_a_reference_resolves_alike_on_every_path(abb):
+    """The handle's lookup and resolve_reference (check_limits, the kinematic Hessian) take and refuse the same
+    references; the values are Pinocchio's own LOCAL Jacobian."""
+    q = abb.random_configuration(5)
+    model = abb.pinocchio_model()
+    expected = pin.computeFrameJacobian(model, model.createData(), q, abb.frame_id("tool0"), pin.LOCAL)
+    fk = abb.frame("tool0")
+    for reference in ("local", np.str_("local"), pin.LOCAL):
+        assert np.array_equal(fk.jacobian(q, reference), expected)
+        assert np.array_equal(abb.jacobian(q, "tool0", reference, check_limits=True), expected)
+        assert abb.kinematic_hessian(q, "tool0", reference).shape == (6, 6, 6)
+    for bad in (True, 1.0, np.int64(2), "LOCAL", b"local", ["local"]):
+        with pytest.raises(OptionError):
+            fk.jacobian(q, bad)
+        with pytest.raises(OptionError):
+            abb.jacobian(q, "tool0", bad, check_limits=True)

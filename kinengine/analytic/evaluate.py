@@ -1,7 +1,6 @@
-"""Analytic Jacobians J_A = E(χ)·J_e0 evaluated on a robot's kinematics: one configuration (J_e0 and
-T_IF from Pinocchio, χ and E by scalar math) or a batch (numpy over the compiled chain for large
-batches, the single path row by row for small ones). q is checked by the caller.
-"""
+"""Analytic Jacobians J_A = E(χ)·J_e0 on a robot's kinematics: one configuration (J_e0 and T_IF from
+Pinocchio, χ and E by scalar math) or a batch (numpy next to the chain; small batches row by row). q is
+checked by the caller."""
 
 from __future__ import annotations
 
@@ -19,8 +18,8 @@ from .pose_map import PoseMap
 
 LWA = pin.LOCAL_WORLD_ALIGNED
 ANALYTIC_CALLS = 100
-"""numpy calls for χ, E and E·J_e0 over a chunk (about; they vary with the parameterization). A row
-of the analytic single-call loop costs about twice a row of Pinocchio's pose and Jacobian loop."""
+"""How many numpy calls χ, E and E·J_e0 take over a chunk, about (a row of the single-call loop costs about
+twice one of Pinocchio's pose and Jacobian loop)."""
 
 
 def analytic_single(
@@ -46,35 +45,28 @@ def analytic_single(
 def analytic_function(
     kin: Kinematics, fid: int, pmap: PoseMap, threshold: float
 ) -> Callable[[np.ndarray], npt.NDArray[np.float64]]:
-    """``J_A(q)`` for one frame and fixed options: :func:`analytic_single` with the lookups done once (each
-    thread binds its own Data views and unchecked frame handle on its first call). q is checked by the
-    caller; singular poses raise RepresentationSingularityError."""
-    if kin.dof == 0:
+    """``J_A(q)`` for one frame and fixed options at a checked q (RepresentationSingularityError at singular
+    poses): for E = blockdiag(I or none, E_R), the rotation's :meth:`chart` written into this thread's E
+    (each thread binds its own Data views, unchecked frame handle and E on its first call); otherwise, and
+    where the chart has no answer, the general single path."""
+    rotation = pmap.rotation
+    if kin.dof == 0 or rotation is None or pmap.rows is not None or pmap.formula_parts != (rotation,):
         return lambda q: analytic_single(kin, q, fid, pmap, threshold)
     local = threading.local()
-    jacobian_single, template, shape = pmap.jacobian_single, pmap.layout.template, pmap.layout.shape
-    pack_into, offset = pmap.layout.pack_into, pmap.layout.offset
-    plain = pmap.rows is None and pmap.formula_parts == (pmap.rotation,)  # E = blockdiag(I or none, E_R)
-    chart = pmap.rotation.chart if plain and pmap.rotation is not None else None
-
-    def thread_path() -> tuple[np.ndarray, np.ndarray, Callable[..., np.ndarray], np.ndarray]:
-        """This thread's (C, p) views, unchecked frame Jacobian and E = blockdiag(I, E_R) (m, 6) buffer."""
-        (C, p), jacobian, _ = _single_path(kin, fid)
-        local.path = C, p, jacobian, np.frombuffer(bytearray(template)).reshape(shape)
-        return local.path
+    jacobian_single, chart, layout = pmap.jacobian_single, rotation.chart, pmap.layout
+    pack_into, offset = layout.pack_into, layout.offset
 
     def evaluate(q: np.ndarray) -> npt.NDArray[np.float64]:
-        """J_A = E·J_e0 with E_R from the rotation's :meth:`chart` at regular poses (written into this
-        thread's E); any other pose map or pose takes :meth:`PoseMap.jacobian_single` (the error, or
-        position formulas and row selections)."""
         try:
             C, p, jacobian, E = local.path
-        except AttributeError:
-            C, p, jacobian, E = thread_path()
+        except AttributeError:  # this thread's first call
+            (C, p), jacobian, _ = _single_path(kin, fid)
+            E = np.frombuffer(bytearray(layout.template)).reshape(layout.shape)
+            local.path = C, p, jacobian, E
         J = jacobian(q, "local_world_aligned")  # also places the frame: C and p show T_IF at q
         rows = C.tolist()
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = rows
-        found = None if chart is None else chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        found = chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
         if found is None or not found[1] >= threshold:  # (chart gives None at distance 0)
             return jacobian_single(rows, p.tolist(), J, threshold)
         pack_into(E, offset, *found[2])
@@ -139,10 +131,4 @@ def analytic_relative(
     return out
 
 
-__all__ = [
-    "ANALYTIC_CALLS",
-    "analytic_batch",
-    "analytic_function",
-    "analytic_relative",
-    "analytic_single",
-]
+__all__ = ["ANALYTIC_CALLS", "analytic_batch", "analytic_function", "analytic_relative", "analytic_single"]

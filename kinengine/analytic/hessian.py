@@ -30,9 +30,6 @@ def analytic_hessian(
     for param, block in ((pmap.position, slice(0, 3)), (pmap.rotation, slice(3, 6))):
         if param is None:
             continue
-        if param.name == "cartesian":
-            blocks.append(H[block])
-            continue
         chi = np.array(param._coordinates(math, p, C))
         Edot = param.E_dot(np.broadcast_to(chi, (kin.dof, chi.size)), J[block].T)  # (dof, m, 3): one per k
         blocks.append(

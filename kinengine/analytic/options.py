@@ -1,11 +1,7 @@
-"""The analytic options, declared once: which pose parameters χ = (χ_P, χ_R) a method or a Task uses, which
-of their rows it keeps, and what a configuration near a representation singularity gives.
-
-Every method that takes ``position``, ``rotation``, ``rows``, ``singularity_threshold`` or
-``on_singularity`` (``Robot.pose_parameters``, ``analytic_jacobian``, ``analytic_hessian``, ``task`` and
-:class:`~kinengine.control.task.Task`) takes its defaults from :data:`DEFAULTS` and checks its values by
-:meth:`AnalyticOptions.checked`, so no two of them can drift apart.
-"""
+"""The analytic options, declared once: every method that takes ``position``, ``rotation``, ``rows``,
+``singularity_threshold`` or ``on_singularity`` (``Robot.pose_parameters``, ``analytic_jacobian``,
+``analytic_hessian``, ``task`` and :class:`~kinengine.control.task.Task`) takes its defaults from
+:data:`DEFAULTS` and checks its values by :meth:`AnalyticOptions.checked`, so none can drift apart."""
 
 from __future__ import annotations
 

@@ -1,22 +1,17 @@
-"""Pose parameters χ_e(q) and analytic Jacobians J_eA = E_e(χ_e) · J_e0.
+"""Pose parameters χ_e(q) and analytic Jacobians J_eA = E_e(χ_e)·J_e0 (Robot Dynamics lecture notes, ETH
+Zurich, section 2.8, eqs. 2.180–2.181).
 
-Robot Dynamics lecture notes, ETH Zurich, section 2.8 (Kinematics of Systems of Bodies), eqs. 2.180–2.181.
-
-J_e0 is the geometric Jacobian in the inertial frame ("local_world_aligned": origin velocity
-and angular velocity in I) and E_e = blockdiag(E_P(χ_P), E_R(χ_R)) maps that twist to χ̇_e.
-A :class:`PoseMap` binds one position and one rotation parameterization (either may be
-absent) and, optionally, a selection of rows by label (the operational-space coordinates of
-lecture notes, section 2.8.2). It is resolved once per (position, rotation, rows) and cached.
-
-The formulas are the parameterizations' own, written once over ``xp`` (see
-:mod:`kinengine.parameterizations.base`): one configuration evaluates them on Python floats
-(:meth:`PoseMap.jacobian_single`), a batch on numpy arrays over a chunk of configurations
-(:meth:`PoseMap.fill_columns`, called by :mod:`kinengine.analytic.evaluate`).
+J_e0 is the geometric Jacobian in the inertial frame ("local_world_aligned": origin velocity and angular
+velocity in I); E_e = blockdiag(E_P(χ_P), E_R(χ_R)) maps that twist to χ̇_e. A :class:`PoseMap` binds a
+position and a rotation parameterization (either may be absent) and a selection of rows by label (the
+operational-space coordinates of section 2.8.2). It evaluates the parameterizations' own formulas on
+Python floats for one configuration and on numpy arrays for a batch (:meth:`PoseMap.fill_columns`).
 """
 
 from __future__ import annotations
 
 import math
+import struct
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -35,13 +30,43 @@ from ..parameterizations.base import (
     is_singular,
     singular_where,
 )
-from .layout import Layout, combine
-from .singular import pose_of, singularity_error
+from .singular import singularity_error
 
 DEFAULT_SINGULARITY_THRESHOLD = 1e-6
 """analytic_jacobian raises RepresentationSingularityError when the distance to the singular set
 (e.g. |cos χ2| for Tait–Bryan angles, ρ for cylindrical) is below this; E's entries grow like
 1/distance, so 1e-6 admits entries up to about 1e6."""
+
+
+class Layout:
+    """Where E's computed entries go in the (m, 6) matrix E = blockdiag(E_P, E_R) of one PoseMap.
+
+    ``template`` holds the constant entries (zeros, the identity of Cartesian rows); ``pack_into`` writes the
+    computed ones (float64, native byte order) from ``offset``: E_P's entries in columns 0-2 of the position
+    rows (unless Cartesian), then E_R's in columns 3-5 of the rotation rows.
+    """
+
+    def __init__(
+        self, position: PositionParameterization | None, rotation: RotationParameterization | None
+    ) -> None:
+        cartesian = position is not None and position.name == "cartesian"
+        m_P, m_R = (0 if part is None else part.size for part in (position, rotation))
+        self.shape: tuple[int, int] = (m_P + m_R, 6)
+        template = np.zeros(self.shape)
+        if cartesian:
+            template[:3, :3] = np.eye(3)
+        self.template = template.tobytes()
+        self.offset = 48 * m_P if cartesian else 0  # 48 bytes: one row of 6 float64
+        rows = "24x3d" * m_R if cartesian else "3d24x" * m_P + "24x3d" * m_R
+        self.pack_into: Callable[..., None] = struct.Struct("=" + rows).pack_into
+
+
+def _combine(entries: Entries, block: np.ndarray, out: np.ndarray, scratch: np.ndarray) -> None:
+    """out = Σ_k entries[k]·block[k]: a row of E (entries (n,) or constants) times J's rows (3, dof, n)."""
+    out[...] = 0.0
+    for entry, row in zip(entries, block, strict=True):
+        if not (isinstance(entry, float) and entry == 0.0):
+            out += np.multiply(row, entry, out=scratch)
 
 
 @dataclass(frozen=True)
@@ -60,10 +85,9 @@ class PoseMap:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layout", Layout(self.position, self.rotation))
-        selected = tuple(range(len(self.labels))) if self.rows is None else self.rows
-        spans: list[tuple[int, ...]] = []
-        start = 0
-        for part in (p for p in (self.position, self.rotation) if p is not None):
+        selected = range(len(self.labels)) if self.rows is None else self.rows
+        spans, start = [], 0
+        for part in self.parts:
             spans.append(tuple(i for i, r in enumerate(selected) if start <= r < start + part.size))
             start += part.size
         object.__setattr__(self, "part_rows", tuple(spans))
@@ -103,9 +127,7 @@ class PoseMap:
         chi = chi if self.rows is None else chi[..., self.rows]
         if threshold is None:
             return chi
-        distances = [
-            np.asarray(param.singularity_distance(x)) for param, x in zip(self.parts, parts, strict=True)
-        ]
+        distances = [param.singularity_distance(x) for param, x in zip(self.parts, parts, strict=True)]
         distance = np.stack(distances, axis=-1).reshape(-1, len(parts))  # (N, parts), N = 1 for one pose
         single, poses = T.ndim == 2, T.reshape(-1, 4, 4)
         jacobian = None if J is None else (lambda row: J(None if single else row))
@@ -120,12 +142,8 @@ class PoseMap:
         threshold: float,
         nan: bool = False,
     ) -> npt.NDArray[np.float64]:
-        """J_A = E(χ) · J_e0 for one pose T_IF (4, 4) and J_e0 (6, dof) in "local_world_aligned" -> (m, dof).
-
-        Raises RepresentationSingularityError when χ is within ``threshold`` of its singular set
-        (``nan``: NaN in that parameterization's rows instead).
-        Batches: :func:`kinengine.batch.analytic_jacobian` (with :meth:`fill_columns`).
-        """
+        """J_A = E(χ)·J_e0 (m, dof) for one pose T_IF (4, 4) and J_e0 (6, dof) in "local_world_aligned": see
+        :meth:`jacobian_single`."""
         rows = T.tolist()[:3]
         return self.jacobian_single([r[:3] for r in rows], [r[3] for r in rows], J, threshold, nan=nan)
 
@@ -138,13 +156,10 @@ class PoseMap:
         row: int | None = None,
         nan: bool = False,
     ) -> npt.NDArray[np.float64]:
-        """J_A for C_IF and p [m] given as Python floats (the fast path of one configuration).
+        """J_A = E·J_e0 for C_IF and p [m] given as Python floats, E's entries by scalar math into the layout.
 
-        Scalar math gives E's entries, packed straight into an (m, 6) array (zeros and the identity
-        of Cartesian rows come from a template); J_A = E·J_e0 is one product. ``row`` (a batch row)
-        only goes into the error message. ``nan``: a part within ``threshold`` of its singular set gets NaN
-        entries in E, hence NaN rows in J_A (no error). The error message states J_e0's rank.
-        """
+        A part within ``threshold`` of its singular set raises RepresentationSingularityError (stating J_e0's
+        rank; ``row``, a batch row, only goes into its message) or, with ``nan``, gets NaN rows."""
         layout = self.layout
         flat = (*C[0], *C[1], *C[2])
         entries: tuple[float, ...] = ()
@@ -157,24 +172,22 @@ class PoseMap:
                 distance, E = 0.0, None
             if E is None:
                 if not nan:
-                    raise singularity_error(param, distance, threshold, pose_of(C, p), row, J)
+                    T = np.eye(4)
+                    T[:3, :3], T[:3, 3] = C, p
+                    raise singularity_error(param, distance, threshold, T, row, J)
                 E = (math.nan,) * (3 * param.size)
             entries += E
         buffer = bytearray(layout.template)
         layout.pack_into(buffer, layout.offset, *entries)
-        JA = np.ndarray(layout.shape, _F64, buffer).dot(J)
+        JA = np.frombuffer(buffer).reshape(layout.shape).dot(J)
         return JA if self.rows is None else JA[self.rows, :]
 
     def fill_columns(
         self, p: Sequence[np.ndarray], C: Sequence[np.ndarray], J: np.ndarray, out: np.ndarray
     ) -> list[np.ndarray | float]:
-        """The batch kernel, on n configurations laid out sample-last (contiguous over the batch).
-
-        p: 3 arrays (n,) [m]; C: the 9 entries of C_IF row-major, arrays (n,); J: J_e0 (6, dof, n) in
-        "local_world_aligned"; out: (m, dof, n) receives J_A. The formulas are the parameterizations'
-        own, evaluated with numpy. Returns each parameterization's distance to its singular set,
-        (n,) or a float, in χ's order; the caller decides (see :meth:`singular_rows`).
-        """
+        """The batch kernel on n configurations, sample-last: p, 3 arrays (n,) [m]; C, the 9 entries of C_IF
+        row-major, arrays (n,); J, J_e0 (6, dof, n) in "local_world_aligned"; out (m, dof, n) receives J_A.
+        Returns each part's distance to its singular set, (n,) or a float (see :meth:`singular_rows`)."""
         E_rows: list[tuple[Entries, npt.NDArray[np.float64]]] = []
         distances: list[npt.NDArray[np.float64] | float] = []
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -186,7 +199,7 @@ class PoseMap:
                 E_rows += [(E[k : k + 3], block) for k in range(0, len(E), 3)]
             scratch = np.empty(out.shape[1:])
             for target, source in enumerate(range(len(E_rows)) if self.rows is None else self.rows):
-                combine(*E_rows[source], out[target], scratch)
+                _combine(*E_rows[source], out[target], scratch)
         return distances
 
     def singular_rows(
@@ -199,13 +212,9 @@ class PoseMap:
         jacobian: Callable[[int], np.ndarray] | None = None,
         single: bool = False,
     ) -> None:
-        """What the batch rows closer than ``threshold`` to a part's singular set get: NaN in that part's rows
-        of out (N, m, ...) (``nan``), or the RepresentationSingularityError one call at the first such row
-        raises (position checked before rotation; ``single``: not named as a batch row).
-
-        distances: (N, len(parts)) from :meth:`fill_columns`; pose(row) gives that row's T_IF (4, 4) and
-        jacobian(row) its J_e0 (6, dof) (for the robot's rank in the message).
-        """
+        """Batch rows closer than ``threshold`` to a part's singular set (distances: (N, len(parts))) get NaN
+        in that part's rows of out (N, m, ...) (``nan``), or the first raises RepresentationSingularityError
+        with pose(row) T_IF (4, 4) and jacobian(row) J_e0 (6, dof) (``single``: not named as a batch row)."""
         below = singular_where(distances, threshold)
         if nan:
             for k, rows in enumerate(self.part_rows):
@@ -223,9 +232,6 @@ class PoseMap:
                 None if single else row,
                 None if jacobian is None else jacobian(row),
             )
-
-
-_F64 = np.dtype(np.float64)
 
 
 @lru_cache(maxsize=256)
@@ -262,8 +268,6 @@ def pose_map(
 
 def as_rows(rows: Sequence[str | int] | str | None) -> tuple[str | int, ...] | None:
     """A hashable row selection (a single label is accepted as a one-row selection)."""
-    if rows is None:
-        return None
     if isinstance(rows, str):
         return (rows,)
-    return tuple(rows)
+    return None if rows is None else tuple(rows)

@@ -1,29 +1,21 @@
-"""Representation singularities met by the analytic layer: what to do there (``on_singularity``), the
-robot's own rank for the message, and the RepresentationSingularityError with the parameterizations that are
-regular at the same pose.
-
-A configuration closer than the threshold to a parameterization's singular set gives either the error
-("raise", the default) or NaN in that parameterization's rows ("nan"; the other rows stay exact). The error
-says whether the robot itself is also kinematically singular there, from the singular values of the
-geometric Jacobian that E(χ) multiplies (J_e0, or a relative Jacobian).
-"""
+"""Representation singularities met by the analytic layer: the RepresentationSingularityError, with the
+parameterizations regular at the same pose and whether the robot itself is kinematically singular there
+(from the singular values of the geometric Jacobian that E(χ) multiplies: J_e0, or a relative Jacobian)."""
 
 from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
 
 import numpy as np
-import numpy.typing as npt
 
 from ..errors import OptionError, RepresentationSingularityError
 from ..parameterizations import POSITION_PARAMETERIZATIONS, ROTATION_PARAMETERIZATIONS
 from ..parameterizations.base import Parameterization
 
 ON_SINGULARITY = ("raise", "nan")
-"""What a configuration closer than the threshold to a singular set gives: RepresentationSingularityError
-("raise", the default) or NaN in the rows of the singular parameterization ("nan"; other rows stay exact)."""
+"""Within the threshold of a singular set: RepresentationSingularityError ("raise", the default) or NaN in
+the rows of the singular parameterization ("nan"; the other rows stay exact)."""
 
 RANK_TOLERANCE = 1e-6
 """Relative tolerance of :func:`robot_rank`: σ_i > RANK_TOLERANCE·σ_max counts (the value of
@@ -38,10 +30,9 @@ def check_on_singularity(on_singularity: object) -> bool:
 
 
 def robot_rank(J: np.ndarray) -> tuple[int, int]:
-    """(rank, generic rank) of a geometric Jacobian J (6, dof): rank counts σ_i > RANK_TOLERANCE·σ_max,
-    the generic rank is min(6, number of columns that are not zero). The robot is kinematically singular
-    when rank < generic rank. (Columns of a relative Jacobian vanish identically for the joints that move
-    both frames alike; an absolute J_e0 has no zero column: a joint always moves its frame.)"""
+    """(rank, generic rank) of a geometric Jacobian J (6, dof): rank counts σ_i > RANK_TOLERANCE·σ_max, the
+    generic rank is min(6, number of nonzero columns: a relative Jacobian's vanish for joints that move both
+    frames alike). The robot is kinematically singular when rank < generic rank."""
     J = np.asarray(J, dtype=float)
     if J.size == 0 or not np.isfinite(J).all():
         return 0, min(J.shape)
@@ -81,18 +72,4 @@ def singularity_error(
     )
 
 
-def pose_of(C: Sequence[Sequence[float]], p: Sequence[float]) -> npt.NDArray[np.float64]:
-    """T (4, 4) from C (3x3 nested floats) and p (3 floats)."""
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = C, p
-    return T
-
-
-__all__ = [
-    "ON_SINGULARITY",
-    "RANK_TOLERANCE",
-    "check_on_singularity",
-    "pose_of",
-    "robot_rank",
-    "singularity_error",
-]
+__all__ = ["ON_SINGULARITY", "RANK_TOLERANCE", "check_on_singularity", "robot_rank", "singularity_error"]

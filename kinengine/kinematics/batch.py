@@ -6,12 +6,9 @@ Same conventions as :mod:`kinengine.kinematics.engine`: T_IF in the root link fr
 [linear; angular] in "local_world_aligned", "local" or "world", columns in ``joint_names`` order.
 
 How: the chain from the root to the frame is compiled once (:func:`compiled_chain`) and evaluated by
-:mod:`kinengine.kinematics.chain` over chunks of configurations (:func:`chunk_rows`: long numpy passes,
-each thread's scratch reused from chunk to chunk and call to call) on a persistent pool of one thread
-per core this process may use (WORKERS, from ``os.sched_getaffinity``; ``workers=`` caps it; numpy
-releases the GIL in its loops; a forked child makes its own pool). Small batches loop over Pinocchio
-instead, which is faster there (see ``CALLS_PER_CONFIGURATION``). ``benchmarks/batch_throughput.py``
-measures configs/s, page faults and memory against the inline Pinocchio loop.
+the C chain or :mod:`kinengine.kinematics.chain` over chunks of configurations (:func:`chunk_rows`) on a
+persistent pool of one thread per core this process may use (WORKERS; ``workers=`` caps it; a forked
+child makes its own pool). Small batches loop over Pinocchio instead, which is faster there.
 """
 
 from __future__ import annotations
@@ -36,27 +33,20 @@ if TYPE_CHECKING:  # imported when the first pool starts: concurrent.futures (an
     from concurrent.futures import ThreadPoolExecutor
 
 MIN_CHUNK = 4096
-"""Fewest rows per chunk (unless CHUNK is smaller): numpy's ~1 µs per call, and the GIL hand-over at
-every call, dominate shorter ones (ABB IRB 120, 10k rows on 2 threads: chunks of 1024 1.3, 2048 1.7,
-4096 2.2 M configs/s)."""
+"""Fewest rows per chunk (unless CHUNK is smaller): numpy's cost per call dominates shorter ones."""
 MEMORY_SHARE = 0.1
-"""Chunks shrink (down to MIN_CHUNK) until the threads' scratch is within this share of the outputs, so a
-call's memory stays within its outputs + 10 %. (Longer chunks are faster: 100k rows on 2 threads, median
-M configs/s at 0.1, 0.2, 0.3 measured interleaved: Kinova 6.48, 6.90, 7.17; ABB IRB 120 5.83, 6.19, 6.50.)"""
+"""Chunks shrink (down to MIN_CHUNK) until the threads' scratch is within this share of the outputs."""
 MIN_PER_WORKER = 4096
 """Batches are split over several threads only when each gets at least this many rows."""
 KERNEL_FROM = 2
-"""Batches of this many rows or more run on the C chain when it is built (ABB IRB 120, robot.kinematics:
-2 rows 5.7 µs against 7.4 looping over Pinocchio, 64 rows 16 against 145; one row: equal)."""
+"""Batches of this many rows or more run on the C chain when it is built (one row: as fast as Pinocchio)."""
 KERNEL_MIN_PER_WORKER = 600
-"""The same for the C chain: handing a share to a pool thread costs ~60 µs (ABB IRB 120, robot.kinematics
-into out=: 500 rows 77 µs on one thread, 110 on two; 1000 rows 149 and 144; 2000 rows 289 and 213)."""
+"""The same for the C chain, whose share costs ~60 µs to hand to a pool thread."""
 WORKERS = max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1)
 """Threads per batch (this one included): the cores this process may use."""
 CALLS_PER_CONFIGURATION = 3
-"""One configuration in Pinocchio's loop costs about as much as this many numpy calls over a chunk
-(measured on the ABB IRB 120, UR5 and Panda: 1.75 µs against 0.55 µs): a chain that takes c numpy
-calls per chunk loops over Pinocchio for batches smaller than c / this."""
+"""One configuration in Pinocchio's loop costs about as much as this many numpy calls over a chunk: a
+chain that takes c numpy calls per chunk loops over Pinocchio for batches smaller than c / this."""
 MIN_CALLS = 12
 """The fewest numpy calls of any chain (a pose of a frame fixed to the root)."""
 _LOCK = threading.Lock()
@@ -105,16 +95,14 @@ def run_chain(
         workers = max(1, min(WORKERS if workers is None else workers, len(Q) // KERNEL_MIN_PER_WORKER))
         code = REFERENCE_CODES.get(reference, 0)  # reference None: no Jacobian asked
         run = chain.kernel.run
-        # The C chain reads and writes aligned float64; any other layout numpy gives (np.frombuffer at an
-        # odd offset) goes through an aligned copy.
+        # the C chain reads and writes aligned float64: other layouts go through an aligned copy
         Q = Q if Q.flags.aligned else Q.copy()
-        T, J = (None if a is None or a.flags.aligned else np.empty_like(a) for a in (pose, jac))
-        T, J = (pose if T is None else T), (jac if J is None else J)
+        T, J = (a if a is None or a.flags.aligned else np.empty_like(a) for a in (pose, jac))
 
         def share(a: int, b: int) -> None:
             run(Q[a:b], None if T is None else T[a:b], None if J is None else J[a:b], code)
 
-        in_shares(list(itertools.pairwise(len(Q) * i // workers for i in range(workers + 1))), share, workers)
+        in_shares(_split(len(Q), workers), share, workers)
         for target, result in ((pose, T), (jac, J)):
             if target is not None and result is not target:
                 target[...] = result
@@ -123,14 +111,17 @@ def run_chain(
     chunk = chunk_rows(chain, len(Q), workers, pose is not None, jac is not None, analytic, reference)
     per = len(Q) / (workers * chunk)  # chunks per worker: rounded (2/3 to 3/2 × chunk rows), or up
     pieces = workers * max(1, math.ceil(per) if MIN_CHUNK < chunk < CHUNK else round(per))  # if memory binds
-    chunks = list(itertools.pairwise(len(Q) * i // pieces for i in range(pieces + 1)))
-
     outputs = Outputs(pose, jac, reference, analytic)
 
     def evaluate_rows(a: int, b: int) -> None:
         evaluate_chain(chain, Q[a:b].T, outputs.rows(a, b))  # Q[a:b].T: a strided view, its rows read
 
-    in_shares(chunks, evaluate_rows, workers)
+    in_shares(_split(len(Q), pieces), evaluate_rows, workers)
+
+
+def _split(n: int, pieces: int) -> list[tuple[int, int]]:
+    """Rows 0..n as ``pieces`` consecutive (start, stop) ranges of near-equal length."""
+    return list(itertools.pairwise(n * i // pieces for i in range(pieces + 1)))
 
 
 def in_shares(chunks: list[tuple[int, int]], work: Callable[[int, int], None], workers: int) -> None:
@@ -177,21 +168,15 @@ def _pinocchio_loop(
     jac: np.ndarray | None,
     reference: pin.ReferenceFrame | None,
 ) -> None:
-    """The same outputs from a Python loop over Pinocchio (faster for small batches)."""
-    model, data, coords = kin.model, kin.data(), kin.coordinates
-    if kin.dof == 0 and jac is not None:
-        jac[...] = 0.0
-        jac = None  # nothing to fill (and Pinocchio 4.1's getFrameJacobian crashes when nv = 0)
-    if pose is None and jac is None:
-        return
-    place_first = jac is None or (pose is not None and reference == pin.LOCAL)
-    for i, qi in enumerate(coords.to_pinocchio(Q)):  # the single-q calls' algorithms: equal bit for bit
-        if place_first:  # computeFrameJacobian leaves data.oMi stale in LOCAL: place the joints first
-            pin.forwardKinematics(model, data, qi)
-        if jac is not None:
-            jac[i] = coords.fold(pin.computeFrameJacobian(model, data, qi, fid, reference).reshape(6, -1))
-        if pose is not None:
-            pose[i] = pin.updateFramePlacement(model, data, fid).homogeneous
+    """The same outputs from a loop over the single-configuration calls (faster for small batches)."""
+    pose1, jacobian1, both = kin.frame_calls(fid)
+    for i, q in enumerate(Q):
+        if pose is not None and jac is not None:
+            pose[i], jac[i] = both(q, reference)
+        elif pose is not None:
+            pose[i] = pose1(q)
+        elif jac is not None:
+            jac[i] = jacobian1(q, reference)
 
 
 def evaluate(
@@ -205,25 +190,20 @@ def evaluate(
     out: tuple[np.ndarray | None, np.ndarray | None] | None = None,
     workers: int | None = None,
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """(T (N, 4, 4) or None, J (N, 6, dof) or None) for an already checked float64 Q (N, dof).
-
-    ``reference`` is a pin.ReferenceFrame (unused when ``jacobian`` is False); ``out`` optional
-    preallocated (T, J) arrays of those shapes, filled in place; ``workers`` caps the threads.
-    """
+    """(T (N, 4, 4) or None, J (N, 6, dof) or None) for an already checked float64 Q (N, dof); ``reference``
+    a pin.ReferenceFrame (unused without ``jacobian``); ``out``: (T, J) filled in place; ``workers``: cap."""
     n = len(Q)
     T, J = out if out is not None else (None, None)
     if out is not None and any(a is not None and np.may_share_memory(Q, a) for a in out):
         Q = Q.copy()  # the outputs are written while Q is still read: read a copy
-    if pose and T is None:
-        T = np.empty((n, 4, 4))
-    if jacobian and J is None:
-        J = np.empty((n, 6, kin.dof))
+    T = (np.empty((n, 4, 4)) if T is None else T) if pose else None
+    J = (np.empty((n, 6, kin.dof)) if J is None else J) if jacobian else None
     chain = numpy_chain(kin, fid, n, True)  # one choice for poses, Jacobians or both: equal bit for bit
     if chain is None:
-        _pinocchio_loop(kin, Q, fid, T if pose else None, J if jacobian else None, reference)
+        _pinocchio_loop(kin, Q, fid, T, J, reference)
     else:
-        run_chain(chain, Q, T if pose else None, J if jacobian else None, reference, workers=workers)
-    return (T if pose else None), (J if jacobian else None)
+        run_chain(chain, Q, T, J, reference, workers=workers)
+    return T, J
 
 
 def checked_workers(workers: object) -> int | None:
@@ -264,12 +244,9 @@ def checked_out(out: object, n: int, dof: int) -> tuple[np.ndarray, np.ndarray] 
 def numpy_chain(
     kin: Kinematics, fid: int, n: int, jacobian: bool, extra: int = 0, row_cost: int = 1, native: bool = True
 ) -> Chain | None:
-    """The compiled chain if evaluating it over the batch is the faster path, else None (loop row by row).
-
-    ``native``: the caller runs poses and Jacobians, which the C chain (when built) evaluates faster than
-    Pinocchio's loop from KERNEL_FROM rows on. Otherwise a loop row costs ``row_cost`` ×
-    CALLS_PER_CONFIGURATION numpy calls and the numpy path the chain's calls plus ``extra``.
-    """
+    """The compiled chain if evaluating it over the batch is faster than a loop over rows, else None.
+    ``native``: poses and Jacobians, on the C chain (when built) from KERNEL_FROM rows. Otherwise a loop row
+    costs ``row_cost`` × CALLS_PER_CONFIGURATION numpy calls, the numpy path the chain's plus ``extra``."""
     if native and compiler.KERNEL is not None and n >= KERNEL_FROM:
         return compiled_chain(kin, fid)
     budget = row_cost * n * CALLS_PER_CONFIGURATION

@@ -1,20 +1,17 @@
 """The compiled kinematic chain behind :mod:`kinengine.kinematics.batch`: frame poses T_IF (4, 4) [m] and
 Jacobians (6, dof) evaluated column-wise over a chunk of n configurations at once (arrays (3, n)).
 
-The chain from the root to the frame is compiled once from the Pinocchio model
-(:func:`kinengine.kinematics.compiler.compiled_chain`). Joint i is carried as S_i = C_Ii · Q_i, where
-Q_i is a constant rotation with Q_i e_z = a_i (its axis):
+The chain from the root to the frame is compiled once (:func:`kinengine.kinematics.compiler.compiled_chain`).
+Joint i is carried as S_i = C_Ii · Q_i, where Q_i is a constant rotation with Q_i e_z = a_i (its axis):
 
     S_i = S_parent · K_i · Rz(θ_i),   K_i = Q_parentᵀ · C_i⁰ · Q_i     (C_i⁰, p_i⁰: joint placement)
     p_i = p_parent + S_parent · t_i,  t_i = Q_parentᵀ · p_i⁰             (+ S_i e_z · d if prismatic)
 
 so the world axis of joint i is the third column of S_i. S and p live in a (4, 3, n) buffer M, slot j
-one column up to sign, which slot and sign fixed at compile time (:class:`Plan`), slot 3 p: a signed
-permutation K_i with t_i = 0 only renames slots; any other joint (a translation, a real tilt, or a
-URDF's π/2 written with 11 digits: 5e-12 off, which Pinocchio keeps) is one 4x4 product; Rz(θ_i) is one
-product and one sum on the pair of slots of columns 0 and 1. Numpy calls, more than bytes, bound the
-speed (each hands the GIL over). A mimic joint uses θ = multiplier · q_leader + offset and adds
-multiplier × its column to the leader's column.
+one column up to sign (slot and sign fixed at compile time: :class:`Plan`), slot 3 p. A signed
+permutation K_i with t_i = 0 only renames slots; any other joint is one 4x4 product; Rz(θ_i) is one
+product and one sum on the pair of slots of columns 0 and 1. A mimic joint uses
+θ = multiplier · q_leader + offset and adds multiplier × its column to the leader's column.
 """
 
 from __future__ import annotations
@@ -30,20 +27,16 @@ if TYPE_CHECKING:
     from .chainkernel import Kernel
 
 CHUNK = 8192
-"""Most configurations per numpy pass: each call costs ~1 µs and hands the GIL to the other threads, so
-long passes win (ABB IRB 120 on 2 threads: 1.3 M configs/s in chunks of 1024, 2.2 in 4096, 3.0 in 8192),
-up to where two threads' scratch (8 · scratch_rows bytes per row each) crowds the shared L3 cache.
-A 4x4 product (48 · CHUNK multiply-adds) takes as long with OPENBLAS_NUM_THREADS=1: not split."""
+"""Most configurations per numpy pass: each numpy call costs ~1 µs and hands the GIL over, so long passes
+win, up to where the threads' scratch (8 · scratch_rows bytes per row each) crowds the shared cache."""
 Terms = tuple[tuple[tuple[int, float], ...], ...]
 _PAIRS = {(0, 1): slice(0, 2), (1, 0): slice(1, None, -1), (0, 2): slice(0, 3, 2)}
 _PAIRS |= {(2, 0): slice(2, None, -2), (1, 2): slice(1, 3), (2, 1): slice(2, 0, -1)}
 
 
-class Step:
-    """One movable joint on the path to the frame (plain slots: no dataclass machinery at import)."""
+class Step(NamedTuple):
+    """One movable joint on the path to the frame."""
 
-    __slots__ = ("accumulate", "coordinate", "offset", "prismatic", "rotation", "scaling", "translation")
-    FIELDS = ("prismatic", "coordinate", "scaling", "offset", "rotation", "translation", "accumulate")
     prismatic: bool
     coordinate: int  # column of Q that drives it (the leader's, for a mimic joint)
     scaling: float  # θ = scaling · q + offset
@@ -52,19 +45,14 @@ class Step:
     translation: tuple[tuple[int, float], ...]  # nonzero entries of t_i: (row, value)
     accumulate: bool  # an earlier step already wrote this Jacobian column
 
-    def __init__(self, *values: object) -> None:
-        for name, value in zip(self.FIELDS, values, strict=True):
-            setattr(self, name, value)
-
 
 class Plan:
     """The chain's work on M (4, 3, n): slots 0-2 the columns of S up to sign, slot 3 p. M starts as
     ``start`` (the first step's K and t folded in); ``moves``, one per step: (matrix (4, 4): M' = matrix ·
-    M into the other buffer, K_i and t_i in one product (one call beats a multiply and an add per entry
-    of t_i, even at 1000 rows), or None when K_i is a signed permutation and t_i = 0: slots renamed; pair:
-    M[pair] = the slots of columns 0 and 1, ordered so that Rz is (a c + b s, b c − a s); axis: slot and
-    sign of column 2). Last, M' = ``matrix`` · M holds C_IF's columns and p_f in order (or, None: the
-    columns are ``slots`` × ``signs``)."""
+    M into the other buffer, K_i and t_i in one product, or None when K_i is a signed permutation and
+    t_i = 0: slots renamed; pair: M[pair] = the slots of columns 0 and 1, ordered so that Rz is
+    (a c + b s, b c − a s); axis: slot and sign of column 2). Last, M' = ``matrix`` · M holds C_IF's
+    columns and p_f in order (or, None: the columns are ``slots`` × ``signs``)."""
 
     def __init__(self, steps: tuple[Step, ...], rotation: Terms, translation: tuple) -> None:
         slots: tuple[int, ...] = (0, 1, 2)
@@ -136,8 +124,6 @@ class Chain:
         self.columns = slice(first, first + len(steps)) if plain and steps else None
         self.kernel: Kernel | None = None  # the C chain, set by kinengine.kinematics.compiler when built
 
-    full = property(lambda self: not self.unused, doc="Every coordinate drives a joint (no zero column).")
-
 
 def _column(M: np.ndarray, slot: int, sign: float, out: np.ndarray | None = None) -> np.ndarray:
     """sign · M[slot] as an array of its own (into ``out`` if given)."""
@@ -154,10 +140,8 @@ def _cross(a: np.ndarray, b: np.ndarray, out: np.ndarray, temp: np.ndarray | Non
 
 
 def _cos_sin(q: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """cos q and sin q from t = tan(q/2): cos = (1 − t²)/(1 + t²), sin = 2t/(1 + t²). One tan and six cheap
-    passes cost ~30 ns per angle where numpy's cos and sin take ~40; within 2.3e-16 of them (q/2 is exact;
-    measured on 3e6 angles, ±π and ±π/2 included). ``rows`` (4 k, n) end up as the blocks cos, cos, −sin,
-    sin (Rz's coefficients, see evaluate_chain)."""
+    """cos q and sin q from t = tan(q/2): cos = (1 − t²)/(1 + t²), sin = 2t/(1 + t²) (one tan and cheap
+    passes, within 2.3e-16 of numpy's cos and sin). ``rows`` (4 k, n) end as cos, cos, −sin, sin."""
     k = len(q)
     cos, cos2, d, sin = rows[:k], rows[k : 2 * k], rows[2 * k : 3 * k], rows[3 * k :]
     t = np.tan(np.multiply(q, 0.5, out=sin), out=sin)
@@ -183,19 +167,12 @@ class Outputs(NamedTuple):
     def rows(self, a: int, b: int) -> Outputs:
         """The outputs of rows a..b (views)."""
         pose, jac, reference, analytic = self
-        if analytic is not None:
-            analytic = (analytic[0], analytic[1][a:b], analytic[2][a:b])
-        return Outputs(
-            None if pose is None else pose[a:b], None if jac is None else jac[a:b], reference, analytic
-        )
+        cut = None if analytic is None else (analytic[0], analytic[1][a:b], analytic[2][a:b])
+        return Outputs(None if pose is None else pose[a:b], None if jac is None else jac[a:b], reference, cut)
 
 
 def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
-    """Fill ``outputs`` for the chunk qT (dof, n).
-
-    qT may be a strided view (``Q[a:b].T``): only its rows are read. Results go straight into the
-    outputs' strided views.
-    """
+    """Fill ``outputs`` for the chunk qT (dof, n), which may be a strided view (``Q[a:b].T``)."""
     pose, jac, reference, analytic = outputs
     dof, n, m, plan = chain.dof, qT.shape[1], len(chain.steps), chain.plan
     jacobian = jac is not None or analytic is not None
@@ -208,7 +185,6 @@ def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
     _cos_sin(qT, memory[: 4 * dof])  # of every coordinate
     turns = memory[: 4 * dof].reshape(2, 2, dof, n)  # [[cos, cos], [−sin, sin]]
     buffers = list(memory[head : head + 24].reshape(2, 4, 3 * n))  # M, M' (4, 3 n) for the products
-    products = [b.reshape(2, 2, 3, n) for b in buffers]  # Rz's product goes to the buffer not holding M
     stacked = jacobian and chain.columns is not None  # z_i, p_i stacked for the Jacobian
     if stacked:
         Z, P = ZP = memory[head + body : head + body + 6 * m].reshape(2, 3, m, n)
@@ -219,11 +195,7 @@ def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
     for i, (step, move) in enumerate(zip(chain.steps, plan.moves, strict=True)):
         matrix, pair, (slot, sign) = move
         if matrix is not None:  # K_i and t_i in one product
-            if not held:
-                M[3] = p
-            buffers.reverse()
-            products.reverse()
-            M = np.matmul(matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
+            M = _product(matrix, M, p, held, buffers)
             p, held = M[3], True
         plain = step.scaling == 1.0 and step.offset == 0.0
         theta = qT[step.coordinate] if plain else qT[step.coordinate] * step.scaling + step.offset
@@ -232,7 +204,7 @@ def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
         else:  # Rz(θ) on M[pair] = (a, b) in place: (a c + b s, b c − a s)
             c, s = (0.0, 0.0) if plain else (np.cos(theta), np.sin(theta))
             turn = turns[:, :, step.coordinate] if plain else np.array([[c, c], [-s, s]])
-            product = products[1]  # M' is free: M lives in buffers[0]
+            product = buffers[1].reshape(2, 2, 3, n)  # M' is free: M lives in buffers[0]
             np.multiply(M[pair][None], turn[:, :, None], out=product)
             np.add(product[0], product[1, ::-1], out=M[pair])
         if stacked and held and (slot, sign) == (2, 1.0):  # axis in slot 2, p in slot 3: one copy
@@ -243,11 +215,7 @@ def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
         elif jacobian:
             joints.append((step, _column(M, slot, sign), p.copy() if held else p))
     if plan.matrix is not None:
-        if not held:
-            M[3] = p
-        buffers.reverse()
-        products.reverse()
-        M = np.matmul(plan.matrix, buffers[1], out=buffers[0]).reshape(4, 3, n)
+        M = _product(plan.matrix, M, p, held, buffers)
         p = M[3]
     p_f = p.copy() if analytic is not None and stacked else p  # P is overwritten below
     if pose is not None and plan.matrix is not None:
@@ -296,6 +264,14 @@ def evaluate_chain(chain: Chain, qT: np.ndarray, outputs: Outputs) -> None:
         for k, distance in enumerate(pmap.fill_columns(p_rows, C, target, JA)):
             distances[:, k] = distance
         out[...] = JA.transpose(2, 0, 1)
+
+
+def _product(matrix: np.ndarray, M: np.ndarray, p: np.ndarray, held: bool, buffers: list) -> np.ndarray:
+    """matrix (4, 4) · M (p into slot 3 first unless ``held``) into the buffer not holding M; they swap."""
+    if not held:
+        M[3] = p
+    buffers.reverse()
+    return np.matmul(matrix, buffers[1], out=buffers[0]).reshape(M.shape)
 
 
 def _columns(joints: list, p_f: np.ndarray, reference: pin.ReferenceFrame | None, target: np.ndarray) -> None:

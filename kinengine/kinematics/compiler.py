@@ -1,10 +1,8 @@
 """The chain from the root to a frame, compiled once per robot and frame from Pinocchio's model.
 
-:func:`compiled_chain` gives a :class:`~kinengine.kinematics.chain.Chain`: its movable joints (axis, the
-constant rotation K_i and translation t_i before each, θ = scaling · q + offset for mimic joints) in the
-frames :mod:`kinengine.kinematics.chain` describes, evaluated by numpy (``chain.evaluate_chain``) or, when
-``kinengine/kinematics/chainkernel.c`` was built, by its C twin (``Chain.kernel``, fed the same constants
-by :func:`program`). The C chain is used unless ``KINENGINE_PURE_PYTHON`` is set.
+:func:`compiled_chain` gives a :class:`~kinengine.kinematics.chain.Chain` (the frames and constants
+:mod:`kinengine.kinematics.chain` describes), evaluated by numpy or, when ``chainkernel.c`` was built and
+``KINENGINE_PURE_PYTHON`` is not set, by its C twin (``Chain.kernel``, fed by :func:`program`).
 """
 
 from __future__ import annotations
@@ -24,16 +22,13 @@ ROUNDING = 1e-15
 """Compiled constants within this (relative) of 0 or ±1 are taken as exactly that (see _snap)."""
 REFERENCE_CODES = {pin.LOCAL_WORLD_ALIGNED: 0, pin.WORLD: 1, pin.LOCAL: 2}
 """The C chain's number for each Jacobian reference."""
-
-
 SIN_COS_TOLERANCE = 1e-15
 """Largest difference from the C library's sin and cos that the C chain's own sin_cos may show at import."""
 
 
 def _kernel_type() -> tuple[type | None, str | None]:
-    """The C chain (kinengine/kinematics/chainkernel.c), or None and why: not built (the ImportError), its
-    sin and cos disagree with the C library's (then one RuntimeWarning says so too), or
-    KINENGINE_PURE_PYTHON (then no reason: accelerator.status says it)."""
+    """The C chain (chainkernel.c), or None and why: not built (the ImportError), its sin and cos disagree
+    with the C library's (one RuntimeWarning too), or KINENGINE_PURE_PYTHON (no reason)."""
     if accelerator.SWITCHED_OFF:
         return None, None
     try:
@@ -66,14 +61,12 @@ def sin_cos_error(sin_check: Callable[[bytes], bytes]) -> float:
 
 
 KERNEL, KERNEL_ERROR = _kernel_type()
-"""The C chain's type, or None: then every batch runs on numpy (tests set it to None to compare); and the
-ImportError's text when it did not load."""
+"""The C chain's type, or None: every batch runs on numpy (tests set it to compare); and why it is None."""
 
 
 def accelerator_status() -> str:
-    """One line: whether kinengine's C accelerator runs in this process and, if not, why (a source tree
-    without built extensions, not built at install, KINENGINE_PURE_PYTHON); what ``kinengine --version``
-    prints. The diagnosis is :func:`kinengine.model.accelerator.status`."""
+    """One line: whether kinengine's C accelerator runs in this process and, if not, why (what ``kinengine
+    --version`` prints; the diagnosis is :func:`kinengine.model.accelerator.status`)."""
     missing: dict[str, str | None] = {}
     if not accelerator.AVAILABLE:
         missing["fastcall"] = accelerator.LOAD_ERROR
@@ -111,15 +104,14 @@ def _snap(values: np.ndarray) -> np.ndarray:
     return np.where(np.abs(np.abs(values) - 1.0) <= ROUNDING, np.sign(values), values)
 
 
+def _nonzero(vector: np.ndarray) -> tuple[tuple[int, float], ...]:
+    """The nonzero entries of a (snapped) 3-vector: ((row, value), ...)."""
+    return tuple((m, float(value)) for m, value in enumerate(vector) if value != 0.0)
+
+
 def _terms(matrix: np.ndarray) -> Terms:
-    """Nonzero entries of a 3x3 rotation, column by column: ((row, value), ...) per column (snapped)."""
-    matrix = _snap(matrix)
-    return tuple(tuple((m, float(matrix[m, k])) for m in range(3) if matrix[m, k] != 0.0) for k in range(3))
-
-
-def _vector_terms(vector: np.ndarray) -> tuple[tuple[int, float], ...]:
-    vector = _snap(vector) if np.abs(vector).max(initial=0.0) > 0 else vector
-    return tuple((m, float(vector[m])) for m in range(3) if vector[m] != 0.0)
+    """Nonzero entries of a 3x3 rotation, column by column (snapped)."""
+    return tuple(_nonzero(column) for column in _snap(matrix).T)
 
 
 def _compile(kin: Kinematics, fid: int) -> Chain:
@@ -136,13 +128,16 @@ def _compile(kin: Kinematics, fid: int) -> Chain:
         axis = np.asarray(joint.axis, dtype=float)
         Q = _axis_basis(axis / np.linalg.norm(axis))
         placement, scale = model.jointPlacements[jid], float(coords.multiplier[k])
-        K, t = _terms(Q_parent.T @ placement.rotation @ Q), _vector_terms(Q_parent.T @ placement.translation)
+        K, t = (
+            _terms(Q_parent.T @ placement.rotation @ Q),
+            _nonzero(_snap(Q_parent.T @ placement.translation)),
+        )
         prismatic, offset = joint.type == "prismatic", float(coords.offset[k])
         steps.append(Step(prismatic, coordinate, scale, offset, K, t, coordinate in seen))
         seen.add(coordinate)
         Q_parent = Q
     rotation = _terms(Q_parent.T @ frame.placement.rotation)
-    translation = _vector_terms(Q_parent.T @ frame.placement.translation)
+    translation = _nonzero(_snap(Q_parent.T @ frame.placement.translation))
     chain = Chain(tuple(steps), rotation, translation, kin.dof)
     if KERNEL is not None:
         chain.kernel = KERNEL(kin.dof, program(chain))

@@ -8,13 +8,12 @@ of *that* matrix. q (and q̇) are checked by the caller.
 * ``jacobian_time_variation``: J̇ = dJ/dt along q̇, (6, dof); entries in [m/(rad·s)], [1/s].
 * ``kinematic_hessian``: H (6, dof, dof) with H[:, :, k] = ∂J/∂q_k, so J̇ = H @ q̇.
 
-How: everything starts from the WORLD Jacobian J_w (the spatial velocity of the body point at I's
-origin) of Pinocchio's plain-joint model, folded by the coordinate map (J = J_pin·M, and
-J̇ = J̇_pin·M with q̇_pin = M q̇), so mimic joints take no special path. The Hessian
-uses the Lie bracket of the joint axes: moving joint b turns every joint a below it, so
-∂S_a/∂θ_b = ad(S_b)·S_a = (ω_b × v_a + v_b × ω_a, ω_b × ω_a) for b above a, 0 otherwise, and
-θ = M q gives H = Σ_ab M[a, j]·ad(S_b)S_a·M[b, k]. Pinocchio's own ``getFrameKinematicHessian``
-gives the same numbers (after ``np.reshape(H.ravel(), (6, nv, nv), order="F")``).
+How: everything starts from the WORLD Jacobian J_w (the spatial velocity of the body point at I's origin)
+of Pinocchio's plain-joint model, folded by the coordinate map (J = J_pin·M, and J̇ = J̇_pin·M with
+q̇_pin = M q̇), so mimic joints take no special path. The Hessian uses the Lie bracket of the joint axes:
+moving joint b turns every joint a below it, so ∂S_a/∂θ_b = ad(S_b)·S_a = (ω_b × v_a + v_b × ω_a, ω_b × ω_a)
+for b above a, 0 otherwise, and θ = M q gives H = Σ_ab M[a, j]·ad(S_b)S_a·M[b, k]. Pinocchio's own
+``getFrameKinematicHessian`` gives the same numbers (after ``np.reshape(H.ravel(), (6, nv, nv), order="F")``).
 From J_w, with v = ∂p, ω = the frame's angular velocity along the differentiation direction:
 J_lwa = [[I, −[p]×], [0, I]]·J_w, ∂J_lwa = ∂J_w + [∂J_w,ang × p + J_w,ang × v; 0] and
 J_local = blockdiag(Cᵀ, Cᵀ)·J_lwa, ∂J_local = blockdiag(Cᵀ, Cᵀ)·(∂J_lwa − ω × J_lwa).
@@ -52,7 +51,7 @@ def jacobian_time_variation(
     Jw = coords.fold(pin.getFrameJacobian(model, data, fid, pin.WORLD).reshape(6, -1))
     dJw = coords.fold(pin.getFrameJacobianTimeVariation(model, data, fid, pin.WORLD).reshape(6, -1))
     M = pin.updateFramePlacement(model, data, fid)
-    return _change_reference(Jw, dJw[:, :, None], qdot[:, None], M.rotation, M.translation, ref)[:, :, 0]
+    return _change_reference(Jw, dJw[:, :, None], qdot[:, None], M, ref)[:, :, 0]
 
 
 def kinematic_hessian(
@@ -75,9 +74,9 @@ def kinematic_hessian(
     bracket[3:] = np.moveaxis(np.cross(w[:, None], w[None]), -1, 0)
     bracket *= chain.above  # only joints b above a turn a
     Hw = chain.A.T @ np.swapaxes(bracket, 1, 2) @ chain.A  # Σ_ab A[a,j]·bracket[:,b,a]·A[b,k]: O(6·p²·dof)
-    Jw = S @ chain.A
-    M = pin.updateFramePlacement(model, data, fid)
-    return _change_reference(Jw, Hw, np.eye(kin.dof), M.rotation, M.translation, ref)
+    return _change_reference(
+        S @ chain.A, Hw, np.eye(kin.dof), pin.updateFramePlacement(model, data, fid), ref
+    )
 
 
 # -- internals ----------------------------------------------------------------------------------
@@ -90,8 +89,7 @@ class _Chain:
     """
 
     def __init__(self, kin: Kinematics, fid: int) -> None:
-        model = kin.model
-        joints = [j for j in model.supports[model.frames[fid].parentJoint] if j > 0]
+        model, joints = kin.model, kin.supports(fid)
         self.columns = [model.joints[j].idx_v for j in joints]
         self.A = kin.coordinates.matrix[self.columns].reshape(len(joints), kin.dof)
         self.above = np.array(
@@ -100,17 +98,13 @@ class _Chain:
 
 
 def _change_reference(
-    Jw: np.ndarray,
-    dJw: np.ndarray,
-    directions: np.ndarray,
-    C: np.ndarray,
-    p: np.ndarray,
-    ref: pin.ReferenceFrame,
+    Jw: np.ndarray, dJw: np.ndarray, directions: np.ndarray, M: pin.SE3, ref: pin.ReferenceFrame
 ) -> npt.NDArray[np.float64]:
     """Derivatives dJw (6, dof, K) of the WORLD Jacobian Jw (6, dof) along K directions of q (dof, K)
-    turned into derivatives of the Jacobian in ``ref`` (see the module doc), (6, dof, K)."""
+    turned into derivatives of the Jacobian in ``ref`` (see the module doc), (6, dof, K); M: T_IF."""
     if ref == pin.WORLD:
         return dJw
+    C, p = M.rotation, M.translation
     J = Jw.copy()
     J[:3] += np.cross(Jw[3:].T, p).T  # J_lwa: v_F = v_O + ω × p
     twist = J @ directions  # (6, K): (∂p, ω) of F along each direction

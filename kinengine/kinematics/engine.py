@@ -12,9 +12,8 @@ Frames and conventions
   - WORLD: the spatial velocity in I: the linear rows are the velocity of the body point that
     currently coincides with I's origin, v_O = v_F − ω × p_F.
 
-Every method here takes an already checked q (see :meth:`CoordinateMap.check`); the Robot facade
-and the frame handles check it once. Pinocchio's Data is per thread, so one object serves several
-threads at once.
+Every method here takes an already checked q (:meth:`CoordinateMap.check`). Pinocchio's Data is per
+thread, so one object serves several threads at once.
 """
 
 from __future__ import annotations
@@ -39,14 +38,15 @@ REFERENCES: dict[object, pin.ReferenceFrame] = {
     "local_world_aligned": pin.LOCAL_WORLD_ALIGNED,
 }
 _ENUMS = (pin.WORLD, pin.LOCAL, pin.LOCAL_WORLD_ALIGNED)
-_forward, _place, _frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
 
 
 def resolve_reference(reference: object) -> pin.ReferenceFrame:
     """Pinocchio's ReferenceFrame for "world", "local", "local_world_aligned" (or the enum itself).
     Anything else — including True, 1.0 and numpy integers — is an OptionError."""
-    if type(reference) is str and reference in REFERENCES:
+    try:
         return REFERENCES[reference]
+    except (KeyError, TypeError):  # TypeError: unhashable
+        pass
     if type(reference) is pin.ReferenceFrame and reference in _ENUMS:
         return reference
     raise OptionError(
@@ -64,39 +64,33 @@ class FramePath(NamedTuple):
     mapped: bool  # True: q goes through q_pin = M q + b and J through J_pin · M; False: both as they are
 
 
+Locked = tuple[pin.Model, Callable[[], pin.Data]] | None  # a reduced model and its per-thread Data
+
+
 class Kinematics:
     """Pinocchio model + coordinate map of one robot; poses and Jacobians at checked configurations."""
 
     def __init__(self, description: RobotDescription) -> None:
         self.description = description
-        self.model = build_pinocchio_model(description)
+        self.model = model = build_pinocchio_model(description)
         self.coordinates = CoordinateMap(description)
         self.dof = self.coordinates.dof
         self.frame_ids = _frame_ids(self.model)
         self.frame_names: tuple[str, ...] = tuple(self.frame_ids)
-        self._tls = threading.local()
+        self._tls, self.data = thread_data(lambda: create_data(model, f"robot {description.name!r}"))
+        """``data()``: this thread's Pinocchio Data (made on first use)."""
         self._memo: dict[object, object] = {}
-
-    def data(self) -> pin.Data:
-        """This thread's Pinocchio Data (created on first use)."""
-        try:
-            return self._tls.data
-        except AttributeError:
-            data = self._tls.data = create_data(self.model, f"robot {self.description.name!r}")
-            return data
+        self._single: dict[int, Calls] = {}  # frame_calls, by frame index
 
     def frame_path(self, fid: int) -> FramePath:
-        """The cheapest exact way to frame ``fid``. Without mimic joints: the model itself, q untouched.
-        With mimic joints, for a frame that no mimic joint moves (an arm's flange and hand, not the
-        mimicking finger): Pinocchio's reduced model with the mimic joints locked, whose nq = dof joints are
-        q's coordinates in q's order — the frame's pose and Jacobian there equal the full model's at
-        q_pin = M q + b (its J_pin columns of mimic joints are zero), so again q passes untouched. A frame
-        that a mimic joint moves gets a model of its own joints alone when they are q's coordinates one for
-        one (:meth:`_frame_joints_only`); only the others take the map (``mapped``)."""
+        """The cheapest exact way to frame ``fid``: the model itself without mimic joints; for a frame that
+        no mimic joint moves, the model with the mimic joints locked (its joints are q's coordinates, so q
+        passes untouched); for one that a mimic joint moves, a model of its own joints alone when they are
+        q's coordinates one for one (:meth:`_frame_joints_only`); the others take the map (``mapped``)."""
         if self.coordinates.identity:
             return FramePath(self.model, fid, self.data, False)
         model, independent = self.model, self.coordinates.names
-        if any(model.names[k] not in independent for k in self._supports(fid)):
+        if any(model.names[k] not in independent for k in self.supports(fid)):
             locked = self.memoized(("frame's joints only", fid), lambda: self._frame_joints_only(fid))
         else:
             locked = self.memoized("mimic joints locked", self._locked_mimics)
@@ -106,29 +100,23 @@ class Kinematics:
         frame = model.frames[fid]
         return FramePath(reduced, reduced.getFrameId(frame.name, frame.type), reduced_data, False)
 
-    def _supports(self, fid: int) -> list[int]:
+    def supports(self, fid: int) -> list[int]:
         """Pinocchio joint indices (1-based) that move frame ``fid``."""
         return [k for k in self.model.supports[self.model.frames[fid].parentJoint] if k > 0]
 
-    def _locked_mimics(self) -> tuple[pin.Model, Callable[[], pin.Data]] | None:
+    def _locked_mimics(self) -> Locked:
         """Pinocchio's model with every mimic joint locked at 0 and its per-thread Data (None if its joints
         were not q's coordinates in q's order)."""
         model, names = self.model, set(self.coordinates.names)
         mimic_joints = [k for k in range(1, model.njoints) if model.names[k] not in names]
-        reduced = _reduced(model, mimic_joints)
-        if reduced is None or tuple(reduced.names)[1:] != self.coordinates.names or reduced.nq != self.dof:
-            return None
-        return reduced, self._data_of(reduced)
+        return self._locked(mimic_joints, in_order=True)
 
-    def _frame_joints_only(self, fid: int) -> tuple[pin.Model, Callable[[], pin.Data]] | None:
-        """For a frame that a mimic joint moves: Pinocchio's model with every joint that does not move the
-        frame locked, when its joints are q's coordinates one for one — the k-th is coordinate k itself or
-        a mimic of it with multiplier 1 and offset 0 (the Panda's right finger: the arm and the mimicking
-        finger joint, whose leader moves only the other finger). The frame's q_pin is then q and its J_pin
-        is J: no map at all. None when the frame needs the map (another multiplier or offset, a leader and
-        its mimic both moving the frame, coordinates that do not move it)."""
+    def _frame_joints_only(self, fid: int) -> Locked:
+        """Pinocchio's model with every joint that does not move frame ``fid`` locked, when its joints are q's
+        coordinates one for one: the k-th is coordinate k or a mimic of it with multiplier 1 and offset 0
+        (the Panda's right finger). Then q_pin = q and J_pin = J; None when the frame needs the map."""
         model, coords = self.model, self.coordinates
-        supports = self._supports(fid)
+        supports = self.supports(fid)
         if len(supports) != self.dof:
             return None
         position = {name: k for k, name in enumerate(coords.pinocchio_names)}
@@ -136,28 +124,23 @@ class Kinematics:
             i = position[model.names[joint]]
             if coords.leader[i] != k or coords.multiplier[i] != 1.0 or coords.offset[i] != 0.0:
                 return None
-        others = [k for k in range(1, model.njoints) if k not in supports]  # their value moves no support
-        reduced = _reduced(model, others)
-        if reduced is None or reduced.nq != self.dof:
+        return self._locked([k for k in range(1, model.njoints) if k not in supports])  # moving no support
+
+    def _locked(self, joints: list[int], in_order: bool = False) -> Locked:
+        """Pinocchio's model with ``joints`` held at 0 and its per-thread Data; None where Pinocchio cannot
+        build it (a locked joint's frame would take an existing frame's name: the callers then map q) or
+        its joints are not dof coordinates (``in_order``: q's own, in q's order)."""
+        try:
+            reduced = pin.buildReducedModel(self.model, joints, np.zeros(self.model.nq))
+        except (ValueError, RuntimeError):
             return None
-        return reduced, self._data_of(reduced)
-
-    def _data_of(self, reduced: pin.Model) -> Callable[[], pin.Data]:
-        """``data()``: this thread's Data of a reduced model."""
-        local = threading.local()
-
-        def data() -> pin.Data:
-            try:
-                return local.data
-            except AttributeError:
-                local.data = create_data(reduced, f"robot {self.description.name!r}")
-                return local.data
-
-        return data
+        if reduced.nq != self.dof or (in_order and tuple(reduced.names)[1:] != self.coordinates.names):
+            return None
+        what = f"robot {self.description.name!r}"
+        return reduced, thread_data(lambda: create_data(reduced, what))[1]
 
     def pinocchio_q(self, q: np.ndarray) -> np.ndarray:
-        """Pinocchio's configuration (nq,) for a checked q (dof,): q itself without mimic joints, else
-        M q + b (:meth:`CoordinateMap.to_pinocchio`)."""
+        """Pinocchio's configuration (nq,) for a checked q (dof,): M q + b (CoordinateMap.to_pinocchio)."""
         return self.coordinates.to_pinocchio(q)
 
     def memoized(self, key: object, make: Callable[[], T]) -> T:
@@ -187,51 +170,83 @@ class Kinematics:
             raise FrameNotFoundError(frame, self.frame_names) from None
 
     # -- single configurations (q checked by the caller) ----------------------------------------
+    def frame_calls(self, fid: int) -> Calls:
+        """pose(q), jacobian(q, ref), kinematics(q, ref) of frame ``fid``: :func:`single_calls`, made once."""
+        try:
+            return self._single[fid]
+        except KeyError:
+            return self._single.setdefault(fid, single_calls(self.coordinates, *self.frame_path(fid)))
+
     def pose(self, q: np.ndarray, fid: int) -> np.ndarray:
         """T_IF (4, 4) at a checked q (dof,)."""
-        try:
-            data = self._tls.data
-        except AttributeError:
-            data = self.data()
-        _forward(self.model, data, q if self.coordinates.identity else self.pinocchio_q(q))
-        return _place(self.model, data, fid).homogeneous
+        return (self._single.get(fid) or self.frame_calls(fid))[0](q)
 
     def jacobian(self, q: np.ndarray, fid: int, ref: pin.ReferenceFrame) -> np.ndarray:
         """J (6, dof) in ``ref`` at a checked q (dof,)."""
-        if self.dof == 0:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0
-            return np.zeros((6, 0))
+        return (self._single.get(fid) or self.frame_calls(fid))[1](q, ref)
+
+
+Calls = tuple[Callable[..., np.ndarray], Callable[..., np.ndarray], Callable[..., tuple]]
+
+
+def single_calls(
+    coords: CoordinateMap, model: pin.Model, pfid: int, data: Callable[[], pin.Data], mapped: bool
+) -> Calls:
+    """The single-configuration calls on a frame's model (see :class:`FramePath`), for a q (dof,) already
+    checked: ``pose(q)``, ``jacobian(q, ref)``, ``kinematics(q, ref)`` with ``ref`` a pin.ReferenceFrame. A
+    ``mapped`` frame takes q_pin = M q + b and J_pin · M; a 1-dof Jacobian comes back from eigenpy as (6,)
+    and is reshaped; Pinocchio 4.1 crashes on a frame Jacobian with nv = 0: a 0-dof one is zeros (6, 0)."""
+    forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
+    local_frame, dof = pin.LOCAL, coords.dof
+    fold: Callable[[np.ndarray], np.ndarray] = _same if dof > 1 else (lambda J: J.reshape(6, dof))
+    if mapped:
+        fold = lambda J: coords.fold(J.reshape(6, -1))  # noqa: E731
+    if dof == 0:  # Pinocchio 4.1 crashes computing a frame Jacobian with nv = 0
+        frame_jacobian = lambda *_: np.zeros((6, 0))  # noqa: E731
+
+    def pose(q: np.ndarray) -> np.ndarray:
+        state = data()
+        forward(model, state, coords.to_pinocchio(q) if mapped else q)
+        return place(model, state, pfid).homogeneous
+
+    def jacobian(q: np.ndarray, ref: pin.ReferenceFrame) -> np.ndarray:
+        return fold(frame_jacobian(model, data(), coords.to_pinocchio(q) if mapped else q, pfid, ref))
+
+    def kinematics(q: np.ndarray, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
+        state, qp = data(), coords.to_pinocchio(q) if mapped else q
+        if ref == local_frame or dof == 0:  # the LOCAL frame Jacobian does not place the joints
+            forward(model, state, qp)
+        J = fold(frame_jacobian(model, state, qp, pfid, ref))  # otherwise it places them
+        return place(model, state, pfid).homogeneous, J
+
+    return pose, jacobian, kinematics
+
+
+def _same(x: np.ndarray) -> np.ndarray:
+    return x
+
+
+def thread_data(make: Callable[[], pin.Data]) -> tuple[threading.local, Callable[[], pin.Data]]:
+    """(local, data): ``data()`` is this thread's ``local.data``, made by ``make()`` on first use."""
+    local = threading.local()
+
+    def data() -> pin.Data:
         try:
-            data = self._tls.data
+            return local.data
         except AttributeError:
-            data = self.data()
-        coords = self.coordinates
-        if coords.identity:
-            J = _frame_jacobian(self.model, data, q, fid, ref)
-            return J if self.dof > 1 else J.reshape(6, 1)
-        return coords.fold(_frame_jacobian(self.model, data, self.pinocchio_q(q), fid, ref).reshape(6, -1))
+            local.data = make()
+            return local.data
+
+    return local, data
 
 
 def _frame_ids(model: pin.Model) -> dict[str, int]:
     """Frame name -> index for every frame but 'universe'; a link wins over a joint of the same name."""
     ids: dict[str, int] = {}
-    for kind_first in (True, False):
-        for fid in range(model.nframes):
-            frame = model.frames[fid]
-            if frame.name == "universe" or frame.name in ids:
-                continue
-            if (frame.type == pin.FrameType.BODY) == kind_first:
-                ids[frame.name] = fid
+    for fid in sorted(range(model.nframes), key=lambda k: model.frames[k].type != pin.FrameType.BODY):
+        ids.setdefault(model.frames[fid].name, fid)  # links first, each kind in index order
+    ids.pop("universe", None)
     return dict(sorted(ids.items(), key=lambda kv: kv[1]))
 
 
-def _reduced(model: pin.Model, locked: list[int]) -> pin.Model | None:
-    """Pinocchio's model with the joints ``locked`` held at 0, or None where Pinocchio cannot build it (a
-    locked joint's frame would take the name of an existing frame, e.g. a joint named like a link): the
-    callers then take the general path, which maps q to Pinocchio's q."""
-    try:
-        return pin.buildReducedModel(model, locked, np.zeros(model.nq))
-    except (ValueError, RuntimeError):
-        return None
-
-
-__all__ = ["REFERENCES", "FramePath", "Kinematics", "resolve_reference"]
+__all__ = ["REFERENCES", "FramePath", "Kinematics", "resolve_reference", "single_calls", "thread_data"]

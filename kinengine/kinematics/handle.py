@@ -5,33 +5,29 @@
 >>> J = fk.jacobian(q, reference="local")      # (6, dof), rows [linear; angular]
 >>> T, J = fk.kinematics(q)                    # both from one pass, equal to the two calls above
 
-Same frames, units and references as :mod:`kinengine.kinematics.engine`. The handle binds the
-frame's Pinocchio model (:meth:`Kinematics.frame_path`), its frame index and Pinocchio's functions
-once; each thread gets its own Pinocchio Data (a frame that a mimic joint moves gets a fresh
-q_pin = M q + b per call), so one handle serves several threads. With ``check_inputs=True`` every
-call runs the one input check: :attr:`CoordinateMap.ready` first (a float64 vector of the right
-length and magnitude passes with one scalar test), :meth:`CoordinateMap.check` for anything else
-(converted, or refused with a ConfigurationError). With ``check_inputs=False`` the caller promises a
-float64 array of shape (dof,) with finite entries; anything else is undefined behaviour of Pinocchio
-(wrong numbers or an exception), never checked. ``batches=True`` (the Robot's own handles) also
-takes checked batches q (N, dof) to the vectorized batch path. Where the C accelerator runs
-(:mod:`kinengine.model.accelerator`), a plain frame's ``pose``, ``jacobian`` and ``kinematics`` are its
-C calls, which make the same Pinocchio calls and hand every other call to the closures below.
+Same frames, units and references as :mod:`kinengine.kinematics.engine`. The handle binds the frame's
+Pinocchio model (:meth:`Kinematics.frame_path`) and index once; each thread gets its own Data, so one
+handle serves several threads. ``check_inputs=True``: every call runs the one input check
+(:attr:`CoordinateMap.ready` first, :meth:`CoordinateMap.check` for anything else); ``False``: the caller
+promises a finite float64 array (dof,), anything else is undefined behaviour of Pinocchio. ``batches=True``
+(the Robot's own handles) also takes batches (N, dof) to the vectorized path. A plain frame's calls are
+the C accelerator's (:mod:`kinengine.model.accelerator`) where it runs: the same Pinocchio calls.
 """
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from ..arrays import Reference
+from ..errors import OptionError
 from ..model import accelerator
 from ..model.coordinates import MAX_MAGNITUDE
 from . import batch
-from .engine import REFERENCES, Kinematics, resolve_reference
+from .engine import REFERENCES, Calls, Kinematics, resolve_reference, single_calls, thread_data
 
 
 class FrameHandle:
@@ -51,8 +47,6 @@ class FrameHandle:
     ) -> None:
         for option, value in (("check_inputs", check_inputs), ("batches", batches)):
             if type(value) is not bool:
-                from ..errors import OptionError
-
                 raise OptionError(f"`{option}` must be True or False, got {value!r}")
         self.name, self.frame_id, self.dof = frame, kin.frame_id(frame), kin.dof
         self.check_inputs = check_inputs
@@ -64,30 +58,13 @@ class FrameHandle:
         return f"<FrameHandle {self.name!r}: {self.dof} dof, check_inputs={self.check_inputs}>"
 
 
-PoseFunction = Callable[..., np.ndarray]
-JacobianFunction = Callable[..., np.ndarray]
-KinematicsFunction = Callable[..., tuple[np.ndarray, np.ndarray]]
-PlacementFunction = Callable[[], tuple[np.ndarray, np.ndarray]]
-Calls = tuple[PoseFunction, JacobianFunction, KinematicsFunction]
-
-
-def _bind(
-    kin: Kinematics, fid: int, checking: bool, batches: bool
-) -> tuple[PoseFunction, JacobianFunction, KinematicsFunction, PlacementFunction]:
+def _bind(kin: Kinematics, fid: int, checking: bool, batches: bool) -> tuple[Callable[..., Any], ...]:
     """The closures ``pose(q)``, ``jacobian(q, reference="local_world_aligned")``,
-    ``kinematics(q, reference="local_world_aligned")`` and ``placement()``: :func:`_single_calls` at one
-    configuration, behind :func:`_checked_calls`; for a plain frame (q as it is, dof > 1) the C accelerator's
-    calls, which hand every call that is not plain back to these closures."""
+    ``kinematics(q, reference="local_world_aligned")`` and ``placement()``: the engine's single calls behind
+    :func:`_checked_calls`; for a plain frame (q as it is, dof > 1) the C accelerator's calls, which hand
+    every call that is not plain back to these closures."""
     model, pfid, new_data, mapped = kin.frame_path(fid)
-    local = threading.local()
-
-    def data() -> pin.Data:
-        """This thread's Data of the frame's model."""
-        try:
-            return local.data
-        except AttributeError:
-            local.data = new_data()
-            return local.data
+    local, data = thread_data(new_data)  # the C calls read local.data and call data() when it is missing
 
     def placement() -> tuple[np.ndarray, np.ndarray]:
         frame = data().oMf[pfid]
@@ -95,8 +72,9 @@ def _bind(
         rotation.flags.writeable = translation.flags.writeable = False
         return rotation, translation
 
-    single = _single_calls(kin, model, pfid, data, mapped)
-    calls = _checked_calls(kin, fid, single, checking, batches)
+    calls = _checked_calls(
+        kin, fid, single_calls(kin.coordinates, model, pfid, data, mapped), checking, batches
+    )
     if mapped or kin.dof <= 1:
         return (*calls, placement)
     native = accelerator.frame_calls(
@@ -120,56 +98,12 @@ def _bind(
     return (*(calls if native is None else native), placement)
 
 
-def _single_calls(
-    kin: Kinematics, model: pin.Model, pfid: int, data: Callable[[], pin.Data], mapped: bool
-) -> Calls:
-    """The single-configuration calls on the frame's model, for a q (dof,) already checked:
-    ``pose(q)``, ``jacobian(q, ref)``, ``kinematics(q, ref)`` with ``ref`` a pin.ReferenceFrame. A frame moved
-    by mimic joints takes q_pin = M q + b and J_pin · M (only the mimic joints that move it); a 1-dof Jacobian
-    comes back from eigenpy as (6,) and is reshaped; Pinocchio 4.1 crashes on a frame Jacobian with nv = 0,
-    so a 0-dof Jacobian is zeros (6, 0)."""
-    forward, place, frame_jacobian = pin.forwardKinematics, pin.updateFramePlacement, pin.computeFrameJacobian
-    local_frame, dof = pin.LOCAL, kin.dof
-    coords = kin.coordinates
-    pinocchio_q: Callable[[np.ndarray], np.ndarray] = coords.to_pinocchio if mapped else _same
-    fold: Callable[[np.ndarray], np.ndarray] = _same if dof > 1 else (lambda J: J.reshape(6, dof))
-    if mapped:
-        fold = lambda J: coords.fold(J.reshape(6, -1))  # noqa: E731
-    if dof == 0:
-        frame_jacobian = _no_columns
-
-    def pose(q: np.ndarray) -> np.ndarray:
-        state = data()
-        forward(model, state, pinocchio_q(q))
-        return place(model, state, pfid).homogeneous
-
-    def jacobian(q: np.ndarray, ref: pin.ReferenceFrame) -> np.ndarray:
-        return fold(frame_jacobian(model, data(), pinocchio_q(q), pfid, ref))
-
-    def kinematics(q: np.ndarray, ref: pin.ReferenceFrame) -> tuple[np.ndarray, np.ndarray]:
-        state, qp = data(), pinocchio_q(q)
-        if ref == local_frame or dof == 0:  # the LOCAL frame Jacobian does not place the joints
-            forward(model, state, qp)
-            return place(model, state, pfid).homogeneous, fold(frame_jacobian(model, state, qp, pfid, ref))
-        J = fold(frame_jacobian(model, state, qp, pfid, ref))  # places the joints and the frame
-        return place(model, state, pfid).homogeneous, J
-
-    return pose, jacobian, kinematics
-
-
 def _checked_calls(kin: Kinematics, fid: int, single: Calls, checking: bool, batches: bool) -> Calls:
     """The public calls: the reference resolved by name, and with ``checking`` q checked once
     (:attr:`CoordinateMap.ready` first, :meth:`CoordinateMap.check` for anything else); a checked batch
     (N, dof), allowed with ``batches``, goes to :func:`kinengine.kinematics.batch.evaluate`."""
     pose1, jacobian1, kinematics1 = single
-    ready, full_check = kin.coordinates.ready, kin.coordinates.check
-    references = dict(REFERENCES)
-
-    def resolve(reference: Reference) -> pin.ReferenceFrame:
-        try:
-            return references[reference]
-        except (KeyError, TypeError):
-            return resolve_reference(reference)
+    ready, full_check, resolve = kin.coordinates.ready, kin.coordinates.check, resolve_reference
 
     def pose(q: np.ndarray) -> np.ndarray:
         if checking and not ready(q):
@@ -197,15 +131,6 @@ def _checked_calls(kin: Kinematics, fid: int, single: Calls, checking: bool, bat
         return kinematics1(q, ref)
 
     return pose, jacobian, kinematics
-
-
-def _same(x: np.ndarray) -> np.ndarray:
-    return x
-
-
-def _no_columns(model: pin.Model, data: pin.Data, q: np.ndarray, fid: int, ref: object) -> np.ndarray:
-    """The frame Jacobian of a 0-dof model, (6, 0): Pinocchio 4.1 crashes computing it."""
-    return np.zeros((6, 0))
 
 
 __all__ = ["FrameHandle"]

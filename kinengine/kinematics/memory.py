@@ -1,20 +1,13 @@
 """Making Pinocchio Data only when it fits: a clear error instead of an out-of-memory abort.
 
 One Pinocchio ``Data`` of a model with nv velocity coordinates holds four nv×nv×nv tensors of second
-derivatives; measured on pin 4.1 (resident memory added by ``createData()`` / peak while it is made):
-nv = 64: 12 / 20 MiB, 128: 73 / 139 MiB, 192: 234 / 455 MiB, 256: 542 / 1062 MiB.
-:func:`data_bytes` bounds the first number from above, the peak is taken as twice that.
-
-A Robot makes one Data per thread that uses it (see :class:`~kinengine.kinematics.Kinematics`), so a
-128-dof robot used from 32 threads holds ~2.3 GiB of Data. Under a memory cap (``RLIMIT_AS``, a
-cgroup ``memory.max``) an allocation that fails deep inside C++ or in glibc ("cannot allocate memory
-for thread-local data") aborts the whole process. :func:`create_data` therefore checks, before each
-Data it makes, that the peak fits in the memory left with :data:`RESERVE` to spare, and raises
-:class:`~kinengine.errors.ResourceLimitError` (one line: the size, the memory left, the fix)
-otherwise; a ``MemoryError`` from Pinocchio becomes the same error. The check reads a few
-``/proc`` and cgroup files (Linux; elsewhere only the MemoryError is translated) and is skipped for
-models whose Data is smaller than :data:`CHECK_FROM` — the 6-dof arms never pay for it. It runs once per
-thread and model, never on the hot path.
+derivatives (measured on pin 4.1, resident memory added by ``createData()`` / peak while it is made:
+nv = 64: 12 / 20 MiB, 128: 73 / 139 MiB, 256: 542 / 1062 MiB); a Robot makes one per thread that uses it.
+Under a memory cap (``RLIMIT_AS``, a cgroup ``memory.max``) an allocation that fails deep inside C++ or
+glibc aborts the whole process, so :func:`create_data` first checks that twice :func:`data_bytes` fits in
+the memory left with :data:`RESERVE` to spare, and raises :class:`~kinengine.errors.ResourceLimitError`
+otherwise (a ``MemoryError`` from Pinocchio becomes the same error). The check reads a few ``/proc`` and
+cgroup files (Linux) once per thread and model, and is skipped below :data:`CHECK_FROM`.
 """
 
 from __future__ import annotations
@@ -49,16 +42,15 @@ def memory_left() -> int | None:
     use, the cgroup's memory.max minus memory.current, and MemAvailable; None if none is known."""
     bounds = []
     soft = resource.getrlimit(resource.RLIMIT_AS)[0] if resource else None
-    if soft is not None and soft != resource.RLIM_INFINITY:
-        used = _address_space()
-        if used is not None:
-            bounds.append(soft - used)
-    limit, current = _read_int("/sys/fs/cgroup/memory.max"), _read_int("/sys/fs/cgroup/memory.current")
+    used = _number("/proc/self/statm", 0)
+    if soft is not None and soft != resource.RLIM_INFINITY and used is not None:
+        bounds.append(soft - used * os.sysconf("SC_PAGE_SIZE"))
+    limit, current = _number("/sys/fs/cgroup/memory.max"), _number("/sys/fs/cgroup/memory.current")
     if limit is not None and current is not None:
         bounds.append(limit - current)
-    available = _mem_available()
+    available = _number("/proc/meminfo", 1, b"MemAvailable:")  # [KiB]
     if available is not None:
-        bounds.append(available)
+        bounds.append(available * 1024)
     return min(bounds) if bounds else None
 
 
@@ -83,39 +75,21 @@ def _too_big(what: str, nv: int, need: int, left: int | None) -> ResourceLimitEr
     mib = 1024**2
     room = "an unknown amount" if left is None else f"{max(left, 0) / mib:.0f} MiB"
     return ResourceLimitError(
-        f"{what} ({nv} joint coordinates) needs ~{need / mib:.0f} MiB of Pinocchio Data per thread that uses "
-        "it "
-        f"(~{2 * need / mib:.0f} MiB while it is made, plus {RESERVE // mib} MiB kept free) but only {room} "
-        "of memory is left: use it from fewer threads (e.g. a pool of a few workers), a smaller model, "
-        "or raise the memory limit"
+        f"{what} ({nv} joint coordinates) needs ~{need / mib:.0f} MiB of Pinocchio Data per thread that "
+        f"uses it (~{2 * need / mib:.0f} MiB while it is made, plus {RESERVE // mib} MiB kept free) but only "
+        f"{room} of memory is left: use it from fewer threads (e.g. a pool of a few workers), a smaller "
+        "model, or raise the memory limit"
     )
 
 
-def _address_space() -> int | None:
-    try:
-        with open("/proc/self/statm", "rb") as f:
-            return int(f.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        return None
-
-
-def _read_int(path: str) -> int | None:
+def _number(path: str, field: int = 0, line: bytes = b"") -> int | None:
+    """Whitespace-separated ``field`` of the first line of file ``path`` that starts with ``line``, as an int;
+    None if the file, the line or a number is missing (e.g. "max")."""
     try:
         with open(path, "rb") as f:
-            return int(f.read().strip())
-    except (OSError, ValueError):  # missing, or "max"
+            return int(next(text for text in f if text.startswith(line)).split()[field])
+    except (OSError, ValueError, IndexError, StopIteration):
         return None
-
-
-def _mem_available() -> int | None:
-    try:
-        with open("/proc/meminfo", "rb") as f:
-            for line in f:
-                if line.startswith(b"MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
 
 
 __all__ = ["CHECK_FROM", "RESERVE", "create_data", "data_bytes", "memory_left"]

@@ -1,13 +1,6 @@
 """Checks of the keyword options every public entry point shares: each bad value is one OptionError
 (or ParameterizationError for parameterization names and rows) naming the option and what it takes.
-
-* ``singularity_threshold``: a real number (not a bool), finite and >= 0 [distance to the
-  parameterization's singular set]; NaN or a negative value would switch the singularity check off.
-* ``tolerance``: a real number, finite and >= 0 [singular-value threshold].
-* ``rng``: None, a whole number >= 0 (a seed) or a ``numpy.random.Generator``.
-* ``position``/``rotation``: a parameterization name (str) or None; ``rows``: None, one label, or a
-  sequence of labels (str) and indices (int).
-The fast path of each is one ``type(...) is float`` test, so the checks cost nothing measurable.
+The fast path of each is one ``type(...) is float`` test.
 """
 
 from __future__ import annotations
@@ -36,12 +29,13 @@ def checked_nonnegative(value: object, name: str) -> float:
 
 
 def checked_threshold(value: object) -> float:
-    """A valid ``singularity_threshold`` (see the module doc)."""
+    """A valid ``singularity_threshold`` [distance to the parameterization's singular set]: NaN or a negative
+    value would switch the singularity check off."""
     return checked_nonnegative(value, "singularity_threshold")
 
 
 def checked_tolerance(value: object) -> float:
-    """A valid ``tolerance`` (see the module doc)."""
+    """A valid ``tolerance`` [singular-value threshold]."""
     return checked_nonnegative(value, "tolerance")
 
 
@@ -59,12 +53,11 @@ def checked_frames(frames: object, kinds: tuple[type, ...]) -> None:
     of them (an empty one is left to the task to refuse)."""
     if frames is None or isinstance(frames, kinds):
         return
-    entries = frames if isinstance(frames, (list, tuple)) else [frames]
-    bad = next((f for f in entries if not isinstance(f, kinds)), None)
-    if bad is not None or not isinstance(frames, (list, tuple)):
-        raise OptionError(
-            f"a task's frames are frame names or kinengine.FrameTask entries, got {_short(bad)}"
-        )
+    for bad in frames if isinstance(frames, (list, tuple)) else [frames]:
+        if not isinstance(bad, kinds):
+            raise OptionError(
+                f"a task's frames are frame names or kinengine.FrameTask entries, got {_short(bad)}"
+            )
 
 
 def checked_rng(rng: object) -> np.random.Generator:

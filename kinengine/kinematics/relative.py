@@ -18,8 +18,6 @@ Every function takes the Kinematics engine, a checked q (dof,) or Q (N, dof) and
 
 from __future__ import annotations
 
-from typing import Literal, overload
-
 import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
@@ -40,44 +38,31 @@ def _inverse_times(TB: np.ndarray, TA: np.ndarray) -> npt.NDArray[np.float64]:
     return out
 
 
-@overload
-def _poses(
-    kin: Kinematics, q: np.ndarray, fid: int, jacobian: Literal[True]
-) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
-@overload
-def _poses(
-    kin: Kinematics, q: np.ndarray, fid: int, jacobian: Literal[False]
-) -> tuple[npt.NDArray[np.float64], None]: ...
-def _poses(
-    kin: Kinematics, q: np.ndarray, fid: int, jacobian: bool
-) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64] | None]:
-    """(T_IF, J_e0 in "local_world_aligned" if ``jacobian`` else None) for q (dof,) or Q (N, dof)."""
+def _pose(kin: Kinematics, q: np.ndarray, fid: int) -> npt.NDArray[np.float64]:
+    """T_IF (4, 4) or (N, 4, 4), an array of its own, for q (dof,) or Q (N, dof)."""
     if q.ndim == 2:
-        T, J = batch.evaluate(kin, q, fid, _LWA, jacobian=jacobian)
-        assert T is not None  # pose=True (the default): the poses are computed
-        return T, J
-    if not jacobian:
-        return kin.pose(q, fid), None
+        return batch.evaluate(kin, q, fid, None, jacobian=False)[0]  # type: ignore[return-value]
+    return kin.pose(q, fid).copy()
+
+
+def _pose_jacobian(kin: Kinematics, q: np.ndarray, fid: int) -> tuple[np.ndarray, np.ndarray]:
+    """(T_IF, J_e0 in "local_world_aligned") for q (dof,) or Q (N, dof)."""
+    if q.ndim == 2:
+        return batch.evaluate(kin, q, fid, _LWA)  # type: ignore[return-value]
     return kin.pose(q, fid).copy(), kin.jacobian(q, fid, _LWA).copy()
 
 
 def relative_pose(kin: Kinematics, q: np.ndarray, fa: int, fb: int) -> npt.NDArray[np.float64]:
     """T_BA = T_IB⁻¹ T_IA: q (dof,) -> (4, 4), q (N, dof) -> (N, 4, 4); translation [m]."""
-    TA = _poses(kin, q, fa, False)[0].copy()
-    TB = _poses(kin, q, fb, False)[0]
-    return _inverse_times(TB, TA)
+    return _inverse_times(_pose(kin, q, fb), _pose(kin, q, fa))
 
 
 def relative_terms(TA: np.ndarray, JA: np.ndarray, TB: np.ndarray, JB: np.ndarray) -> npt.NDArray[np.float64]:
     """[v_rel; ω_rel] Jacobian (6, dof) or (N, 6, dof) in I's axes from the frames' poses and
     "local_world_aligned" Jacobians (see the module doc)."""
     d = TA[..., :3, 3] - TB[..., :3, 3]
-    out = np.empty(np.broadcast_shapes(JA.shape, JB.shape))
-    Jw_B = JB[..., 3:, :]
-    # [d]× J_B,ω column by column: d × (J_B,ω e_k)
-    cross = np.cross(d[..., None, :], np.swapaxes(Jw_B, -1, -2))
-    out[..., :3, :] = JA[..., :3, :] - JB[..., :3, :] + np.swapaxes(cross, -1, -2)
-    out[..., 3:, :] = JA[..., 3:, :] - Jw_B
+    out = JA - JB  # and [d]× J_B,ω on the linear rows, column by column: d × (J_B,ω e_k)
+    out[..., :3, :] += np.swapaxes(np.cross(d[..., None, :], np.swapaxes(JB[..., 3:, :], -1, -2)), -1, -2)
     return out
 
 
@@ -86,10 +71,10 @@ def relative_jacobian(
 ) -> npt.NDArray[np.float64]:
     """J_rel (6, dof) or (N, 6, dof): rows [v; ω] of A relative to B (module doc), in the axes of frame
     ``fe`` (default ``fb``). Units: [m/s] and [rad/s] per unit joint speed."""
-    TA, JA = _poses(kin, q, fa, True)
-    TB, JB = _poses(kin, q, fb, True)
+    TA, JA = _pose_jacobian(kin, q, fa)
+    TB, JB = _pose_jacobian(kin, q, fb)
     inner = relative_terms(TA, JA, TB, JB)
-    C = TB[..., :3, :3] if fe is None or fe == fb else _poses(kin, q, fe, False)[0][..., :3, :3]
+    C = TB[..., :3, :3] if fe is None or fe == fb else _pose(kin, q, fe)[..., :3, :3]
     Ct = np.swapaxes(C, -1, -2)
     inner[..., :3, :] = Ct @ inner[..., :3, :]
     inner[..., 3:, :] = Ct @ inner[..., 3:, :]

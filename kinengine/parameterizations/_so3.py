@@ -10,7 +10,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .base import SMALL_ANGLE_SQ, Component, Entries, Namespace
+from .base import SMALL_ANGLE_SQ, Component, Entries, Namespace, where
 
 
 def quaternion_from_matrix(xp: Namespace, *C: Component) -> tuple[Component, Component, Component, Component]:
@@ -30,15 +30,13 @@ def quaternion_from_matrix(xp: Namespace, *C: Component) -> tuple[Component, Com
     if xp is math:
         diagonal = (c00, c11, c22, trace)
         x, y, z, w = cases[diagonal.index(max(diagonal))]  # the first maximum, like numpy's argmax
-        norm = math.sqrt(x * x + y * y + z * z + w * w)
-        if w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0))))):
-            norm = -norm
-        return w / norm, x / norm, y / norm, z / norm
-    choice = np.argmax(np.stack([c00, c11, c22, trace], axis=-1), axis=-1)
-    x, y, z, w = (np.choose(choice, [case[k] for case in cases]) for k in range(4))
-    norm = np.sqrt(x * x + y * y + z * z + w * w)
-    negative = (w < 0) | ((w == 0) & ((x < 0) | ((x == 0) & ((y < 0) | ((y == 0) & (z < 0))))))
-    norm = np.where(negative, -norm, norm)
+        negative = w < 0.0 or (w == 0.0 and (x < 0.0 or (x == 0.0 and (y < 0.0 or (y == 0.0 and z < 0.0)))))
+    else:
+        choice = np.argmax(np.stack([c00, c11, c22, trace], axis=-1), axis=-1)
+        x, y, z, w = (np.choose(choice, [case[k] for case in cases]) for k in range(4))
+        negative = (w < 0) | ((w == 0) & ((x < 0) | ((x == 0) & ((y < 0) | ((y == 0) & (z < 0))))))
+    norm = xp.sqrt(x * x + y * y + z * z + w * w)
+    norm = where(xp, negative, -norm, norm)
     return w / norm, x / norm, y / norm, z / norm
 
 
@@ -54,23 +52,16 @@ def rotation_entries(alpha: Component, beta: Component, x: Component, y: Compone
     )  # fmt: skip
 
 
-def matrix_from_quaternion(w: Component, x: Component, y: Component, z: Component) -> Entries:
-    """Row-major entries of C_IE(q) for q = (w, x, y, z), normalized first (any nonzero q)."""
-    s = 2.0 / (w * w + x * x + y * y + z * z)
-    return rotation_entries(s * w, s, x, y, z)
-
-
 def series_or_closed(
     xp: Namespace,
     t: Component,
     series: Callable[[Component], Component],
     closed: Callable[[Namespace, Component], Component],
-    below: float = SMALL_ANGLE_SQ,
 ) -> Component:
-    """series(t) where t < ``below``, else closed(xp, t) (jaxlie's small-angle branch, decided on t = θ²)."""
+    """series(t) where t < SMALL_ANGLE_SQ, else closed(xp, t) (jaxlie's small-angle branch, on t = θ²)."""
     if xp is math:
-        return series(t) if t < below else closed(math, t)
-    small = t < below
+        return series(t) if t < SMALL_ANGLE_SQ else closed(math, t)
+    small = t < SMALL_ANGLE_SQ
     return np.where(small, series(t), closed(np, np.where(small, 1.0, t)))
 
 

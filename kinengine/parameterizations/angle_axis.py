@@ -58,20 +58,15 @@ class AngleAxis(RotationParameterization):
         return rotation_entries(xp.sin(theta) / xp.sqrt(n2), 2.0 * half * half / n2, nx, ny, nz)
 
     def _E(self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component) -> Entries:
-        k = -0.5 / xp.tan(0.5 * theta)  # −½ cot(θ/2)
-        M = rotation_entries(-0.5, k, nx, ny, nz)  # I − ½ [n]x − ½ cot(θ/2) [n]x²
+        M = rotation_entries(-0.5, -0.5 / xp.tan(0.5 * theta), nx, ny, nz)  # I − ½ [n]x − ½ cot(θ/2) [n]x²
         return (nx, ny, nz, M[0] - 1.0, M[1], M[2], M[3], M[4] - 1.0, M[5], M[6], M[7], M[8] - 1.0)
 
     def _E_inverse(
         self, xp: Namespace, theta: Component, nx: Component, ny: Component, nz: Component
     ) -> Entries:
-        s, half = xp.sin(theta), xp.sin(0.5 * theta)
-        v = 2.0 * half * half  # 1 − cos θ
-        return (
-            nx, s * (1.0 - nx * nx), -s * nx * ny - v * nz, -s * nx * nz + v * ny,
-            ny, -s * nx * ny + v * nz, s * (1.0 - ny * ny), -s * ny * nz - v * nx,
-            nz, -s * nx * nz - v * ny, -s * ny * nz + v * nx, s * (1.0 - nz * nz),
-        )  # fmt: skip
+        half = xp.sin(0.5 * theta)  # M − I = sin θ (I − n n^T) + (1 − cos θ)[n]x, |n| = 1
+        M = rotation_entries(2.0 * half * half, -xp.sin(theta), nx, ny, nz)
+        return (nx, M[0] - 1.0, M[1], M[2], ny, M[3], M[4] - 1.0, M[5], nz, M[6], M[7], M[8] - 1.0)
 
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         theta, nx, ny, nz = chi

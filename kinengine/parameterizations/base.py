@@ -34,10 +34,8 @@ relative truncation error < 1e-14 there). Decided on θ², never on θ."""
 Namespace: TypeAlias = ModuleType
 """The namespace the formulas run over: :mod:`math` (one sample) or :mod:`numpy` (a batch)."""
 Component: TypeAlias = Any
-"""One scalar component in a formula: a Python float when ``xp`` is math, a float64 array of the batch
-shape when ``xp`` is numpy. ``Any`` because which of the two is decided at run time by ``xp`` (the
-formulas branch on ``xp is math``), which a type checker cannot follow: a union would flag every
-``math.*`` call on an array and every ``bool()`` of an array comparison."""
+"""One scalar component in a formula: a Python float (xp = math) or a float64 array of the batch shape
+(xp = numpy). ``Any``: which one is decided at run time by ``xp``, which a type checker cannot follow."""
 Entries: TypeAlias = tuple[Component, ...]
 """Row-major entries of a formula's result (a vector or matrix), each a Component."""
 Values: TypeAlias = Sequence[Component]
@@ -50,27 +48,12 @@ _KINENGINE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + o
 def as_float_array(value: npt.ArrayLike, tail: tuple[int, ...], what: str) -> FloatArray:
     """``value`` as a float64 array of shape tail or (..., *tail); ParameterizationError otherwise."""
     array = np.asarray(value, dtype=np.float64)
-    n = len(tail)
-    if array.ndim < n or array.shape[array.ndim - n :] != tail:
-        expected = str(tail) if n > 1 else f"({tail[0]},)"
-        batched = "(..., " + ", ".join(str(t) for t in tail) + ")"
+    if array.shape[max(0, array.ndim - len(tail)) :] != tail:
+        batched = ", ".join(map(str, tail))
         raise ParameterizationError(
-            f"Expected `{what}` to have shape {expected} or {batched}, got {array.shape}"
+            f"Expected `{what}` to have shape {tail} or (..., {batched}), got {array.shape}"
         )
     return array
-
-
-def columns(array: FloatArray, n: int) -> list[FloatArray]:
-    """The n entries of the last axis of a batch (..., n), each of shape (...,)."""
-    return [array[..., k] for k in range(n)]
-
-
-def stack(entries: Entries, batch: tuple[int, ...], shape: tuple[int, ...]) -> FloatArray:
-    """Assemble row-major ``entries`` (arrays of shape batch, or constants) into (*batch, *shape)."""
-    out = np.empty(batch + (len(entries),))
-    for k, entry in enumerate(entries):
-        out[..., k] = entry
-    return out.reshape(batch + shape)
 
 
 def apply(formula: Callable[..., Entries], values: FloatArray, shape: tuple[int, ...]) -> FloatArray:
@@ -78,7 +61,17 @@ def apply(formula: Callable[..., Entries], values: FloatArray, shape: tuple[int,
     floats, ``xp`` = math), a batch (..., n) -> (..., *shape) (on arrays, ``xp`` = numpy)."""
     if values.ndim == 1:
         return np.array(formula(math, *values.tolist())).reshape(shape)
-    return stack(formula(np, *columns(values, values.shape[-1])), values.shape[:-1], shape)
+    batch = values.shape[:-1]
+    entries = formula(np, *np.moveaxis(values, -1, 0))
+    out = np.empty(batch + (len(entries),))
+    for k, entry in enumerate(entries):
+        out[..., k] = entry
+    return out.reshape(batch + shape)
+
+
+def where(xp: Namespace, condition: Component, a: Component, b: Component) -> Component:
+    """``a`` where ``condition`` holds, else ``b``: one sample (``xp`` = math) or each entry of a batch."""
+    return (a if condition else b) if xp is math else np.where(condition, a, b)
 
 
 def is_singular(distance: float, threshold: float) -> bool:
@@ -142,8 +135,7 @@ class Parameterization(ABC):
         Batched: (..., m) and (..., 3) broadcast to (..., m, 3). J̇_A = Ė·J_e0 + E·J̇_e0.
         """
         m = self.size
-        chi = as_float_array(chi, (m,), "chi")
-        u = as_float_array(velocity, (3,), "velocity")
+        chi, u = as_float_array(chi, (m,), "chi"), as_float_array(velocity, (3,), "velocity")
         if chi.ndim == 1 and u.ndim == 1:  # one sample (a controller's step): the formula on Python floats
             try:
                 return np.array(self._E_dot(math, chi.tolist(), u.tolist())).reshape(m, 3)
@@ -166,12 +158,14 @@ class Parameterization(ABC):
     ) -> FloatArray:
         """:func:`apply` of a rate formula; RepresentationSingularityError where an entry has no finite value
         (the sample is on the singular set)."""
-        try:
-            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                out = apply(formula, values, shape)
-        except ZeroDivisionError:
-            raise self._singular_error() from None
-        if values.ndim > 1 and not np.isfinite(out).all():
+        if values.ndim == 1:  # Python floats: no errstate to set up; a division by zero raises
+            try:
+                return apply(formula, values, shape)
+            except ZeroDivisionError:
+                raise self._singular_error() from None
+        with np.errstate(all="ignore"):
+            out = apply(formula, values, shape)
+        if not np.isfinite(out).all():
             raise self._singular_error()
         return out
 
@@ -184,13 +178,10 @@ class Parameterization(ABC):
 
     @abstractmethod
     def _E(self, xp: Namespace, *chi: Component) -> Entries: ...
-
     @abstractmethod
     def _E_inverse(self, xp: Namespace, *chi: Component) -> Entries: ...
-
     @abstractmethod
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries: ...
-
     @abstractmethod
     def _distance(self, xp: Namespace, *chi: Component) -> Component: ...
 
@@ -221,7 +212,6 @@ class PositionParameterization(Parameterization):
 
     @abstractmethod
     def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries: ...
-
     @abstractmethod
     def _to_position(self, xp: Namespace, *chi: Component) -> Entries: ...
 
@@ -247,13 +237,10 @@ class RotationParameterization(Parameterization):
         return apply(self._to_rotation, as_float_array(chi, (self.size,), "chi"), (3, 3))
 
     def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
-        """(χ, its distance to the singular set, E(χ)'s row-major entries) at one pose C_IE given by its 9
-        row-major entries (Python floats), χ in the canonical ranges of :meth:`from_rotation`. None where
-        χ is not unique (gimbal lock) or E has no finite value: the caller's general path then decides.
-
-        The single-pose rate map that the analytic Jacobian and the Task call: :meth:`_from_rotation`,
-        :meth:`_distance` and :meth:`_E` (a family may share their intermediate values, as Euler angles do).
-        """
+        """(χ in the ranges of :meth:`from_rotation`, its distance to the singular set, E(χ)'s row-major
+        entries) at one pose C_IE given by its 9 row-major entries (Python floats): the single-pose rate map
+        of the analytic Jacobian and the Task. None where χ is not unique (gimbal lock) or E is not finite:
+        the caller's general path then decides. A family may override it to share intermediate values."""
         chi = list(self._from_rotation(math, False, *C))
         try:
             distance = self._distance(math, *chi)
@@ -266,6 +253,5 @@ class RotationParameterization(Parameterization):
 
     @abstractmethod
     def _from_rotation(self, xp: Namespace, warn: bool, *c: Component) -> Entries: ...
-
     @abstractmethod
     def _to_rotation(self, xp: Namespace, *chi: Component) -> Entries: ...

@@ -18,8 +18,7 @@ class Cartesian(PositionParameterization):
     def _from_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         return x, y, z
 
-    def _to_position(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
-        return x, y, z
+    _to_position = _from_position
 
     def _E(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         return (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)

@@ -22,24 +22,16 @@ from __future__ import annotations
 import math
 from operator import itemgetter
 
-import numpy as np
-
 from ..errors import ParameterizationError
-from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where
+from ._so3 import rotation_entries
+from .base import Component, Entries, Namespace, RotationParameterization, Values, warn_where, where
 
 EULER_SEQUENCES = ("xyz", "xzy", "yxz", "yzx", "zxy", "zyx", "xyx", "xzx", "yxy", "yzy", "zxz", "zyz")
 GIMBAL_LOCK_TOLERANCE = 1e-7
 """[rad]; scipy's tolerance on χ2 for declaring gimbal lock in ``as_euler``."""
 
 
-def _elementary(xp: Namespace, axis: int, angle: Component) -> Entries:
-    """Row-major entries of the rotation by ``angle`` [rad] about the basis axis ``axis``."""
-    c, s = xp.cos(angle), xp.sin(angle)
-    if axis == 0:
-        return (1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
-    if axis == 1:
-        return (c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
-    return (c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+_UNIT = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
 def _matmul(A: Entries, B: Entries) -> Entries:
@@ -98,26 +90,18 @@ class EulerAngles(RotationParameterization):
 
     def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
         tb, bb = self._index[7:]
-        eps = self._eps
         chi1, chi2, locked = self._leading(xp, C)
-        if xp is np or locked:
-            if warn:
-                warn_where(
-                    xp,
-                    locked,
-                    f"{self.name}: gimbal lock detected. Setting third angle to zero "
-                    "since it is not possible to uniquely determine all angles.",
-                )
-            # χ3 = 0: C = R_a(χ1) R_b(χ2), whose column b is R_a(χ1) e_b = c1 e_b + ε s1 e_t
-            chi1 = (
-                xp.atan2(eps * C[tb], C[bb])
-                if xp is math
-                else np.where(locked, np.arctan2(eps * C[tb], C[bb]), chi1)
+        if warn:
+            warn_where(
+                xp,
+                locked,
+                f"{self.name}: gimbal lock detected. Setting third angle to zero "
+                "since it is not possible to uniquely determine all angles.",
             )
+        # locked: χ3 = 0, C = R_a(χ1) R_b(χ2), whose column b is R_a(χ1) e_b = c1 e_b + ε s1 e_t
+        chi1 = where(xp, locked, xp.atan2(self._eps * C[tb], C[bb]), chi1)
         chi3 = self._third(xp, xp.cos(chi1), xp.sin(chi1), C)
-        if xp is math:
-            return chi1, chi2, 0.0 if locked else chi3
-        return chi1, chi2, np.where(locked, 0.0, chi3)
+        return chi1, chi2, where(xp, locked, 0.0, chi3)
 
     def _third(self, xp: Namespace, c1: Component, s1: Component, C: Values) -> Component:
         """χ3 from row b of R_a(χ1)^T C = R_b(χ2) R_c(χ3), c1, s1 of the χ1 chosen (as Eigen's eulerAngles):
@@ -142,8 +126,11 @@ class EulerAngles(RotationParameterization):
         return chi, distance, self._rate_entries(c1, s1, c2, s2)
 
     def _to_rotation(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
-        a, b, c = self._axes
-        return _matmul(_matmul(_elementary(xp, a, chi1), _elementary(xp, b, chi2)), _elementary(xp, c, chi3))
+        R1, R2, R3 = (  # the rotation by χk about the basis axis k: I + sin χk [e]x + (1 − cos χk) [e]x²
+            rotation_entries(xp.sin(x), 1.0 - xp.cos(x), *_UNIT[axis])
+            for axis, x in zip(self._axes, (chi1, chi2, chi3), strict=True)
+        )
+        return _matmul(_matmul(R1, R2), R3)
 
     def _E(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         return self._rate_entries(xp.cos(chi1), xp.sin(chi1), xp.cos(chi2), xp.sin(chi2))

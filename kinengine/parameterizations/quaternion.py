@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from ._so3 import matrix_from_quaternion, quaternion_from_matrix
+from ._so3 import quaternion_from_matrix, rotation_entries
 from .base import Component, Entries, Namespace, RotationParameterization, Values
 
 
@@ -37,7 +37,8 @@ class Quaternion(RotationParameterization):
         return quaternion_from_matrix(xp, *C)
 
     def _to_rotation(self, xp: Namespace, w: Component, x: Component, y: Component, z: Component) -> Entries:
-        return matrix_from_quaternion(w, x, y, z)
+        s = 2.0 / (w * w + x * x + y * y + z * z)  # C(q/|q|) = I + s w [v]x + s [v]x², any nonzero q
+        return rotation_entries(s * w, s, x, y, z)
 
     def _E(self, xp: Namespace, w: Component, x: Component, y: Component, z: Component) -> Entries:
         return _half_H(w, x, y, z)

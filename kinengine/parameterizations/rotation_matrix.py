@@ -46,11 +46,8 @@ class RotationMatrix(RotationParameterization):
 
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         a, b, c = u
-        C_dot = []
-        for j in range(3):  # column j of Ċ is ω × C[:, j]
-            x, y, z = chi[j], chi[3 + j], chi[6 + j]
-            C_dot.append((b * z - c * y, c * x - a * z, a * y - b * x))
-        return _rate_map(*(C_dot[j][i] for i in range(3) for j in range(3)))
+        E = _rate_map(*chi)  # Ė = E(Ċ) with vec(Ċ) = E·ω
+        return _rate_map(*(E[k] * a + E[k + 1] * b + E[k + 2] * c for k in range(0, 27, 3)))
 
     def _distance(self, xp: Namespace, *chi: Component) -> Component:
         return math.inf

@@ -22,8 +22,6 @@ from ._so3 import cross_matrix, quaternion_from_matrix, rotation_entries, series
 from .base import Component, Entries, Namespace, RotationParameterization, Values
 
 _TWO_PI = 2.0 * math.pi
-_TINY_SIN2 = 1e-12
-"""sin²(θ/2) below which θ/sin(θ/2) uses its Taylor series in from_rotation (truncation O(1e-24))."""
 
 
 # Coefficients as functions of t = θ²: the Taylor series (Horner, through θ⁸) used for t < SMALL_ANGLE_SQ
@@ -36,13 +34,9 @@ def _sinc_closed(xp: Namespace, t: Component) -> Component:
     return xp.sin(xp.sqrt(t)) / xp.sqrt(t)
 
 
-def _versine_series(t: Component) -> Component:  # (1 − cos θ)/θ²
-    return 0.5 * (1.0 - t / 12.0 * (1.0 - t / 30.0 * (1.0 - t / 56.0 * (1.0 - t / 90.0))))
-
-
-def _versine_closed(xp: Namespace, t: Component) -> Component:  # 2 sin²(θ/2)/θ², no cancellation
-    half = xp.sin(0.5 * xp.sqrt(t))
-    return 2.0 * half * half / t
+def _half_sinc(xp: Namespace, t: Component) -> Component:
+    """k = sin(θ/2)/θ = ½ sinc(θ/2) of t = θ² (the quaternion's vector part is k φ)."""
+    return 0.5 * series_or_closed(xp, 0.25 * t, _sinc_series, _sinc_closed)
 
 
 def _theta_minus_sin_series(t: Component) -> Component:  # (θ − sin θ)/θ³
@@ -84,15 +78,11 @@ def _inverse_left_jacobian(xp: Namespace, t: Component, x: Component, y: Compone
 
 
 def _log_by_quaternion(xp: Namespace, *C: Component) -> Entries:
-    """φ from the canonical quaternion of C (scipy's ``as_rotvec``, θ <= π, its sign rule at θ = π)."""
+    """φ from the canonical quaternion of C (scipy's ``as_rotvec``, θ <= π, its sign rule at θ = π); called
+    for θ near π only, where sin(θ/2) ≈ 1."""
     w, x, y, z = quaternion_from_matrix(xp, *C)
-    scale = series_or_closed(  # θ / sin(θ/2) of s2 = sin²(θ/2)
-        xp,
-        x * x + y * y + z * z,
-        lambda s2: 2.0 / w * (1.0 - s2 / (3.0 * w * w)),
-        lambda xp, s2: 2.0 * xp.atan2(xp.sqrt(s2), w) / xp.sqrt(s2),
-        _TINY_SIN2,
-    )
+    s = xp.sqrt(x * x + y * y + z * z)  # sin(θ/2)
+    scale = 2.0 * xp.atan2(s, w) / s  # θ / sin(θ/2)
     return scale * x, scale * y, scale * z
 
 
@@ -138,22 +128,18 @@ class RotationVector(RotationParameterization):
 
     def _to_rotation(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z
-        return rotation_entries(
-            series_or_closed(xp, t, _sinc_series, _sinc_closed),
-            series_or_closed(xp, t, _versine_series, _versine_closed),
-            x,
-            y,
-            z,
-        )
+        k = _half_sinc(xp, t)  # with w = cos(θ/2): sin θ/θ = 2wk, (1 − cos θ)/θ² = 2k²
+        return rotation_entries(2.0 * xp.cos(0.5 * xp.sqrt(t)) * k, 2.0 * k * k, x, y, z)
 
     def _E(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         return _inverse_left_jacobian(xp, x * x + y * y + z * z, x, y, z)
 
     def _E_inverse(self, xp: Namespace, x: Component, y: Component, z: Component) -> Entries:
         t = x * x + y * y + z * z
-        a1 = series_or_closed(xp, t, _versine_series, _versine_closed)
-        a2 = series_or_closed(xp, t, _theta_minus_sin_series, _theta_minus_sin_closed)
-        return rotation_entries(a1, a2, x, y, z)
+        k = _half_sinc(xp, t)  # (1 − cos θ)/θ² = 2k²
+        return rotation_entries(
+            2.0 * k * k, series_or_closed(xp, t, _theta_minus_sin_series, _theta_minus_sin_closed), x, y, z
+        )
 
     def _E_dot(self, xp: Namespace, chi: Values, u: Values) -> Entries:
         x, y, z = chi
@@ -173,7 +159,5 @@ class RotationVector(RotationParameterization):
         )
 
     def _distance(self, xp: Namespace, x: Component, y: Component, z: Component) -> Component:
-        theta = xp.sqrt(x * x + y * y + z * z)
-        if xp is math:  # the nearest 2πk with k >= 1 (θ >= 0: a round to 0 means k = 1)
-            return abs(theta - _TWO_PI * (round(theta / _TWO_PI) or 1))
+        theta = xp.sqrt(x * x + y * y + z * z)  # to the nearest 2πk with k >= 1
         return abs(theta - _TWO_PI * np.maximum(1.0, np.round(theta / _TWO_PI)))
