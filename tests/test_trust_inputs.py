@@ -41,19 +41,21 @@ def test_a_pose_whose_bottom_row_is_not_0001_is_refused(abb, bottom):
         abb.inverse_kinematics(np.stack([T, bad]))
 
 
-def test_batched_seed_tables_are_bounded(mixed):
-    """One table per frame was kept without bound; now an LRU of BATCH_SEED_TABLES per robot."""
+def test_seed_tables_are_bounded(mixed):
+    """One table per frame was kept without bound; now one LRU of SEED_TABLES per robot, of at most
+    SEED_TABLE_BYTES each, shared by single and batched solves."""
     frames = [f for f in mixed.frame_names if f != mixed.description.root]
-    assert len(frames) > ik_seeds.BATCH_SEED_TABLES
+    assert len(frames) > ik_seeds.SEED_TABLES
     for frame in frames * 2:
         T = mixed.frame_pose(mixed.neutral(), frame)
         inverse_kinematics(mixed, np.stack([T, T]), frame, max_iterations=1, restarts=1)
-    tables = mixed.engine.memoized("ik batch seed tables", ik_seeds.SeedTables)
-    assert 0 < len(tables.tables) <= ik_seeds.BATCH_SEED_TABLES
+        inverse_kinematics(mixed, T, frame, max_iterations=1, restarts=0)
+    tables = mixed.engine.memoized("ik seed tables", ik_seeds.SeedTables)
+    assert 0 < len(tables.tables) <= ik_seeds.SEED_TABLES
     last = (frames[-1], True, True)
     assert last in tables.tables  # the most recent frame is kept
     for configs, tree in tables.tables.values():
-        assert configs.nbytes + tree.data.nbytes <= 2 * ik_seeds.BATCH_SEED_TABLE_BYTES
+        assert configs.nbytes + tree.data.nbytes <= 2 * ik_seeds.SEED_TABLE_BYTES
     T = mixed.frame_pose(mixed.neutral(), frames[0])  # a dropped table is made again on demand
     assert inverse_kinematics(mixed, np.stack([T, T]), frames[0]).success.all()
 

@@ -11,12 +11,11 @@ Step (:mod:`.ik_step`): Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e plu
 nullspace of J, with Sugihara's damping λ² = 0.1·|S e|² + λ_min² (strong far from the target or near a
 singularity, Gauss–Newton speed close to it) and Chan & Dubey's joint-limit weights W; every iterate is
 clipped into the limits.
-Seeds, in order, one attempt each of at most ``max_iterations`` iterations (an attempt that stalls or is
-still far after a few iterations makes way for the next seed, :func:`.ik_step.gives_way`): ``q0`` if given
-(its attempt never gives up early), else the middle of the joint ranges (or ``nullspace_target``) and the
-``NEAREST_SEEDS`` configurations of a per-robot table (:mod:`.ik_seeds`: ``SEED_TABLE_SIZE`` random
-in-limit configurations, fixed seed) whose frame poses are nearest the target; then ``restarts`` uniformly
-random ones from ``rng``.
+Seeds, in order, one attempt each of at most ``max_iterations`` iterations (:func:`.ik_step.gives_way`:
+one that stalls or is still far makes way for the next seed; any, the last too, ends when stuck): ``q0``
+if given (its attempt never gives way early), else the ``NEAREST_SEEDS`` table configurations whose frame
+poses are nearest the target (:mod:`.ik_seeds`) and the middle of the joint ranges (or
+``nullspace_target``); then ``restarts`` uniformly random ones from ``rng``.
 One frame and several at once (a mapping {frame: T_IF}, errors and Jacobians stacked, :mod:`.ik_multi`)
 run one attempt loop, :func:`.ik_solver.solve`; a batch of targets (N, 4, 4) runs the same algorithm
 vectorized, :mod:`kinengine.control.ik_batch`.

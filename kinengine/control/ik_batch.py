@@ -11,10 +11,10 @@ that end (converged, given up, out of iterations) are compacted away, and the ta
 (its seed looked up only then: :class:`~kinengine.control.ik_seeds.BatchSeeds`). When few attempts are
 left running (SPECULATE), each target runs several of its next attempts at the same time; every target's
 outcome is then taken from its attempts in order (:func:`_resolve`): the same q, success, iteration
-count and restarts as if the attempts had run one after another. The last few attempts that never give
-way (TAIL) are rerun from their starts by the one-target loop (:func:`.ik_solver.solve`). Floating point
-differs from that loop's (the batch chain's Jacobian in I, another factorization), so the two agree in
-convergence and tolerance, not bit for bit; random restarts draw from ``rng`` in a different order.
+count and restarts as if the attempts had run one after another. Floating point differs from the
+one-target loop's (:func:`.ik_solver.solve`: the batch chain's Jacobian in I, another factorization), so
+the two agree in convergence and tolerance, not bit for bit; random restarts draw from ``rng`` in a
+different order.
 
 The result is an :class:`IKBatchResult`: arrays over the batch (``q`` (N, dof), ``success`` (N,), ...),
 and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``list(result)``).
@@ -23,7 +23,7 @@ and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``li
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,17 +31,15 @@ import pinocchio as pin
 
 from ..kinematics import batch
 from ..parameterizations import ROTATION_PARAMETERIZATIONS
+from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
-from .ik_solver import IKResult, solve
-from .ik_step import POSE_ROW_DAMPING, STALL_SPAN, LimitWeights, damping, gives_way, limit_weights, take_steps
-from .ik_target import FrameGoal, Problem, RandomSource
+from .ik_solver import IKResult
+from .ik_step import LimitWeights
+from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # named for the checker only
     from .robot_like import RobotLike
 
-TAIL = 4
-"""When no more columns than this are left, all of them attempts that never give way (the last ones), the
-single-target solver runs each again from its start (~15 µs an iteration, a batch iteration ~125 µs)."""
 SPECULATE = 1024
 """When no more attempts than this are running, targets run their next ones at the same time (up to this
 many in all): a batch iteration costs about the same for one column as for a few hundred."""
@@ -108,18 +106,20 @@ def solve_batch(
     rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
     tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
     lower, upper = joints.lower[:, None], joints.upper[:, None]
-    limits = limit_weights(robot.engine)
+    limits = step.limit_weights(robot.engine)
     # a full pose's rotation rows are weighted by ρ: |S e|² in the damping, λ² S⁻² on A's diagonal (ik_step)
-    row_damping = POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
+    row_damping = step.POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
     row_weight_sq = 1.0 / row_damping  # S²
     winner = np.full(n, attempts, dtype=np.intp)  # each target's first converged attempt (none yet)
     launched = np.zeros(n, dtype=np.intp)  # attempts started so far
     log: list[tuple[np.ndarray, ...]] = []  # every finished attempt: target, attempt, iterations, ...
     # one column per running attempt, compacted as they end: (target, attempt, iterations so far) and
     # rows q (dof), |∂φ/∂q| at the last iteration (dof; -1: none yet), the scores of the last STALL_SPAN
-    # iterations (oldest first), the target's p_d (3) and C_d (9), the attempt's start (dof)
-    H, P, S = 2 * dof, 2 * dof + STALL_SPAN, 2 * dof + STALL_SPAN + 12  # history, p_d, start
-    meta, state = np.empty((3, 0), dtype=np.intp), np.empty((S + dof, 0))
+    # iterations (oldest first), the best score and the iterations since (ik_step.gives_way), the target's
+    # p_d (3) and C_d (9)
+    H, B = 2 * dof, 2 * dof + step.STALL_SPAN  # history, best
+    P, S = B + 2, B + 14  # p_d, C_d up to S
+    meta, state = np.empty((3, 0), dtype=np.intp), np.empty((S, 0))
     space = _Workspace(max(n, SPECULATE), dof)
     new = np.arange(n)
     while True:
@@ -132,25 +132,16 @@ def solve_batch(
             block[:dof, seeded] = seeds.starts(new[seeded], new_meta[1][seeded]).T
             if (~seeded).any():
                 block[:dof, ~seeded] = rng.configurations(robot, int((~seeded).sum())).T
-            block[dof:H], block[S:] = -1.0, block[:dof]
+            block[dof:H], block[B], block[B + 1] = -1.0, np.inf, 0.0
             block[P : P + 3], block[P + 3 : S] = p_d[new].T, C_d[new].reshape(-1, 9).T
             meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
         r, (tid, att, it) = meta.shape[1], meta
         patient = (att == attempts - 1) | ((att == 0) & problem.patient_first)
-        if r <= TAIL and patient.all():  # a few attempts that never give way: the single solver reruns them
-            rest = replace(problem, restarts=0, patient_first=True)
-            tail = [
-                solve(robot, [FrameGoal(rest, p_d[t], C_d[t])], x[None], rng)
-                for t, x in zip(tid, state[S:].T.copy(), strict=True)
-            ]
-            e = np.array([[o.position_error, o.rotation_error, o.iterations] for o in tail]).reshape(r, 3).T
-            q_t = np.array([o.q for o in tail]).reshape(r, dof)
-            log.append((tid, att, e[2].astype(np.intp), e[0] + SEED_ROTATION_WEIGHT * e[1], e[0], e[1], q_t))
-            np.minimum.at(winner, tid, np.where([o.success for o in tail], att, attempts))
+        if not r:
             break
         if r > space.capacity:
             space = _Workspace(r, dof)
-        q, history, pd, Cd = state[:dof], state[H:P], state[P : P + 3], state[P + 3 : S].reshape(3, 3, r)
+        q, history, pd, Cd = state[:dof], state[H:B], state[P : P + 3], state[P + 3 : S].reshape(3, 3, r)
         T, J = space.pose[..., :r], space.jac[..., :r]  # (4, 4, r), (6, dof, r): the chain writes rows
         batch.evaluate(
             kin, q.T, problem.fid, pin.LOCAL_WORLD_ALIGNED, out=(T.transpose(2, 0, 1), J.transpose(2, 0, 1))
@@ -167,7 +158,9 @@ def solve_batch(
             err = e_d if sqrt_w is None else e_d * sqrt_w[:, None]
         score = ep + SEED_ROTATION_WEIGHT * er
         done = (ep <= tol_p) & (er <= tol_r)
-        end = done | (it == max_iterations) | (gives_way(it, score, history) & ~patient)
+        best = score < step.STUCK_RATIO * state[B]  # a new best; the count of iterations since restarts
+        state[B], state[B + 1] = np.where(best, score, state[B]), np.where(best, 0.0, state[B + 1] + 1)
+        end = done | (it == max_iterations) | step.gives_way(it, score, history, patient, state[B + 1])
         history[:-1], history[-1] = history[1:].copy(), score  # oldest first
         ended = np.empty(0, dtype=np.intp)
         if end.any():
@@ -186,10 +179,9 @@ def solve_batch(
             if limits.any:
                 w, state[dof:H] = limits.inverse_weights(q, state[dof:H])
             squared = row_weight_sq @ (err * err)  # |S e|²
-            diagonal = row_damping[:, None] * damping(squared, problem.damping_sq)
+            diagonal = row_damping[:, None] * step.damping(squared, problem.damping_sq)
             nullspace = (problem.q_ns, problem.gain, score)
-            step = take_steps(q, J, err, w, diagonal, nullspace, space.buffers)
-            np.clip(step, lower, upper, out=q)
+            np.clip(step.take_steps(q, J, err, w, diagonal, nullspace, space.buffers), lower, upper, out=q)
             meta[2] += 1
         # next attempts: one per target that needs one; when few columns run, several at once per target
         # (_resolve takes the outcomes in attempt order, as if the attempts had run one after another)

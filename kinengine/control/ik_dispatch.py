@@ -18,6 +18,7 @@ from ..errors import KinematicsError, OptionError
 from .closed_form import METHODS, ClosedFormChain, available, chain_of, ik_solutions
 from .ik_candidates import residuals
 from .ik_ranges import wrap_pi
+from .ik_seeds import middle_of_ranges
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .ik_batch import IKBatchResult
@@ -67,17 +68,6 @@ def _shape(target: npt.ArrayLike) -> tuple[int, ...]:
         return ()
 
 
-def _middle(robot: RobotLike) -> np.ndarray:
-    """The middle of each joint's range; where a range is unbounded, 0 clipped into it (read-only)."""
-    lo, hi = robot.engine.coordinates.lower, robot.engine.coordinates.upper
-    both = np.isfinite(lo) & np.isfinite(hi)
-    middle = np.zeros(robot.dof)
-    middle[both] = (lo[both] + hi[both]) / 2
-    middle = np.clip(middle, lo, hi)
-    middle.flags.writeable = False
-    return middle
-
-
 def nearest_result(
     robot: RobotLike,
     target: npt.ArrayLike,
@@ -96,7 +86,7 @@ def nearest_result(
     coords = robot.engine.coordinates
     single = np.ndim(target) == 2
     if q0 is None:
-        reference: np.ndarray = robot.engine.memoized("middle of the joint ranges", lambda: _middle(robot))
+        reference: np.ndarray = middle_of_ranges(robot)
     else:
         reference = coords.check(q0, name="q0", allow_batch=not single)
         n = np.shape(target)[0]

@@ -1,6 +1,7 @@
-"""IK seeds: a per-robot, per-frame table of random in-limit configurations and a KD-tree over their frame
-poses, so each target starts from the stored configurations whose poses are nearest it (plus the middle of
-the joint ranges, or the nullspace target); tables are bounded in number and size (an LRU)."""
+"""IK seeds: a per-robot, per-frame table of random configurations well inside the limits and a KD-tree
+over their frame poses, so each target starts from the stored configurations whose poses are nearest it
+(plus the middle of the joint ranges, or the nullspace target); one table serves the single and the batched
+solver; tables are bounded in number and size (an LRU)."""
 
 from __future__ import annotations
 
@@ -18,23 +19,24 @@ if TYPE_CHECKING:  # named for the checker only
     from .robot_like import RobotLike
 
 NEAREST_SEEDS = 10
-SEED_TABLE_SIZE = 4096
-SEED_TABLE_BYTES = 1 << 21
-"""At most 2 MiB per seed table (fewer than SEED_TABLE_SIZE rows for robots with many joints)."""
-SEED_TABLES = 16
-"""At most this many seed tables (frames × target kinds) are kept per robot, least recently used dropped."""
+SEED_TABLE_SIZE = 32768
+SEED_TABLE_BYTES = 1 << 23
+"""At most 8 MiB per seed table (fewer than SEED_TABLE_SIZE rows for robots with many joints)."""
+SEED_TABLES = 8
+"""At most this many seed tables (frames × target kinds, shared by the single and the batched solver) are
+kept per robot, least recently used dropped: with their KD-trees ~130 MiB at most (kept per frame without
+bound, 60 frames of a 30-dof chain held 550 MiB)."""
 SEED_TABLE_RNG = 0x5EED_7AB1E
-BATCH_SEED_TABLE_SIZE = 32768
-BATCH_SEED_TABLE_BYTES = 1 << 23
-"""The batched solver's seed table (one per robot and frame): up to 8 MiB."""
-BATCH_SEED_TABLES = 4
-"""At most this many batched seed tables (frames) are kept per robot, least recently used dropped: with
-their KD-trees ~40 MiB at most (kept per frame without bound, 60 frames of a 30-dof chain held 550 MiB)."""
-BATCH_SEED_EPS = 1.0
-"""Approximate nearest entries for batches: within (1 + this) of the nearest distance (cKDTree's eps)."""
-BATCH_SEED_FURTHER_EPS = 4.0
-"""... and for a target's further entries (wanted after its nearest failed: 9 % farther on average, a
-search of half the cost)."""
+SEED_MARGIN = 0.05
+"""Table configurations are drawn from the inner 1 − 2·this of each bounded joint's range: an attempt from a
+seed on a limit often stalls against it (on random targets 15-25 % fewer iterations; a target whose only
+solutions lie near a limit is reached about as often, ~0.1 % of them are missed either way)."""
+SEED_EPS = 2.0
+"""Approximate nearest entries: within (1 + this) of the nearest distance (cKDTree's eps; exact ones cost a
+batch ~4x the search for as many reached targets)."""
+FIRST_SEED_EPS = 3.0
+"""... for every batch target's first entry at once (4 % farther on average than the nearest); the further
+entries, wanted by the few targets whose first attempt fails, with SEED_EPS."""
 SEED_ROTATION_WEIGHT = 0.2
 """[m/rad]: pose distance |Δp| + 0.2·angle used to rank attempts and pick the stored seeds nearest a
 target."""
@@ -44,45 +46,42 @@ SeedTable = tuple[np.ndarray, Any]
 
 
 class SeedTables:
-    """A small LRU of seed tables (bounded: ``most`` tables, SEED_TABLES by default, of at most
-    SEED_TABLE_BYTES each; BATCH_SEED_TABLES of BATCH_SEED_TABLE_BYTES for the batched solver)."""
+    """A small LRU of seed tables (bounded: SEED_TABLES tables of at most SEED_TABLE_BYTES each)."""
 
-    def __init__(self, most: int = SEED_TABLES) -> None:
-        self.most = most
+    def __init__(self) -> None:
         self.lock = threading.Lock()
         self.tables: OrderedDict[tuple[str, bool, bool], SeedTable] = OrderedDict()
 
     def get(self, key: tuple[str, bool, bool], make: Callable[[], SeedTable]) -> SeedTable:
-        with self.lock:
-            if key in self.tables:
-                self.tables.move_to_end(key)
-                return self.tables[key]
-        table = make()
-        with self.lock:
-            self.tables[key] = table
-            while len(self.tables) > self.most:
-                self.tables.popitem(last=False)
-        return table
+        with self.lock:  # made under the lock: another thread wanting a table waits for it
+            if key not in self.tables:
+                self.tables[key] = make()
+                while len(self.tables) > SEED_TABLES:
+                    self.tables.popitem(last=False)
+            self.tables.move_to_end(key)
+            return self.tables[key]
 
 
-def _seed_table(
-    robot: RobotLike,
-    frame: str,
-    use_p: bool,
-    use_R: bool,
-    most: int = SEED_TABLE_SIZE,
-    bound: int = SEED_TABLE_BYTES,
-) -> SeedTable:
-    """(configurations (K, dof), a KD-tree over [p, w·vec(C)/√2] of ``frame`` at them), K <= ``most``
-    within ``bound`` bytes."""
-    from scipy.spatial import cKDTree
+def seed_table(robot: RobotLike, frame: str, use_p: bool, use_R: bool) -> SeedTable:
+    """The robot's seed table of ``frame`` for targets fixing the position / rotation (``use_p``, ``use_R``):
+    (configurations (K, dof), a KD-tree over [p, w·vec(C)/√2] of ``frame`` at them), K <= SEED_TABLE_SIZE
+    within SEED_TABLE_BYTES, made once (an LRU of SEED_TABLES per robot)."""
 
-    size = max(64, min(most, bound // (8 * (robot.dof + 12))))
-    configs = robot.random_configuration(np.random.default_rng(SEED_TABLE_RNG), size=size)
-    poses = robot.frame_pose(configs, frame)
-    return configs, cKDTree(
-        _embed(poses[:, :3, 3] if use_p else None, poses[:, :3, :3] if use_R else None, len(configs))
-    )
+    def make() -> SeedTable:
+        from scipy.spatial import cKDTree
+
+        size = max(64, min(SEED_TABLE_SIZE, SEED_TABLE_BYTES // (8 * (robot.dof + 12))))
+        configs = robot.random_configuration(np.random.default_rng(SEED_TABLE_RNG), size=size)
+        coords, middle = robot.engine.coordinates, middle_of_ranges(robot)
+        inner = np.isfinite(coords.lower) & np.isfinite(coords.upper)  # shrunk towards the middle
+        configs[:, inner] = middle[inner] + (1 - 2 * SEED_MARGIN) * (configs[:, inner] - middle[inner])
+        poses = robot.frame_pose(configs, frame)
+        return configs, cKDTree(
+            _embed(poses[:, :3, 3] if use_p else None, poses[:, :3, :3] if use_R else None, size)
+        )
+
+    tables = robot.engine.memoized("ik seed tables", SeedTables)
+    return tables.get((frame, use_p, use_R), make)
 
 
 def _embed(p: np.ndarray | None, C: np.ndarray | None, n: int) -> np.ndarray:
@@ -94,26 +93,34 @@ def _embed(p: np.ndarray | None, C: np.ndarray | None, n: int) -> np.ndarray:
     return np.hstack(parts) if parts else np.zeros((n, 1))
 
 
+def middle_of_ranges(robot: RobotLike) -> np.ndarray:
+    """The middle of each joint's range; where a range is unbounded, 0 clipped into it (read-only, made
+    once per robot)."""
+
+    def make() -> np.ndarray:
+        lower, upper = robot.engine.coordinates.lower, robot.engine.coordinates.upper
+        bounded = np.isfinite(lower) & np.isfinite(upper)
+        middle = np.clip(np.where(bounded, (np.where(bounded, lower, 0.0) + upper) / 2, 0.0), lower, upper)
+        middle.flags.writeable = False
+        return middle
+
+    return robot.engine.memoized("ik middle of the ranges", make)
+
+
 def _default_start(robot: RobotLike, problem: Problem) -> np.ndarray:
     """The seeded start that is not from a table: the middle of the joint ranges (0 for an unbounded joint),
     or the nullspace target clipped into the limits."""
-    lower, upper = robot.engine.coordinates.lower, robot.engine.coordinates.upper
     if problem.q_ns is not None:
-        return np.clip(problem.q_ns, lower, upper)
-    bounded = np.isfinite(lower) & np.isfinite(upper)
-    return robot.engine.memoized(
-        "ik middle of the ranges", lambda: (np.where(bounded, lower, 0.0) + np.where(bounded, upper, 0.0)) / 2
-    )
+        return np.clip(problem.q_ns, robot.engine.coordinates.lower, robot.engine.coordinates.upper)
+    return middle_of_ranges(robot)
 
 
 def _nearest(robot: RobotLike, goal: FrameGoal) -> np.ndarray:
     """The NEAREST_SEEDS configurations (k, dof) of the stored table of the goal's frame and target kind whose
     frame poses are nearest its target, nearest first."""
-    frame, use_p, use_R = goal.problem.frame, goal.p_d is not None, goal.C_d is not None
-    tables = robot.engine.memoized("ik seed tables", SeedTables)
-    configs, tree = tables.get((frame, use_p, use_R), lambda: _seed_table(robot, frame, use_p, use_R))
+    configs, tree = seed_table(robot, goal.problem.frame, goal.p_d is not None, goal.C_d is not None)
     k = min(NEAREST_SEEDS, len(configs))
-    return configs[np.reshape(tree.query(_embed(goal.p_d, goal.C_d, 1), k=k)[1], k)]
+    return configs[np.reshape(tree.query(_embed(goal.p_d, goal.C_d, 1), k=k, eps=SEED_EPS)[1], k)]
 
 
 def frame_seeds(robot: RobotLike, goals: list[FrameGoal], q0: np.ndarray | None) -> np.ndarray:
@@ -142,10 +149,9 @@ def frame_seeds(robot: RobotLike, goals: list[FrameGoal], q0: np.ndarray | None)
 
 class BatchSeeds:
     """The seeded starts for a batch (N targets), as :func:`frame_seeds` orders them (the nearest table
-    entries, then the middle of the ranges; or ``q0``), from a larger table (BATCH_SEED_TABLE_SIZE) searched
-    approximately (BATCH_SEED_EPS) and only when needed: every target's nearest entry at once, its
-    further ones when the target first needs a second attempt. :meth:`starts` gives (m, dof) for
-    (target, attempt) pairs, each attempt < ``count``."""
+    entries, then the middle of the ranges; or ``q0``), searched only when needed: every target's nearest
+    entry at once, its further ones when the target first needs a second attempt. :meth:`starts` gives
+    (m, dof) for (target, attempt) pairs, each attempt < ``count``."""
 
     def __init__(
         self, robot: RobotLike, problem: Problem, p_d: np.ndarray, C_d: np.ndarray, q0: np.ndarray | None
@@ -158,13 +164,7 @@ class BatchSeeds:
         if self.given is not None:
             return
         self.first = _default_start(robot, problem)
-        tables = robot.engine.memoized("ik batch seed tables", lambda: SeedTables(BATCH_SEED_TABLES))
-        self.configs, self.tree = tables.get(
-            (problem.frame, True, True),
-            lambda: _seed_table(
-                robot, problem.frame, True, True, BATCH_SEED_TABLE_SIZE, BATCH_SEED_TABLE_BYTES
-            ),
-        )
+        self.configs, self.tree = seed_table(robot, problem.frame, True, True)
         self.k = min(NEAREST_SEEDS, len(self.configs))
         self.count = self.k + 1
         self.points = _embed(p_d, C_d, n)
@@ -172,12 +172,9 @@ class BatchSeeds:
         self.depth = np.zeros(n, dtype=np.intp)  # table entries found so far, nearest first
 
     def _find(self, targets: np.ndarray, k: int) -> None:
-        _, index = self.tree.query(
-            self.points[targets],
-            k=k,
-            eps=BATCH_SEED_EPS if k == 1 else BATCH_SEED_FURTHER_EPS,
-            workers=-1 if len(targets) > 2048 else 1,
-        )
+        workers = -1 if len(targets) > 2048 else 1
+        eps = FIRST_SEED_EPS if k == 1 else SEED_EPS
+        _, index = self.tree.query(self.points[targets], k=k, eps=eps, workers=workers)
         self.index[targets, :k] = np.asarray(index).reshape(len(targets), k)
         self.depth[targets] = k
 
@@ -199,12 +196,10 @@ class BatchSeeds:
 
 
 __all__ = [
-    "BATCH_SEED_EPS",
-    "BATCH_SEED_FURTHER_EPS",
-    "BATCH_SEED_TABLES",
-    "BATCH_SEED_TABLE_BYTES",
-    "BATCH_SEED_TABLE_SIZE",
+    "FIRST_SEED_EPS",
     "NEAREST_SEEDS",
+    "SEED_EPS",
+    "SEED_MARGIN",
     "SEED_ROTATION_WEIGHT",
     "SEED_TABLES",
     "SEED_TABLE_BYTES",
@@ -213,4 +208,6 @@ __all__ = [
     "BatchSeeds",
     "SeedTables",
     "frame_seeds",
+    "middle_of_ranges",
+    "seed_table",
 ]

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg.lapack import dposv  # 5x cheaper per call than np.linalg.solve on a 6x6
 
 from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT
@@ -101,8 +102,6 @@ def solve(
     Per iteration a dozen numpy calls on arrays of 6 to 42 numbers, so their count sets the speed: the
     normal matrix is written into one buffer whose diagonal view takes λ², and solved by Cholesky
     (LAPACK ``dposv``: J W⁻¹Jᵀ + λ² S⁻² is symmetric positive definite for λ > 0; least squares if not)."""
-    from scipy.linalg.lapack import dposv  # 5x cheaper per call than np.linalg.solve on a 6x6
-
     kin = robot.engine
     joints = kin.coordinates
     model, data = kin.model, kin.data()
@@ -117,7 +116,8 @@ def solve(
     kinematics = pin.computeJointJacobians if movable else pin.forwardKinematics
     subtract, hypot, sqrt = np.subtract, math.hypot, math.sqrt
     m = sum(g.row_count for g in goals)
-    err, J, A = np.empty(m), np.empty((m, robot.dof)), np.empty((m, m))
+    err, J, A = np.empty(m), np.empty((m, robot.dof)), np.empty(m * m)
+    normal = (A.reshape(m, m), A[:: m + 1])  # A and its diagonal
     # a full pose's rows are weighted by S = diag(1, 1, 1, ρ, ρ, ρ): (S J W⁻¹Jᵀ S + λ² I) x = S e is
     # (J W⁻¹Jᵀ + λ² S⁻²)(S x) = e with Δq = W⁻¹Jᵀ (S x), so the weights only scale the damping's diagonal
     errors, jacobians, row_damping = _layout(goals, err)
@@ -128,7 +128,7 @@ def solve(
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
         last = attempt == attempts - 1 or (attempt == 0 and shared.patient_first)
-        iteration, previous = 0, None
+        iteration, previous, lowest, since = 0, None, math.inf, 0
         history: list[float] = []  # the score at each iteration
         while True:
             kinematics(model, data, q if identity else pinocchio_q(q))
@@ -157,11 +157,15 @@ def solve(
                 per_frame.append((ep, er))
                 score += ep + SEED_ROTATION_WEIGHT * er
                 done = done and ep <= tol_p and er <= tol_r
+            if score < step.STUCK_RATIO * lowest:
+                lowest, since = score, 0
+            else:
+                since += 1
             if (
                 done
                 or not movable  # no joint moves a frame: the error stays as it is
                 or iteration == max_iterations
-                or (not last and step.gives_way(iteration, score, history))
+                or step.gives_way(iteration, score, history, last, since)
             ):
                 break
             history.append(score)
@@ -176,7 +180,7 @@ def solve(
                     np.dot(S_w, J_F, out=J[start:stop])
             diagonal = step.damping(squared, damping_sq) * row_damping
             previous = step.take_step(
-                q, J, err, A, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
+                q, J, err, normal, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
             )
         total += iteration
         if best is None or score < best[2]:

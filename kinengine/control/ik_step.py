@@ -11,9 +11,7 @@ target. :func:`take_step` takes one step for one configuration (LAPACK ``dposv``
 positive definite for λ > 0; least squares where it is not), :func:`take_steps` for columns of
 configurations (a Cholesky factorization over all columns at once; numpy's solve where it refuses).
 
-Attempts: an attempt other than the last gives way to the next seed when its score |e_p| + 0.2 m/rad·|e_R|
-is still above GIVE_UP after PROBE_ITERATIONS iterations, or when, from STALL_FROM iterations on, it has not
-fallen below STALL_RATIO × its value STALL_SPAN iterations earlier (:func:`gives_way`).
+Attempts: :func:`gives_way` tells when one makes way for the next seed (still far, stalled) or ends (stuck).
 """
 
 from __future__ import annotations
@@ -35,6 +33,9 @@ STALL_FROM, STALL_SPAN, STALL_RATIO = 4, 3, 0.8
 """From iteration STALL_FROM on, an attempt whose score is above STALL_RATIO × its score STALL_SPAN iterations
 earlier gives way (stuck on a joint limit or in a local minimum: such attempts crawl for max_iterations,
 and on 1,000 random targets they cost the ABB IRB 120 more iterations than the converging ones)."""
+STUCK_SPAN, STUCK_RATIO = 10, 0.9
+"""An attempt, the last one too, ends after STUCK_SPAN iterations without a score below STUCK_RATIO × its best
+(in a local minimum or against a limit: it would crawl to max_iterations unchanged)."""
 DAMPING_SCALE = 0.1
 """λ² = DAMPING_SCALE·|e|² + λ_min² (Sugihara's rule λ² = ½ eᵀW_E e + λ_min² with W_E = 0.2·I, e weighted as
 below): weaker than ½|e|², so the first steps from a stored seed go further."""
@@ -105,18 +106,25 @@ def limit_weights(kin: Kinematics) -> LimitWeights:
 
 
 def gives_way(
-    iteration: int | np.ndarray, score: float | np.ndarray, history: Sequence[float] | np.ndarray
+    iteration: int | np.ndarray,
+    score: float | np.ndarray,
+    history: Sequence[float] | np.ndarray,
+    patient: bool | np.ndarray,
+    since: int | np.ndarray,
 ) -> bool | np.ndarray:
-    """Whether an attempt other than the last makes way for the next seed at this iteration: its score still
-    above GIVE_UP after PROBE_ITERATIONS, or stalled (from STALL_FROM on, above STALL_RATIO × its score
-    STALL_SPAN iterations earlier). ``history``: the earlier scores, oldest first (a list for one attempt;
-    rows (≥ STALL_SPAN, r) for columns of attempts, with ``iteration`` and ``score`` (r,): an array out)."""
-    if isinstance(iteration, int):
-        if iteration == PROBE_ITERATIONS and score > GIVE_UP:
-            return True
-        return iteration >= STALL_FROM and score > STALL_RATIO * history[-STALL_SPAN]
+    """Whether an attempt ends without converging at this iteration: one that is not ``patient`` (not the
+    last) when its score is still above GIVE_UP after PROBE_ITERATIONS or stalled (from STALL_FROM on,
+    above STALL_RATIO × its score STALL_SPAN iterations earlier); any when stuck (``since`` >= STUCK_SPAN
+    iterations without a score below STUCK_RATIO × its best). ``history``: the earlier scores, oldest
+    first (a list for one attempt; rows (≥ STALL_SPAN, r) for columns of attempts, with the other
+    arguments (r,): an array out)."""
+    if isinstance(iteration, int):  # one attempt, in plain floats
+        probed = iteration == PROBE_ITERATIONS and score > GIVE_UP
+        stalled = iteration >= STALL_FROM and score > STALL_RATIO * history[-STALL_SPAN]
+        return since >= STUCK_SPAN or (not patient and (probed or stalled))
     probed = (iteration == PROBE_ITERATIONS) & (score > GIVE_UP)
-    return probed | ((iteration >= STALL_FROM) & (score > STALL_RATIO * history[-STALL_SPAN]))
+    stalled = (iteration >= STALL_FROM) & (score > STALL_RATIO * history[-STALL_SPAN])
+    return ((probed | stalled) & ~patient) | (since >= STUCK_SPAN)
 
 
 def damping(squared: float | np.ndarray, damping_sq: float) -> float | np.ndarray:
@@ -135,7 +143,7 @@ def take_step(
     q: np.ndarray,
     J: np.ndarray,
     err: np.ndarray,
-    A: np.ndarray,
+    normal: tuple[np.ndarray, np.ndarray],
     diagonal: np.ndarray | float,
     weigh: Callable[[np.ndarray, list | None], tuple[np.ndarray, list]] | None,
     previous: list | None,
@@ -144,16 +152,17 @@ def take_step(
     dposv: Callable[..., tuple],
 ) -> list | None:
     """One step for one configuration, in place: q ← clip(q + W⁻¹Jᵀ A⁻¹ (e − J z) + z, lower, upper) with
-    A = J W⁻¹Jᵀ + diag(``diagonal``) (λ² S⁻²) written into the (m, m) buffer ``A`` and solved by Cholesky
-    (``dposv``; least squares where it is not positive definite). ``weigh``: LimitWeights.inverse_weights_one
-    (None: W = I), ``previous`` its last gradient, which is returned for the next step. ``nullspace``
-    (q_ns, gain, score): the pull z towards q_ns (None: none)."""
+    A = J W⁻¹Jᵀ + diag(``diagonal``) (λ² S⁻²) written into ``normal`` = (A (m, m), a view of its diagonal)
+    and solved by Cholesky (``dposv``; least squares where it is not positive definite). ``weigh``:
+    LimitWeights.inverse_weights_one (None: W = I), ``previous`` its last gradient, which is returned for the
+    next step. ``nullspace`` (q_ns, gain, score): the pull z towards q_ns (None: none)."""
     JW = J
     if weigh is not None:
         w, previous = weigh(q, previous)
         JW = J * w
+    A, A_diagonal = normal
     np.dot(JW, J.T, out=A)
-    A.reshape(-1)[:: len(A) + 1] += diagonal
+    A_diagonal += diagonal
     q_ns, gain, score = nullspace
     if q_ns is None:
         _, x, info = dposv(A, err)
@@ -268,6 +277,8 @@ __all__ = [
     "STALL_FROM",
     "STALL_RATIO",
     "STALL_SPAN",
+    "STUCK_RATIO",
+    "STUCK_SPAN",
     "LimitWeights",
     "damping",
     "gives_way",

@@ -183,13 +183,6 @@ def rotation_deviation(
     )
 
 
-def _rotation_ok(
-    a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float, i: float
-) -> bool:
-    """C = [[a, b, c], [d, e, f], [g, h, i]] (row by row): CᵀC = I to 1e-6 and det C > 0 (False for NaN)."""
-    return rotation_deviation(a, b, c, d, e, f, g, h, i) <= ROTATION_TOLERANCE
-
-
 def nearest_rotations(C: np.ndarray) -> np.ndarray:
     """The rotation matrices nearest (Frobenius) to C (N, 3, 3) with det C > 0: U·Vᵀ of C's SVD."""
     U, _, Vt = np.linalg.svd(C)
@@ -303,7 +296,7 @@ def single_target(
     if (
         R is not None
         and C_d is not None
-        and not (np.isfinite(C_d).all() and _rotation_ok(*C_d.ravel().tolist()))
+        and not (np.isfinite(C_d).all() and rotation_deviation(*C_d.ravel().tolist()) <= ROTATION_TOLERANCE)
     ):
         raise ParameterizationError(
             f"`target`'s {rotation} parameters {value[m - R.size :].tolist()} describe no "
