@@ -45,35 +45,36 @@ class FrameKinematics:
         model, path = kin.model, kin.frame_path(fid)
         self.model, self.data, self.fid, self.nv, self.mapped = model, data, fid, model.nv, path.mapped
         path_data = data if path.model is model else create_data(path.model, "a Task")
-        self.path, self.path_nv = (path.model, path_data, path.frame_id), path.model.nv
         # references into the Data: they follow every update
-        self.views = path_data.oMf[path.frame_id].rotation, path_data.oMf[path.frame_id].translation
+        views = path_data.oMf[path.frame_id].rotation, path_data.oMf[path.frame_id].translation
         self.world_views = data.oMf[fid].rotation, data.oMf[fid].translation
         self.fold = None if kin.coordinates.identity else kin.coordinates.matrix
-        self.plain = not path.mapped and path.model.nv > 1  # Pinocchio's frame Jacobian is J_e0 as it is
+        plain = not path.mapped and path.model.nv > 1  # Pinocchio's frame Jacobian is J_e0 as it is
+        self.path = pin.computeFrameJacobian, path.model, path_data, path.frame_id, path.mapped, plain, views
+        self.path_nv = path.model.nv
         self.J = np.zeros((6, kin.dof))  # Pinocchio's fresh array (rebound every update) or self.buffer
         self.buffer, self.Jdot, self.twist = np.zeros((6, kin.dof)), np.zeros((6, kin.dof)), np.zeros(6)
-        self.R = self.views[0]
+        self.R = views[0]
         self.C: list[list[float]] = []
         self.pos: list[float] = []
 
     def update(self, q: np.ndarray, q_pin: np.ndarray, qdot: np.ndarray | None) -> None:
         """At q and Pinocchio's q_pin (with q̇: after ``computeJointJacobiansTimeVariation`` at q_pin)."""
         if qdot is None and self.path_nv:
-            model, data, fid = self.path
-            J = pin.computeFrameJacobian(model, data, q_pin if self.mapped else q, fid, _LWA)
-            if not self.plain:  # eigenpy hands a (6, 1) matrix over as (6,)
+            frame_jacobian, model, data, fid, mapped, plain, (R, p) = self.path
+            J = frame_jacobian(model, data, q_pin if mapped else q, fid, _LWA)
+            if not plain:  # eigenpy hands a (6, 1) matrix over as (6,)
                 J = J.reshape(6, self.path_nv)
-                J = np.dot(J, self.fold, out=self.buffer) if self.fold is not None and self.mapped else J
-            self.J, (self.R, p) = J, self.views
+                J = np.dot(J, self.fold, out=self.buffer) if self.fold is not None and mapped else J
+            self.J = J
         else:
             if not self.nv:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0: J is (6, 0)
                 pin.forwardKinematics(self.model, self.data, q_pin)
             pin.updateFramePlacement(self.model, self.data, self.fid)
-            self.R, p = self.world_views
+            R, p = self.world_views
             if qdot is not None and self.nv:
                 self._rates(qdot)
-        self.C, self.pos = self.R.tolist(), p.tolist()
+        self.R, self.C, self.pos = R, R.tolist(), p.tolist()
 
     def _rates(self, qdot: np.ndarray) -> None:
         model, data, fid, nv = self.model, self.data, self.fid, self.nv
