@@ -127,13 +127,14 @@ class FrameBlock:
         if pmap.rows is None:  # no selection: E's entries and the run in one write, from S's E rows on
             self.E[:] = self.E_all
             write, at = struct.Struct(layout.format + run).pack_into, 8 * 36 + layout.offset
-        self.out = np.zeros((6 + ms, dof))
-        self.J, self.JA = self.out[:6], self.out[6:]
+        self.out = out = np.zeros((6 + ms, dof))
+        self.J, self.JA = out[:6], out[6:]
         self.Jdot, self.twist = (a.Jdot, a.twist) if b is None else (np.zeros((6, dof)), np.zeros(6))
         self.JAdot, self.chi_dot, self.tmp = np.zeros((ms, dof)), np.zeros(ms), np.zeros((ms, dof))
         self.Edot, self.Edot_selected, self.singular = np.zeros((m, 6)), np.zeros((ms, 6)), [False] * k
-        cartesian = position is not None and position.name == "cartesian"  # update's constants, in one tuple:
-        self.bound = position, rotation, m_P, cartesian, rule, self.singular, selected, write, values, at
+        cart = position is not None and position.name == "cartesian"  # update's constants, in one tuple:
+        chart, dot = None if rotation is None else rotation.chart, S.dot
+        self.bound = position, chart, m_P, cart, rule, self.singular, selected, write, values, at, dot, out
         if b is not None:  # relative: buffers for J_rel and its rate
             self.skew, self.t3 = np.zeros((3, 3)), np.zeros((3, dof))
             self.inner, self.dinner, self.Jrel = np.zeros((6, dof)), np.zeros((6, dof)), np.zeros((6, dof))
@@ -181,7 +182,7 @@ class FrameBlock:
         self, qdot: np.ndarray | None, threshold: float, continuous: bool
     ) -> RepresentationSingularityError | None:
         """Fill this block's arrays; returns the RepresentationSingularityError to raise (or None)."""
-        position, rotation, m_P, cartesian, rule, singular, selected, write, values, at = self.bound
+        position, chart, m_P, cartesian, rule, singular, selected, write, values, at, dot, out = self.bound
         if self.b is None:
             a = self.a
             C, p, J = a.C, a.pos, a.J
@@ -195,8 +196,8 @@ class FrameBlock:
         if position is not None and not cartesian:
             chi, distance, entries = self._general(0, C, p, previous and previous[:m_P], threshold)
             distances.append(distance)
-        if rotation is not None:  # the chart gives χ, distance and E at once at a regular canonical χ
-            found = rotation.chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        if chart is not None:  # the rotation's chart gives χ, distance and E at once at a regular canonical χ
+            found = chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
             if (
                 found is None
                 or not found[1] >= threshold
@@ -218,7 +219,7 @@ class FrameBlock:
             values, at, *entries, *selected_chi, *distances,  # type: ignore[arg-type]  # a buffer (numpy: 3.12+)
             c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz,
         )  # fmt: skip
-        self.S.dot(J, self.out)  # [J; J_A] = [I; E]·J
+        dot(J, out)  # [J; J_A] = [I; E]·J
         if continuous:
             self.previous = chi
         if qdot is not None:
