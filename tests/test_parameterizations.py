@@ -483,3 +483,27 @@ def test_chart_is_the_rate_of_chi_by_central_differences(name, seed, theta):
     behind = param.from_rotation(Rotation.from_rotvec(-h * omega).as_matrix() @ C, warn=False)
     assume(np.abs(ahead - behind).max() < 1e-3)  # no branch cut crossed (angle wrap, quaternion sign)
     assert_close_relative(E @ omega, (ahead - behind) / (2 * h), 1e-6)
+
+
+@pytest.mark.parametrize("name", EULERS)
+@pytest.mark.parametrize("offset", [0.0, 5e-8, 2e-7, 1e-3])
+def test_euler_chart_declines_where_from_rotation_sees_gimbal_lock(name, offset):
+    """The single-pose chart gives None exactly where from_rotation warns of gimbal lock (χ2 within scipy's
+    1e-7 rad of the singular value), else from_rotation's χ, the distance |cos χ2| (Tait–Bryan) or |sin χ2|
+    (proper) and E(χ); and χ reproduces C."""
+    param = ROTATION_PARAMETERIZATIONS[name]
+    proper = name[6] == name[8]
+    chi2 = offset if proper else np.pi / 2 - offset  # at (0) or near the singular set
+    C = param.to_rotation([0.4, chi2, -0.7])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        chi = param.from_rotation(C)
+    found = param.chart(*C.ravel().tolist())
+    assert (found is None) == (len(caught) == 1)
+    assert (found is None) == (offset < 1e-7)
+    if found is not None:
+        np.testing.assert_allclose(found[0], chi, rtol=0, atol=1e-15)
+        expected = abs(np.sin(chi[1])) if proper else abs(np.cos(chi[1]))
+        assert found[1] == pytest.approx(expected, rel=1e-12)
+        np.testing.assert_allclose(np.reshape(found[2], (3, 3)), param.E(chi), rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(param.to_rotation(chi), C, rtol=0, atol=3e-7 if offset < 1e-6 else 1e-14)

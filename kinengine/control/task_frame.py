@@ -45,35 +45,36 @@ class FrameKinematics:
         model, path = kin.model, kin.frame_path(fid)
         self.model, self.data, self.fid, self.nv, self.mapped = model, data, fid, model.nv, path.mapped
         path_data = data if path.model is model else create_data(path.model, "a Task")
-        self.path, self.path_nv = (path.model, path_data, path.frame_id), path.model.nv
         # references into the Data: they follow every update
-        self.views = path_data.oMf[path.frame_id].rotation, path_data.oMf[path.frame_id].translation
+        views = path_data.oMf[path.frame_id].rotation, path_data.oMf[path.frame_id].translation
         self.world_views = data.oMf[fid].rotation, data.oMf[fid].translation
         self.fold = None if kin.coordinates.identity else kin.coordinates.matrix
-        self.plain = not path.mapped and path.model.nv > 1  # Pinocchio's frame Jacobian is J_e0 as it is
+        plain = not path.mapped and path.model.nv > 1  # Pinocchio's frame Jacobian is J_e0 as it is
+        self.path = pin.computeFrameJacobian, path.model, path_data, path.frame_id, path.mapped, plain, views
+        self.path_nv = path.model.nv
         self.J = np.zeros((6, kin.dof))  # Pinocchio's fresh array (rebound every update) or self.buffer
         self.buffer, self.Jdot, self.twist = np.zeros((6, kin.dof)), np.zeros((6, kin.dof)), np.zeros(6)
-        self.R = self.views[0]
+        self.R = views[0]
         self.C: list[list[float]] = []
         self.pos: list[float] = []
 
     def update(self, q: np.ndarray, q_pin: np.ndarray, qdot: np.ndarray | None) -> None:
         """At q and Pinocchio's q_pin (with q̇: after ``computeJointJacobiansTimeVariation`` at q_pin)."""
         if qdot is None and self.path_nv:
-            model, data, fid = self.path
-            J = pin.computeFrameJacobian(model, data, q_pin if self.mapped else q, fid, _LWA)
-            if not self.plain:  # eigenpy hands a (6, 1) matrix over as (6,)
+            frame_jacobian, model, data, fid, mapped, plain, (R, p) = self.path
+            J = frame_jacobian(model, data, q_pin if mapped else q, fid, _LWA)
+            if not plain:  # eigenpy hands a (6, 1) matrix over as (6,)
                 J = J.reshape(6, self.path_nv)
-                J = np.dot(J, self.fold, out=self.buffer) if self.fold is not None and self.mapped else J
-            self.J, (self.R, p) = J, self.views
+                J = np.dot(J, self.fold, out=self.buffer) if self.fold is not None and mapped else J
+            self.J = J
         else:
             if not self.nv:  # Pinocchio 4.1 crashes on a frame Jacobian with nv = 0: J is (6, 0)
                 pin.forwardKinematics(self.model, self.data, q_pin)
             pin.updateFramePlacement(self.model, self.data, self.fid)
-            self.R, p = self.world_views
+            R, p = self.world_views
             if qdot is not None and self.nv:
                 self._rates(qdot)
-        self.C, self.pos = self.R.tolist(), p.tolist()
+        self.R, self.C, self.pos = R, R.tolist(), p.tolist()
 
     def _rates(self, qdot: np.ndarray) -> None:
         model, data, fid, nv = self.model, self.data, self.fid, self.nv
@@ -101,8 +102,7 @@ class FrameBlock:
         self.spec, self.pmap, self.a, self.b, self.parts = spec, pmap, a, b, pmap.parts
         position, rotation = pmap.position, pmap.rotation
         m_P = 0 if position is None else position.size
-        self.pose_map = (position, rotation, m_P, position is not None and position.name == "cartesian")
-        self.rule = continuity_rule("cartesian" if rotation is None else rotation.name)
+        rule = continuity_rule("cartesian" if rotation is None else rotation.name)
         starts = np.cumsum([0] + [p.size for p in self.parts]).tolist()
         self.rate_parts = [  # (index, part, its rows of E, its columns of E: 0-2 for v, 3-5 for ω)
             (k, p, slice(first, first + p.size), slice(3, 6) if p.kind == "rotation" else slice(0, 3))
@@ -111,27 +111,30 @@ class FrameBlock:
         ]
         dof, m, ms, k = a.J.shape[1], starts[-1], pmap.size, len(self.parts)
         self.previous: list[float] | None = None
-        self.selected = None if pmap.rows is None else list(pmap.rows)
-        self.values = np.zeros(6 * (6 + ms) + ms + k + 16)
-        self.S = S = self.values[: 6 * (6 + ms)].reshape(6 + ms, 6)
+        self.selected = selected = None if pmap.rows is None else list(pmap.rows)
+        self.values = values = np.zeros(6 * (6 + ms) + ms + k + 16)
+        self.S = S = values[: 6 * (6 + ms)].reshape(6 + ms, 6)
         S[:6] = np.eye(6)
         self.E = S[6:]
-        tail = self.values[S.size :]
+        tail = values[S.size :]
         self.chi, self.distances, self.pose = tail[:ms], tail[ms : ms + k], tail[ms + k :].reshape(4, 4)
         self.pose[3, 3] = 1.0
         layout = pmap.layout  # E = blockdiag(E_P, E_R) (m, 6): all of it, its rows then selected into S
         self.write_E, self.E_offset = layout.pack_into, layout.offset
         self.E_all: np.ndarray = np.frombuffer(bytearray(layout.template)).reshape(layout.shape)
         run = f"{ms + k + 12}d"  # after S: χ, distances, the pose's rows 0-2
-        self.write, self.write_at = struct.Struct("=" + run).pack_into, 8 * S.size
+        write, at = struct.Struct("=" + run).pack_into, 8 * S.size
         if pmap.rows is None:  # no selection: E's entries and the run in one write, from S's E rows on
             self.E[:] = self.E_all
-            self.write, self.write_at = struct.Struct(layout.format + run).pack_into, 8 * 36 + layout.offset
-        self.out = np.zeros((6 + ms, dof))
-        self.J, self.JA = self.out[:6], self.out[6:]
+            write, at = struct.Struct(layout.format + run).pack_into, 8 * 36 + layout.offset
+        self.out = out = np.zeros((6 + ms, dof))
+        self.J, self.JA = out[:6], out[6:]
         self.Jdot, self.twist = (a.Jdot, a.twist) if b is None else (np.zeros((6, dof)), np.zeros(6))
         self.JAdot, self.chi_dot, self.tmp = np.zeros((ms, dof)), np.zeros(ms), np.zeros((ms, dof))
         self.Edot, self.Edot_selected, self.singular = np.zeros((m, 6)), np.zeros((ms, 6)), [False] * k
+        cart = position is not None and position.name == "cartesian"  # update's constants, in one tuple:
+        chart, dot = None if rotation is None else rotation.chart, S.dot
+        self.bound = position, chart, m_P, cart, rule, self.singular, selected, write, values, at, dot, out
         if b is not None:  # relative: buffers for J_rel and its rate
             self.skew, self.t3 = np.zeros((3, 3)), np.zeros((3, dof))
             self.inner, self.dinner, self.Jrel = np.zeros((6, dof)), np.zeros((6, dof)), np.zeros((6, dof))
@@ -179,50 +182,49 @@ class FrameBlock:
         self, qdot: np.ndarray | None, threshold: float, continuous: bool
     ) -> RepresentationSingularityError | None:
         """Fill this block's arrays; returns the RepresentationSingularityError to raise (or None)."""
+        position, chart, m_P, cartesian, rule, singular, selected, write, values, at, dot, out = self.bound
         if self.b is None:
-            C, p, J = self.a.C, self.a.pos, self.a.J
+            a = self.a
+            C, p, J = a.C, a.pos, a.J
         else:
             (C, p), J = self._relative(qdot), self.Jrel
         (c00, c01, c02), (c10, c11, c12), (c20, c21, c22) = C
-        previous, (position, rotation, m_P, cartesian) = self.previous, self.pose_map
+        previous = self.previous
         chi: list[float] = [*p] if cartesian else []  # χ_P = p and E_P = I: never singular
         distances: list[float] = [math.inf] if cartesian else []
         entries: Entries = ()
         if position is not None and not cartesian:
-            before = None if previous is None else previous[:m_P]
-            chi, distance, entries = self._general(0, C, p, before, threshold)
+            chi, distance, entries = self._general(0, C, p, previous and previous[:m_P], threshold)
             distances.append(distance)
-        if rotation is not None:  # the chart gives χ, distance and E at once at a regular canonical χ
-            before = None if previous is None else previous[m_P:]
-            found = rotation.chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
+        if chart is not None:  # the rotation's chart gives χ, distance and E at once at a regular canonical χ
+            found = chart(c00, c01, c02, c10, c11, c12, c20, c21, c22)
             if (
                 found is None
                 or not found[1] >= threshold
-                or (before is not None and self.rule(found[0], before) != found[0])
+                or (previous is not None and rule(found[0], previous[m_P:]) != found[0])
             ):
-                found = self._general(len(self.parts) - 1, C, p, before, threshold)
+                found = self._general(len(self.parts) - 1, C, p, previous and previous[m_P:], threshold)
             else:
-                self.singular[-1] = False
+                singular[-1] = False
             chi += found[0]
             distances.append(found[1])
             entries += found[2]
-        selected = chi
-        if self.selected is not None:  # E's entries into the whole E, then its selected rows into S
+        selected_chi = chi
+        if selected is not None:  # E's entries into the whole E, then its selected rows into S
             self.write_E(self.E_all, self.E_offset, *entries)
-            np.take(self.E_all, self.selected, axis=0, out=self.E)
-            entries, selected = (), [chi[i] for i in self.selected]
+            np.take(self.E_all, selected, axis=0, out=self.E)
+            entries, selected_chi = (), [chi[i] for i in selected]
         px, py, pz = p
-        self.write(
-            self.values,  # type: ignore[arg-type]  # a buffer; numpy declares __buffer__ for Python >= 3.12 only
-            self.write_at,
-            *entries, *selected, *distances, c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz,
+        write(
+            values, at, *entries, *selected_chi, *distances,  # type: ignore[arg-type]  # a buffer (numpy: 3.12+)
+            c00, c01, c02, px, c10, c11, c12, py, c20, c21, c22, pz,
         )  # fmt: skip
-        self.S.dot(J, self.out)  # [J; J_A] = [I; E]·J
+        dot(J, out)  # [J; J_A] = [I; E]·J
         if continuous:
             self.previous = chi
         if qdot is not None:
             self._rates(qdot, chi)
-        if True not in self.singular:
+        if True not in singular:
             return None
         k = self.singular.index(True)
         return singularity_error(

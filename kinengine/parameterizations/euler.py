@@ -73,24 +73,31 @@ class EulerAngles(RotationParameterization):
             self.singular_set = f"χ2 = ±π/2, cos χ2 = 0 (gimbal lock: axes {seq[0]} and {seq[2]} aligned)"
             self.alternatives = ("quaternion", f"euler_{seq[0]}{seq[1]}{seq[0]}", "rotation_matrix")
 
-    def _leading(self, xp: Namespace, C: Values) -> tuple[Component, Component, Component]:
-        """(χ1, χ2, locked) off C's row-major entries by atan2; ``locked``: χ2 within GIMBAL_LOCK_TOLERANCE
-        of gimbal lock, where χ1 alone is not defined."""
-        ab, at, aa, ba, ta, bt, tt, _, _ = self._index
-        eps = self._eps
-        # proper: C[a][a] = c2, C[a][b] = s2 s3, C[a][t] = ε s2 c3, C[b][a] = s1 s2, C[t][a] = −ε c1 s2
-        if self._proper:
+    def _angles(self, xp: Namespace, C: Values) -> tuple[Component, ...]:
+        """(χ1, χ2, χ3, locked, cos χ1, sin χ1) off C's row-major entries by atan2. ``locked``: χ2 within
+        GIMBAL_LOCK_TOLERANCE of gimbal lock, where χ1 alone is not defined: χ1 then from C = R_a(χ1) R_b(χ2),
+        whose column b is R_a(χ1) e_b = c1 e_b + ε s1 e_t (the caller sets χ3 = 0). χ3 from row b of
+        R_a(χ1)^T C = R_b(χ2) R_c(χ3) (as Eigen's eulerAngles): near gimbal lock χ1 is ill-conditioned, but
+        then χ3 compensates and χ -> C stays accurate."""
+        ab, at, aa, ba, ta, bt, tt, tb, bb = self._index
+        e, proper = self._eps, self._proper
+        if proper:  # C[a][a] = c2, C[a][b] = s2 s3, C[a][t] = ε s2 c3, C[b][a] = s1 s2, C[t][a] = −ε c1 s2
             chi2 = xp.atan2(xp.hypot(C[ab], C[at]), C[aa])
             locked = (abs(chi2) <= GIMBAL_LOCK_TOLERANCE) | (abs(chi2 - math.pi) <= GIMBAL_LOCK_TOLERANCE)
-            return xp.atan2(C[ba], -eps * C[ta]), chi2, locked
-        # C[a][t] = ε s2, C[b][t] = −ε s1 c2, C[t][t] = c1 c2
-        chi2 = xp.atan2(eps * C[at], xp.hypot(C[bt], C[tt]))
-        locked = abs(abs(chi2) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE
-        return xp.atan2(-eps * C[bt], C[tt]), chi2, locked
+            chi1 = xp.atan2(C[ba], -e * C[ta])
+        else:  # C[a][t] = ε s2, C[b][t] = −ε s1 c2, C[t][t] = c1 c2
+            chi2 = xp.atan2(e * C[at], xp.hypot(C[bt], C[tt]))
+            locked = abs(abs(chi2) - 0.5 * math.pi) <= GIMBAL_LOCK_TOLERANCE
+            chi1 = xp.atan2(-e * C[bt], C[tt])
+        if xp is not math or locked:
+            chi1 = where(xp, locked, xp.atan2(e * C[tb], C[bb]), chi1)
+        c1, s1 = xp.cos(chi1), xp.sin(chi1)
+        # row b of R_b(χ2) R_a(χ3) = (−ε s3 on t, c3 on b) (proper), of R_b(χ2) R_t(χ3) = (ε s3 on a, c3 on b)
+        y3 = -e * c1 * C[bt] - s1 * C[tt] if proper else e * c1 * C[ba] + s1 * C[ta]
+        return chi1, chi2, xp.atan2(y3, c1 * C[bb] + e * s1 * C[tb]), locked, c1, s1
 
     def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
-        tb, bb = self._index[7:]
-        chi1, chi2, locked = self._leading(xp, C)
+        chi1, chi2, chi3, locked, _, _ = self._angles(xp, C)
         if warn:
             warn_where(
                 xp,
@@ -98,32 +105,16 @@ class EulerAngles(RotationParameterization):
                 f"{self.name}: gimbal lock detected. Setting third angle to zero "
                 "since it is not possible to uniquely determine all angles.",
             )
-        # locked: χ3 = 0, C = R_a(χ1) R_b(χ2), whose column b is R_a(χ1) e_b = c1 e_b + ε s1 e_t
-        chi1 = where(xp, locked, xp.atan2(self._eps * C[tb], C[bb]), chi1)
-        chi3 = self._third(xp, xp.cos(chi1), xp.sin(chi1), C)
         return chi1, chi2, where(xp, locked, 0.0, chi3)
-
-    def _third(self, xp: Namespace, c1: Component, s1: Component, C: Values) -> Component:
-        """χ3 from row b of R_a(χ1)^T C = R_b(χ2) R_c(χ3), c1, s1 of the χ1 chosen (as Eigen's eulerAngles):
-        near gimbal lock χ1 is ill-conditioned, but then χ3 compensates and χ -> C stays accurate."""
-        _, _, _, ba, ta, bt, tt, tb, bb = self._index
-        eps = self._eps
-        if self._proper:  # row b of R_b(χ2) R_a(χ3) = (−ε s3 on t, c3 on b)
-            return xp.atan2(-eps * c1 * C[bt] - s1 * C[tt], c1 * C[bb] + eps * s1 * C[tb])
-        # row b of R_b(χ2) R_t(χ3) = (ε s3 on a, c3 on b)
-        return xp.atan2(eps * c1 * C[ba] + s1 * C[ta], c1 * C[bb] + eps * s1 * C[tb])
 
     def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
         # _from_rotation, _distance and _E with cos and sin of χ1 and χ2 computed once
-        chi1, chi2, locked = self._leading(math, C)
-        if locked:
-            return None
-        c1, s1, c2, s2 = math.cos(chi1), math.sin(chi1), math.cos(chi2), math.sin(chi2)
+        chi1, chi2, chi3, locked, c1, s1 = self._angles(math, C)
+        c2, s2 = math.cos(chi2), math.sin(chi2)
         distance = abs(s2) if self._proper else abs(c2)
-        if distance == 0.0:
+        if locked or distance == 0.0:
             return None
-        chi = [chi1, chi2, self._third(math, c1, s1, C)]
-        return chi, distance, self._rate_entries(c1, s1, c2, s2)
+        return [chi1, chi2, chi3], distance, self._rate_entries(c1, s1, c2, s2)
 
     def _to_rotation(self, xp: Namespace, chi1: Component, chi2: Component, chi3: Component) -> Entries:
         R1, R2, R3 = (  # the rotation by χk about the basis axis k: I + sin χk [e]x + (1 − cos χk) [e]x²

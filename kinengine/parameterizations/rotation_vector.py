@@ -86,7 +86,7 @@ def _log_by_quaternion(xp: Namespace, *C: Component) -> Entries:
     return scale * x, scale * y, scale * z
 
 
-def _log(xp: Namespace, *C: Component) -> Entries:
+def _log(xp: Namespace, C: Values) -> Entries:
     """φ of C's 9 entries: with w = vee(C − Cᵀ) = 2 sin θ n and cos θ = (tr C − 1)/2, θ = atan2(|w|/2, cos θ)
     and φ = (θ/|w|) w (→ w/2 as θ → 0); where cos θ < NEAR_PI_COS, the quaternion route (in a batch only for
     those samples: the batched IK's log, where C is mostly near I)."""
@@ -118,11 +118,11 @@ class RotationVector(RotationParameterization):
     alternatives: tuple[str, ...] = ("quaternion", "rotation_matrix")
 
     def _from_rotation(self, xp: Namespace, warn: bool, *C: Component) -> Entries:
-        return _log(xp, *C)
+        return _log(xp, C)
 
     def chart(self, *C: float) -> tuple[list[float], float, Entries] | None:
         # _from_rotation keeps θ <= π (+ rounding): _distance's nearest 2πk is 2π, so the distance is 2π − θ
-        x, y, z = _log(math, *C)
+        x, y, z = _log(math, C)
         t = x * x + y * y + z * z
         return [x, y, z], _TWO_PI - math.sqrt(t), _inverse_left_jacobian(math, t, x, y, z)
 
