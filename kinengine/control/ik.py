@@ -7,18 +7,12 @@ With ``rows=`` or ``weights=`` both halves are expressed in the target frame D (
 blockwise) and only the named rows count: rows=("x", "y", "z", "rx", "ry") is a 5-D target, position plus
 tool axis (D's z axis): rotation about it is left free. ``weights`` (w ≥ 0, one per kept row) minimize
 Σ w_i e_i² instead of |e|²; a full pose minimizes |e_p|² + (ρ|e_R|)², ρ = 0.2 m/rad.
-Step (:mod:`.ik_step`): Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e plus a pull towards ``nullspace_target`` in the
-nullspace of J, with Sugihara's damping λ² = 0.1·|S e|² + λ_min² (strong far from the target or near a
-singularity, Gauss–Newton speed close to it) and Chan & Dubey's joint-limit weights W; every iterate is
-clipped into the limits.
-Seeds, in order, one attempt each of at most ``max_iterations`` iterations (:func:`.ik_step.gives_way`:
-one that stalls or is still far makes way for the next seed; any, the last too, ends when stuck): ``q0``
-if given (its attempt never gives way early), else the ``NEAREST_SEEDS`` table configurations whose frame
-poses are nearest the target (:mod:`.ik_seeds`) and the middle of the joint ranges (or
-``nullspace_target``); then ``restarts`` uniformly random ones from ``rng``.
-One frame and several at once (a mapping {frame: T_IF}, errors and Jacobians stacked, :mod:`.ik_multi`)
-run one attempt loop, :func:`.ik_solver.solve`; a batch of targets (N, 4, 4) runs the same algorithm
-vectorized, :mod:`kinengine.control.ik_batch`.
+Step, damping, joint-limit weights, nullspace pull and give-way rule: :mod:`.ik_step`. Seeds, one attempt
+each of at most ``max_iterations`` iterations: ``q0`` if given (its attempt never gives way early), else
+the ``NEAREST_SEEDS`` stored configurations whose frame poses are nearest the target (:mod:`.ik_seeds`) and
+the middle of the joint ranges (or ``nullspace_target``); then ``restarts`` random ones from ``rng``.
+One frame or several (a mapping {frame: T_IF}, :mod:`.ik_multi`) run one attempt loop,
+:func:`.ik_solver.solve`; a batch (N, 4, 4) runs the same algorithm vectorized, :mod:`.ik_batch`.
 """
 
 from __future__ import annotations
@@ -105,40 +99,41 @@ def inverse_kinematics(
         goals = checked_goals(robot, target, rows, weights, options)
         start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=False)
         return solve(robot, goals, frame_seeds(robot, goals, start), generator, several=True)
-    batch = position is None and rotation is None and not isinstance(target, str) and np.ndim(target) == 3
     problem = checked_problem(robot, frame, rows, weights, options)
-    if problem.rows is not None and (position is not None or rotation is not None):
+    parameters = position is not None or rotation is not None
+    if problem.rows is not None and parameters:
         raise OptionError(
             "`rows=` and `weights=` apply to pose targets (4, 4) or (N, 4, 4); for parameters χ "
             "name only the parameterizations you need"
         )
-    start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=batch)
+
+    def numeric(T: npt.ArrayLike, q0: object) -> IKResult | IKBatchResult:
+        """The numeric solver on the checked problem: a batch (N, 4, 4) vectorized, else one target."""
+        batch = None if parameters else batch_targets(T)  # (N, 3), (N, 3, 3)
+        start = (
+            None
+            if q0 is None
+            else robot.engine.coordinates.check(q0, name="q0", allow_batch=batch is not None)
+        )
+        if batch is None:
+            goals = [FrameGoal(problem, *single_target(T, position, rotation))]
+            return solve(robot, goals, frame_seeds(robot, goals, start), generator)
+        from .ik_batch import solve_batch
+
+        if start is not None and start.ndim == 2 and len(start) != len(batch[0]):
+            raise OptionError(
+                f"`q0` must be (dof,) or one row per target ({len(batch[0])}), got {len(start)} rows"
+            )
+        return solve_batch(robot, problem, *batch, start, generator)
+
     if method != "numeric":
         from .ik_dispatch import closed_form_or_none
 
-        def numeric(T: npt.ArrayLike, start: object) -> IKResult | IKBatchResult:
-            return inverse_kinematics(
-                robot, T, frame, start, tol_position=tol_position, tol_rotation=tol_rotation,
-                max_iterations=max_iterations, restarts=restarts, rng=rng, min_damping=min_damping,
-                method="numeric",
-            )  # fmt: skip
-
-        plain = position is None and rotation is None and rows is None and weights is None
-        plain = plain and nullspace_target is None
+        plain = not parameters and problem.rows is None and nullspace_target is None
         solved = closed_form_or_none(robot, target, frame, q0, method, plain, numeric)
         if solved is not None:
             return solved
-    if batch:
-        from .ik_batch import solve_batch
-
-        P_d, Cs_d = batch_targets(target)  # (N, 3), (N, 3, 3)
-        if start is not None and start.ndim == 2 and len(start) != len(P_d):
-            raise OptionError(
-                f"`q0` must be (dof,) or one row per target ({len(P_d)}), got {len(start)} rows"
-            )
-        return solve_batch(robot, problem, P_d, Cs_d, start, generator)
-    goals = [FrameGoal(problem, *single_target(target, position, rotation))]
-    return solve(robot, goals, frame_seeds(robot, goals, start), generator)
+    return numeric(target, q0)
 
 
 __all__ = ["NEAREST_SEEDS", "SEED_TABLES", "SEED_TABLE_BYTES", "IKResult", "inverse_kinematics"]

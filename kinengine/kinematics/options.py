@@ -28,6 +28,26 @@ def checked_nonnegative(value: object, name: str) -> float:
     return number
 
 
+def number_option(
+    what: str, value: object, low: float = 0.0, high: float = math.inf, open_low: bool = False
+) -> float:
+    """A finite real number in [low, high] ((low, high] with open_low), else OptionError naming ``what``."""
+    if type(value) is float:  # the common case, checked cheaply
+        x = value
+        if (x > low if open_low else x >= low) and x <= high and x - x == 0.0:  # in range and finite
+            return x
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise OptionError(f"{what} must be a number, got {_short(value)}")
+    try:
+        x = float(value)
+    except (OverflowError, TypeError, ValueError):  # e.g. an int beyond float range
+        x = math.nan
+    if not (math.isfinite(x) and (x > low if open_low else x >= low) and x <= high):
+        bound = f"({low:g}, {high:g}]" if open_low else f"[{low:g}, {high:g}]"
+        raise OptionError(f"{what} must be a finite number in {bound}, got {_short(value)}")
+    return x
+
+
 def checked_threshold(value: object) -> float:
     """A valid ``singularity_threshold`` [distance to the parameterization's singular set]: NaN or a negative
     value would switch the singularity check off."""
@@ -113,4 +133,5 @@ __all__ = [
     "checked_rng",
     "checked_threshold",
     "checked_tolerance",
+    "number_option",
 ]
