@@ -364,7 +364,7 @@ def test_q0_rows_must_match_the_targets(abb):
     T = abb.frame_pose(abb.random_configuration(rng=1, size=3))
     with pytest.raises(kinengine.OptionError, match=r"`q0` must be \(dof,\) or one row per target \(3\)"):
         abb.inverse_kinematics(T, q0=np.zeros((2, 6)))
-    with pytest.raises(kinengine.OptionError, match=r"`q_near` must be \(dof,\) or one row per pose \(3\)"):
+    with pytest.raises(kinengine.OptionError, match=r"`q_near` must be \(dof,\) or one row per target \(3\)"):
         abb.ik_solutions(T, q_near=np.zeros((2, 6)))
 
 

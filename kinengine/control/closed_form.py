@@ -28,11 +28,11 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..errors import KinematicsError, OptionError
+from ..errors import KinematicsError
 from ..kinematics.compiler import compiled_chain
 from .ik_candidates import candidates_to_solutions, shared_by_poses
 from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined
-from .ik_target import checked_pose, checked_poses, exact_pose, is_batch
+from .ik_target import checked_pose, checked_poses, checked_start, exact_pose, is_batch
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .robot_like import RobotLike
@@ -224,14 +224,7 @@ def ik_solutions(
     poses = exact_pose(*(checked_poses(T) if is_batch(T) else checked_pose(T)))
     single = poses.ndim == 2
     poses = poses[None] if single else poses
-    coords = robot.engine.coordinates
-    near = None
-    if q_near is not None:
-        near = coords.check(q_near, name="q_near", allow_batch=not single)
-        if near.ndim == 2 and len(near) != len(poses):
-            raise OptionError(
-                f"`q_near` must be (dof,) or one row per pose ({len(poses)}), got {len(near)} rows"
-            )
+    near = checked_start(robot, q_near, "q_near", None if single else len(poses))
     reference = chain.neutral if near is None else near
     if single:  # the solver's answer object as it comes: no batch gathering
         answer = chain.solve_one(poses[0])

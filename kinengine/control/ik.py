@@ -7,12 +7,9 @@ With ``rows=`` or ``weights=`` both halves are expressed in the target frame D (
 blockwise) and only the named rows count: rows=("x", "y", "z", "rx", "ry") is a 5-D target, position plus
 tool axis (D's z axis): rotation about it is left free. ``weights`` (w ≥ 0, one per kept row) minimize
 Σ w_i e_i² instead of |e|²; a full pose minimizes |e_p|² + (ρ|e_R|)², ρ = 0.2 m/rad.
-Step, damping, joint-limit weights, nullspace pull and give-way rule: :mod:`.ik_step`. Seeds, one attempt
-each of at most ``max_iterations`` iterations: ``q0`` if given (its attempt never gives way early), else
-the ``NEAREST_SEEDS`` stored configurations whose frame poses are nearest the target (:mod:`.ik_seeds`) and
-the middle of the joint ranges (or ``nullspace_target``); then ``restarts`` random ones from ``rng``.
-One frame or several (a mapping {frame: T_IF}, :mod:`.ik_multi`) run one attempt loop,
-:func:`.ik_solver.solve`; a batch (N, 4, 4) runs the same algorithm vectorized, :mod:`.ik_batch`.
+Step, damping, limit weights, nullspace pull and give-way rule: :mod:`.ik_step`; seeds (``q0``, the
+stored configurations nearest the target, the middle of the ranges, then ``restarts`` random ones):
+:mod:`.ik_seeds`; the attempt loop of one frame or several: :mod:`.ik_solver`; batches: :mod:`.ik_batch`.
 """
 
 from __future__ import annotations
@@ -24,10 +21,10 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import OptionError
+from . import ik_target
 from .ik_multi import checked_goals
 from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, frame_seeds
 from .ik_solver import IKResult, solve
-from .ik_target import FrameGoal, Options, RandomSource, batch_targets, checked_problem, single_target
 
 if TYPE_CHECKING:  # named for the checker only
     from .ik_batch import IKBatchResult
@@ -65,16 +62,14 @@ def inverse_kinematics(
     ``nullspace_target`` (dof,): preferred q, pursued with ``nullspace_gain`` [1/iteration] where the
     task leaves freedom. ``min_damping``: λ_min [1]. Every option is validated (OptionError).
 
-    Several frames at once: ``target`` a mapping {frame: T_IF (4, 4)} (``frame`` None); ``rows`` and
-    ``weights`` one spec for every frame or a mapping {frame: spec} (missing frames: all six rows, weight
-    1). Success when every frame is within the tolerances; the result's position_error / rotation_error
-    are the maxima over the frames, ``frame_errors`` each frame's (:mod:`kinengine.control.ik_multi`).
+    Several frames at once: ``target`` a mapping {frame: T_IF (4, 4)} (``frame`` None), ``rows`` and
+    ``weights`` one spec for all or a mapping {frame: spec}; see :mod:`kinengine.control.ik_multi`.
 
     ``method``: "numeric" this solver; "closed_form" the solution nearest ``q0`` (default: the middle of
     the ranges) among every closed-form one (:mod:`kinengine.control.ik_dispatch`); "auto" the closed form
     for a pose target of a chain that has one (and the ``ik`` extra installed), else this solver.
     """
-    options = Options(
+    options = ik_target.Options(
         tol_position,
         tol_rotation,
         max_iterations,
@@ -84,7 +79,7 @@ def inverse_kinematics(
         min_damping,
         q0 is not None,
     )
-    generator = RandomSource(rng)
+    generator = ik_target.RandomSource(rng)
     if isinstance(target, Mapping):
         if frame is not None or position is not None or rotation is not None:
             raise OptionError(
@@ -97,9 +92,9 @@ def inverse_kinematics(
                 "{frame: pose} is solved by method='numeric' (or 'auto')"
             )
         goals = checked_goals(robot, target, rows, weights, options)
-        start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=False)
+        start = ik_target.checked_start(robot, q0, "q0", None)
         return solve(robot, goals, frame_seeds(robot, goals, start), generator, several=True)
-    problem = checked_problem(robot, frame, rows, weights, options)
+    problem = ik_target.checked_problem(robot, frame, rows, weights, options)
     parameters = position is not None or rotation is not None
     if problem.rows is not None and parameters:
         raise OptionError(
@@ -109,21 +104,13 @@ def inverse_kinematics(
 
     def numeric(T: npt.ArrayLike, q0: object) -> IKResult | IKBatchResult:
         """The numeric solver on the checked problem: a batch (N, 4, 4) vectorized, else one target."""
-        batch = None if parameters else batch_targets(T)  # (N, 3), (N, 3, 3)
-        start = (
-            None
-            if q0 is None
-            else robot.engine.coordinates.check(q0, name="q0", allow_batch=batch is not None)
-        )
+        batch = None if parameters else ik_target.batch_targets(T)  # (N, 3), (N, 3, 3)
+        start = ik_target.checked_start(robot, q0, "q0", None if batch is None else len(batch[0]))
         if batch is None:
-            goals = [FrameGoal(problem, *single_target(T, position, rotation))]
+            goals = [ik_target.FrameGoal(problem, *ik_target.single_target(T, position, rotation))]
             return solve(robot, goals, frame_seeds(robot, goals, start), generator)
         from .ik_batch import solve_batch
 
-        if start is not None and start.ndim == 2 and len(start) != len(batch[0]):
-            raise OptionError(
-                f"`q0` must be (dof,) or one row per target ({len(batch[0])}), got {len(start)} rows"
-            )
         return solve_batch(robot, problem, *batch, start, generator)
 
     if method != "numeric":

@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import OptionError, ParameterizationError
-from ..kinematics.options import number_option
+from ..kinematics.options import checked_seed, number_option
 from ..parameterizations import get_position, get_rotation
 
 if TYPE_CHECKING:  # named for the checker only
@@ -134,20 +135,25 @@ class RandomSource:
     costs more than a converged solve)."""
 
     def __init__(self, rng: object) -> None:
-        ok = (
-            rng is None
-            or isinstance(rng, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence))
-            or (not isinstance(rng, bool) and isinstance(rng, (int, np.integer)) and rng >= 0)
-        )
-        if not ok:
-            raise OptionError(f"`rng` must be None, a seed >= 0 or a numpy Generator, got {rng!r}")
-        self.rng = rng
-        self.generator: np.random.Generator | None = None
+        self.rng = checked_seed(rng)
+
+    @cached_property
+    def generator(self) -> np.random.Generator:
+        return np.random.default_rng(self.rng)  # type: ignore[arg-type]  # checked in __init__
 
     def configurations(self, robot: RobotLike, size: int | None = None) -> np.ndarray:
-        if self.generator is None:
-            self.generator = np.random.default_rng(self.rng)  # type: ignore[arg-type]  # checked in __init__
         return robot.random_configuration(self.generator, size=size)
+
+
+def checked_start(robot: RobotLike, q0: object, name: str, count: int | None) -> np.ndarray | None:
+    """``q0`` None, (dof,) or, for ``count`` targets (None: one), one row per target (count, dof), checked
+    (ConfigurationError, OptionError naming ``name``)."""
+    if q0 is None:
+        return None
+    q = robot.engine.coordinates.check(q0, name=name, allow_batch=count is not None)
+    if q.ndim == 2 and len(q) != count:
+        raise OptionError(f"`{name}` must be (dof,) or one row per target ({count}), got {len(q)} rows")
+    return q
 
 
 def rotation_deviation(
@@ -332,6 +338,7 @@ __all__ = [
     "checked_pose",
     "checked_poses",
     "checked_problem",
+    "checked_start",
     "exact_pose",
     "is_batch",
     "rotation_deviation",

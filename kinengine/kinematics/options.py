@@ -80,16 +80,22 @@ def checked_frames(frames: object, kinds: tuple[type, ...]) -> None:
             )
 
 
-def checked_rng(rng: object) -> np.random.Generator:
-    """A numpy Generator from ``rng`` (None: fresh entropy; an int >= 0: a seed; a Generator: itself)."""
-    if rng is None or isinstance(rng, np.random.Generator):
-        return np.random.default_rng(rng)
+def checked_seed(rng: object) -> object:
+    """``rng`` as numpy's ``default_rng`` takes it: None (fresh entropy), a seed (a whole number >= 0), a
+    Generator, BitGenerator or SeedSequence; OptionError otherwise."""
+    if rng is None or isinstance(rng, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence)):
+        return rng
     if isinstance(rng, (bool, np.bool_)) or not isinstance(rng, numbers.Integral) or rng < 0:
         raise OptionError(
             f"rng must be None, a seed (a whole number >= 0) or a numpy.random.Generator, got "
             f"{type(rng).__name__} {_short(rng)}"
         )
-    return np.random.default_rng(int(rng))
+    return int(rng)
+
+
+def checked_rng(rng: object) -> np.random.Generator:
+    """A numpy Generator from ``rng`` (:func:`checked_seed`; a Generator: itself)."""
+    return np.random.default_rng(checked_seed(rng))  # type: ignore[arg-type]
 
 
 def checked_parameterization(position: object, rotation: object, rows: object) -> tuple:
@@ -131,6 +137,7 @@ __all__ = [
     "checked_nonnegative",
     "checked_parameterization",
     "checked_rng",
+    "checked_seed",
     "checked_threshold",
     "checked_tolerance",
     "number_option",
