@@ -220,9 +220,8 @@ def _within_reach(distance: float) -> None:
 
 
 def checked_pose(target: object) -> tuple[np.ndarray, float]:
-    """(T (4, 4) float64, max |CᵀC − I| of its rotation block): a pose target checked (finite, rotation
-    block a rotation to ``ROTATION_TOLERANCE``, bottom row (0, 0, 0, 1), position within reach);
-    ParameterizationError naming what is wrong."""
+    """(T (4, 4) float64, max |CᵀC − I| of its rotation block): a pose target checked as :func:`checked_poses`
+    checks each of a batch, accepted in plain floats (cheaper than numpy for one pose)."""
     value = _real(target, "a (4, 4) pose or parameters χ")
     if value.shape != (4, 4):
         raise ParameterizationError(
@@ -230,21 +229,15 @@ def checked_pose(target: object) -> tuple[np.ndarray, float]:
             f"{value.shape}; for parameters χ name their position= and/or rotation= parameterization"
         )
     flat = value.ravel().tolist()
-    if not all(map(math.isfinite, flat)):
-        raise ParameterizationError("`target` holds NaN or inf: a pose T_IF (4, 4) has finite entries")
     a, b, c, x, d, e, f, y, g, h, i, z = flat[:12]
-    deviation = rotation_deviation(a, b, c, d, e, f, g, h, i)
-    if not deviation <= ROTATION_TOLERANCE:
-        raise ParameterizationError(
-            "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
-        )
-    if not all(abs(v - w) <= 1e-9 for v, w in zip(flat[12:], _BOTTOM, strict=True)):
-        raise ParameterizationError(
-            f"`target`'s bottom row is {flat[12:]}, expected [0, 0, 0, 1]: a pose T_IF (4, 4) is a "
-            "homogeneous transform"
-        )
-    _within_reach(max(abs(x), abs(y), abs(z)))
-    return value, deviation
+    if (
+        all(map(math.isfinite, flat))
+        and (deviation := rotation_deviation(a, b, c, d, e, f, g, h, i)) <= ROTATION_TOLERANCE
+        and all(abs(v - w) <= 1e-9 for v, w in zip(flat[12:], _BOTTOM, strict=True))
+        and max(abs(x), abs(y), abs(z)) <= MAX_TARGET_DISTANCE
+    ):
+        return value, deviation
+    return value, float(checked_poses(value[None], single=True)[1][0])  # raises, naming what is wrong
 
 
 def single_target(
@@ -285,32 +278,34 @@ def single_target(
     return p_d, C_d
 
 
-def checked_poses(target: object) -> tuple[np.ndarray, np.ndarray]:
-    """(T (N, 4, 4) float64, deviation (N,) = max |CᵀC − I| per rotation block): a batch of pose targets,
-    every one checked as :func:`checked_pose` checks one; ParameterizationError naming the first bad pose."""
+def checked_poses(target: object, single: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """(T (N, 4, 4) float64, deviation (N,) = max |CᵀC − I| per rotation block): a batch of pose targets
+    checked (finite, rotation blocks rotations to ``ROTATION_TOLERANCE``, bottom rows (0, 0, 0, 1), positions
+    within reach); ParameterizationError naming the first bad pose (``single``: the one pose, (1, 4, 4))."""
     value = _real(target, "a batch of poses (N, 4, 4)")
     if value.ndim != 3 or value.shape[1:] != (4, 4) or not len(value):
         raise ParameterizationError(
             f"Expected `target` to be a finite batch of poses (N >= 1, 4, 4), got {value.shape}"
         )
+    name = "`target`" if single else "`target`[{}]"  # the first bad pose
     not_finite = np.flatnonzero(~np.isfinite(value).all(axis=(1, 2)))
     if len(not_finite):
+        count = "" if single else f" ({len(not_finite)} of {len(value)} poses)"
         raise ParameterizationError(
-            f"`target`[{not_finite[0]}] holds NaN or inf ({len(not_finite)} of {len(value)} poses): a pose "
-            "T_IF (4, 4) has finite entries"
+            f"{name.format(not_finite[0])} holds NaN or inf{count}: a pose T_IF (4, 4) has finite entries"
         )
     C = value[:, :3, :3]
     deviation = np.abs(np.einsum("nki,nkj->nij", C, C) - np.eye(3)).max(axis=(1, 2))
     bad = np.flatnonzero((deviation > ROTATION_TOLERANCE) | (np.linalg.det(C) <= 0))
     if len(bad):
         raise ParameterizationError(
-            f"`target`[{bad[0]}]'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+            f"{name.format(bad[0])}'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
         )
     bottom = np.flatnonzero(np.abs(value[:, 3, :] - _BOTTOM).max(axis=1) > 1e-9)
     if len(bottom):
         raise ParameterizationError(
-            f"`target`[{bottom[0]}]'s bottom row is {value[bottom[0], 3].tolist()}, expected [0, 0, 0, 1]: "
-            "a pose T_IF (4, 4) is a homogeneous transform"
+            f"{name.format(bottom[0])}'s bottom row is {value[bottom[0], 3].tolist()}, expected "
+            "[0, 0, 0, 1]: a pose T_IF (4, 4) is a homogeneous transform"
         )
     _within_reach(float(np.abs(value[:, :3, 3]).max()))
     return value, deviation
