@@ -86,10 +86,10 @@ def inverse_kinematics(
                 "a mapping {frame: pose} names its frames and takes poses (4, 4): leave `frame`, "
                 "`position` and `rotation` None (or pass one pose with frame=...)"
             )
-        if method == "closed_form":
+        if method not in ("auto", "numeric"):
             raise OptionError(
-                "method='closed_form' solves pose targets (4, 4) or (N, 4, 4) of one frame; a mapping "
-                "{frame: pose} is solved by method='numeric' (or 'auto')"
+                f"method={method!r} does not solve a mapping {{frame: pose}} (closed forms solve poses "
+                "(4, 4) or (N, 4, 4) of one frame); use method='numeric' or 'auto'"
             )
         goals = checked_goals(robot, target, rows, weights, options)
         start = ik_target.checked_start(robot, q0, "q0", None)
