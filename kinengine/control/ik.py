@@ -70,15 +70,9 @@ def inverse_kinematics(
     for a pose target of a chain that has one (and the ``ik`` extra installed), else this solver.
     """
     options = ik_target.Options(
-        tol_position,
-        tol_rotation,
-        max_iterations,
-        restarts,
-        nullspace_target,
-        nullspace_gain,
-        min_damping,
+        tol_position, tol_rotation, max_iterations, restarts, nullspace_target, nullspace_gain, min_damping,
         q0 is not None,
-    )
+    )  # fmt: skip
     generator = ik_target.RandomSource(rng)
     if isinstance(target, Mapping):
         if frame is not None or position is not None or rotation is not None:

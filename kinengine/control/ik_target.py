@@ -96,9 +96,7 @@ def checked_problem(
     restarts = _count("restarts", o.restarts, 10_000)
     gain = number_option("`nullspace_gain`", o.nullspace_gain, 0.0, 1.0)
     damping = number_option("`min_damping`", o.min_damping, 0.0, 1e6)
-    q_ns = o.nullspace_target
-    if q_ns is not None:
-        q_ns = robot.engine.coordinates.check(q_ns, name="nullspace_target", allow_batch=False)
+    q_ns = checked_start(robot, o.nullspace_target, "nullspace_target", None)
     kept, sqrt_w = None, None
     if rows is not None or weights is not None:
         kept = np.arange(6) if rows is None else _rows(rows)
@@ -174,10 +172,9 @@ def rotation_deviation(
 
 
 def exact_pose(T: np.ndarray, deviation: float | np.ndarray) -> np.ndarray:
-    """A checked pose T (4, 4) or (N, 4, 4) with its ``deviation`` (from :func:`checked_pose` /
-    :func:`checked_poses`), C-contiguous float64: T itself when every rotation block is a rotation to
-    ``ROTATION_EXACT``, else a copy with the others replaced by their nearest rotations U·Vᵀ (C = U S Vᵀ):
-    a float32 or rounded target is solved for the rotation it stands for, reproduced to 1e-9."""
+    """Checked T (4, 4) or (N, 4, 4) and ``deviation`` (:func:`checked_pose`, :func:`checked_poses`) -> T
+    C-contiguous, rotation blocks off by more than ``ROTATION_EXACT`` (a float32 or rounded target) replaced
+    in a copy by their nearest rotations U·Vᵀ (C = U S Vᵀ), which answers then reproduce to 1e-9."""
     fix = deviation > ROTATION_EXACT
     if not (fix.any() if isinstance(fix, np.ndarray) else fix):
         return T if T.flags.c_contiguous else np.ascontiguousarray(T)
@@ -188,8 +185,7 @@ def exact_pose(T: np.ndarray, deviation: float | np.ndarray) -> np.ndarray:
 
 
 def is_batch(target: object) -> bool:
-    """Whether ``target`` has three dimensions (a batch of poses); False for what is no array (a ragged
-    nesting), which the single target's check then refuses by name."""
+    """Whether ``target`` is a batch (three-dimensional); False for a ragged nesting (refused later)."""
     try:
         return np.ndim(target) == 3  # type: ignore[arg-type]
     except (TypeError, ValueError):
