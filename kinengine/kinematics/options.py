@@ -15,17 +15,7 @@ from ..errors import OptionError, ParameterizationError
 
 def checked_nonnegative(value: object, name: str) -> float:
     """``value`` as a float if it is a finite real number >= 0; OptionError otherwise."""
-    if type(value) is float and 0.0 <= value < math.inf:
-        return value
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise OptionError(f"{name} must be a real number >= 0, got {type(value).__name__} {_short(value)}")
-    try:
-        number = float(value)
-    except (OverflowError, TypeError, ValueError):
-        raise OptionError(f"{name} must be a finite real number >= 0, got {_short(value)}") from None
-    if not 0.0 <= number < math.inf:
-        raise OptionError(f"{name} must be a finite real number >= 0, got {number!r}")
-    return number
+    return number_option(name, value)
 
 
 def number_option(
@@ -36,15 +26,18 @@ def number_option(
         x = value
         if (x > low if open_low else x >= low) and x <= high and x - x == 0.0:  # in range and finite
             return x
+    if high == math.inf and not open_low:
+        bound = f">= {low:g}"
+    else:
+        bound = f"in ({low:g}, {high:g}]" if open_low else f"in [{low:g}, {high:g}]"
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise OptionError(f"{what} must be a number, got {_short(value)}")
+        raise OptionError(f"{what} must be a real number {bound}, got {type(value).__name__} {_short(value)}")
     try:
         x = float(value)
     except (OverflowError, TypeError, ValueError):  # e.g. an int beyond float range
         x = math.nan
     if not (math.isfinite(x) and (x > low if open_low else x >= low) and x <= high):
-        bound = f"({low:g}, {high:g}]" if open_low else f"[{low:g}, {high:g}]"
-        raise OptionError(f"{what} must be a finite number in {bound}, got {_short(value)}")
+        raise OptionError(f"{what} must be a finite real number {bound}, got {_short(value)}")
     return x
 
 
