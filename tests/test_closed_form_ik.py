@@ -364,7 +364,7 @@ def test_q0_rows_must_match_the_targets(abb):
     T = abb.frame_pose(abb.random_configuration(rng=1, size=3))
     with pytest.raises(kinengine.OptionError, match=r"`q0` must be \(dof,\) or one row per target \(3\)"):
         abb.inverse_kinematics(T, q0=np.zeros((2, 6)))
-    with pytest.raises(kinengine.OptionError, match=r"`q_near` must be \(dof,\) or one row per pose \(3\)"):
+    with pytest.raises(kinengine.OptionError, match=r"`q_near` must be \(dof,\) or one row per target \(3\)"):
         abb.ik_solutions(T, q_near=np.zeros((2, 6)))
 
 
@@ -384,8 +384,9 @@ def test_a_large_batch_is_solved_in_chunks_with_the_same_answer(abb, monkeypatch
 
 def test_closed_form_refuses_a_mapping_and_measures_the_errors_of_an_unreachable_pose(abb):
     T = abb.frame_pose(abb.random_configuration(rng=5))
-    with pytest.raises(kinengine.OptionError, match="mapping"):
-        abb.inverse_kinematics({"tool0": T}, method="closed_form")
+    for method in ("closed_form", "analytic"):  # an unknown method is refused for a mapping too
+        with pytest.raises(kinengine.OptionError, match=f"method='{method}' does not solve a mapping"):
+            abb.inverse_kinematics({"tool0": T}, method=method)
     far = T.copy()
     far[:3, 3] = [2.0, 0.0, 0.5]  # beyond the ABB's 0.65 m reach
     result = abb.inverse_kinematics(far, method="closed_form")

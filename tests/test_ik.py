@@ -170,7 +170,7 @@ def test_inputs_are_checked():
     [
         ("max_iterations", [1.5, np.nan, np.inf, -1, True, "5", 10**7]),
         ("restarts", [1.5, -1, np.nan, "1", None]),
-        ("tol_position", [np.nan, -1e-6, np.inf, "1e-6", None]),
+        ("tol_position", [np.nan, -1e-6, np.inf, "1e-6", None, 10**400]),
         ("tol_rotation", [np.nan, -1.0, np.inf]),
         ("min_damping", [np.nan, -1.0, np.inf, "0"]),
         ("nullspace_gain", [np.nan, -0.1, 2.0, np.inf]),
@@ -203,6 +203,13 @@ def test_degenerate_targets_are_refused(abb):
         inverse_kinematics(abb, "abc")
     with pytest.raises(kinengine.ParameterizationError):
         inverse_kinematics(abb, np.zeros((3, 4, 4)))  # a batch of zero rotations
+    for ragged in (
+        [[1.0, 0.0], [0.0]],
+        [[[1.0, 0.0], [0.0]]],
+    ):  # no array: refused by name, not numpy's error
+        for method in ("numeric", "auto"):
+            with pytest.raises(kinengine.ParameterizationError, match="Expected `target` to be a"):
+                inverse_kinematics(abb, ragged, method=method)
 
 
 def test_far_but_finite_target_gives_finite_errors(abb):

@@ -28,11 +28,11 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from ..errors import KinematicsError, OptionError
+from ..errors import KinematicsError
 from ..kinematics.compiler import compiled_chain
 from .ik_candidates import candidates_to_solutions, shared_by_poses
 from .ik_solutions import CONTINUOUS, MANY_TURNS, ONE_TURN, IKSolutions, joined
-from .ik_target import ROTATION_EXACT, checked_pose, checked_poses, exact_pose
+from .ik_target import checked_pose, checked_poses, checked_start, exact_pose, is_batch
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .robot_like import RobotLike
@@ -221,17 +221,10 @@ def ik_solutions(
 ) -> IKSolutions:
     """Every solution of T_IF (4, 4) or of each pose of (N, 4, 4); see :class:`IKSolutions`."""
     chain = solver_of(robot, frame)
-    poses = _checked_poses(T)
+    poses = exact_pose(*(checked_poses(T) if is_batch(T) else checked_pose(T)))
     single = poses.ndim == 2
     poses = poses[None] if single else poses
-    coords = robot.engine.coordinates
-    near = None
-    if q_near is not None:
-        near = coords.check(q_near, name="q_near", allow_batch=not single)
-        if near.ndim == 2 and len(near) != len(poses):
-            raise OptionError(
-                f"`q_near` must be (dof,) or one row per pose ({len(poses)}), got {len(near)} rows"
-            )
+    near = checked_start(robot, q_near, "q_near", None if single else len(poses))
     reference = chain.neutral if near is None else near
     if single:  # the solver's answer object as it comes: no batch gathering
         answer = chain.solve_one(poses[0])
@@ -274,19 +267,6 @@ def ik_solutions(
     # bounded memory: the candidates' arrays of one chunk at a time
     done = [solve(a, min(a + CHUNK_POSES, len(poses))) for a in range(0, len(poses), CHUNK_POSES)]
     return done[0] if len(done) == 1 else joined(done)
-
-
-def _checked_poses(T: object) -> np.ndarray:
-    """T as a C-contiguous float64 (4, 4) or (N, 4, 4), checked as the numeric solver checks its targets;
-    a rotation block off orthonormal by more than ROTATION_EXACT (float32, rounded) is replaced by its
-    nearest rotation (:func:`.ik_target.exact_pose`), which the answers then reproduce to 1e-9."""
-    if np.ndim(T) == 3:  # type: ignore[arg-type]
-        poses, deviations = checked_poses(T)
-        return exact_pose(np.ascontiguousarray(poses), deviations)
-    pose, deviation = checked_pose(T)
-    if not (type(pose) is np.ndarray and pose.flags.c_contiguous):
-        pose = np.ascontiguousarray(pose)
-    return exact_pose(pose, deviation) if deviation > ROTATION_EXACT else pose
 
 
 def snapped(g: Geometry) -> Geometry:

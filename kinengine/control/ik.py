@@ -7,18 +7,9 @@ With ``rows=`` or ``weights=`` both halves are expressed in the target frame D (
 blockwise) and only the named rows count: rows=("x", "y", "z", "rx", "ry") is a 5-D target, position plus
 tool axis (D's z axis): rotation about it is left free. ``weights`` (w ≥ 0, one per kept row) minimize
 Σ w_i e_i² instead of |e|²; a full pose minimizes |e_p|² + (ρ|e_R|)², ρ = 0.2 m/rad.
-Step (:mod:`.ik_step`): Δq = W⁻¹Jᵀ (J W⁻¹Jᵀ + λ² S⁻²)⁻¹ e plus a pull towards ``nullspace_target`` in the
-nullspace of J, with Sugihara's damping λ² = 0.1·|S e|² + λ_min² (strong far from the target or near a
-singularity, Gauss–Newton speed close to it) and Chan & Dubey's joint-limit weights W; every iterate is
-clipped into the limits.
-Seeds, in order, one attempt each of at most ``max_iterations`` iterations (:func:`.ik_step.gives_way`:
-one that stalls or is still far makes way for the next seed; any, the last too, ends when stuck): ``q0``
-if given (its attempt never gives way early), else the ``NEAREST_SEEDS`` table configurations whose frame
-poses are nearest the target (:mod:`.ik_seeds`) and the middle of the joint ranges (or
-``nullspace_target``); then ``restarts`` uniformly random ones from ``rng``.
-One frame and several at once (a mapping {frame: T_IF}, errors and Jacobians stacked, :mod:`.ik_multi`)
-run one attempt loop, :func:`.ik_solver.solve`; a batch of targets (N, 4, 4) runs the same algorithm
-vectorized, :mod:`kinengine.control.ik_batch`.
+Step, damping, limit weights, nullspace pull and give-way rule: :mod:`.ik_step`; seeds (``q0``, the
+stored configurations nearest the target, the middle of the ranges, then ``restarts`` random ones):
+:mod:`.ik_seeds`; the attempt loop of one frame or several: :mod:`.ik_solver`; batches: :mod:`.ik_batch`.
 """
 
 from __future__ import annotations
@@ -30,10 +21,10 @@ import numpy as np
 import numpy.typing as npt
 
 from ..errors import OptionError
+from . import ik_target
 from .ik_multi import checked_goals
 from .ik_seeds import NEAREST_SEEDS, SEED_TABLE_BYTES, SEED_TABLES, frame_seeds
 from .ik_solver import IKResult, solve
-from .ik_target import FrameGoal, Options, RandomSource, batch_targets, checked_problem, single_target
 
 if TYPE_CHECKING:  # named for the checker only
     from .ik_batch import IKBatchResult
@@ -71,74 +62,59 @@ def inverse_kinematics(
     ``nullspace_target`` (dof,): preferred q, pursued with ``nullspace_gain`` [1/iteration] where the
     task leaves freedom. ``min_damping``: λ_min [1]. Every option is validated (OptionError).
 
-    Several frames at once: ``target`` a mapping {frame: T_IF (4, 4)} (``frame`` None); ``rows`` and
-    ``weights`` one spec for every frame or a mapping {frame: spec} (missing frames: all six rows, weight
-    1). Success when every frame is within the tolerances; the result's position_error / rotation_error
-    are the maxima over the frames, ``frame_errors`` each frame's (:mod:`kinengine.control.ik_multi`).
+    Several frames at once: ``target`` a mapping {frame: T_IF (4, 4)} (``frame`` None), ``rows`` and
+    ``weights`` one spec for all or a mapping {frame: spec}; see :mod:`kinengine.control.ik_multi`.
 
     ``method``: "numeric" this solver; "closed_form" the solution nearest ``q0`` (default: the middle of
     the ranges) among every closed-form one (:mod:`kinengine.control.ik_dispatch`); "auto" the closed form
     for a pose target of a chain that has one (and the ``ik`` extra installed), else this solver.
     """
-    options = Options(
-        tol_position,
-        tol_rotation,
-        max_iterations,
-        restarts,
-        nullspace_target,
-        nullspace_gain,
-        min_damping,
+    options = ik_target.Options(
+        tol_position, tol_rotation, max_iterations, restarts, nullspace_target, nullspace_gain, min_damping,
         q0 is not None,
-    )
-    generator = RandomSource(rng)
+    )  # fmt: skip
+    generator = ik_target.RandomSource(rng)
     if isinstance(target, Mapping):
         if frame is not None or position is not None or rotation is not None:
             raise OptionError(
                 "a mapping {frame: pose} names its frames and takes poses (4, 4): leave `frame`, "
                 "`position` and `rotation` None (or pass one pose with frame=...)"
             )
-        if method == "closed_form":
+        if method not in ("auto", "numeric"):
             raise OptionError(
-                "method='closed_form' solves pose targets (4, 4) or (N, 4, 4) of one frame; a mapping "
-                "{frame: pose} is solved by method='numeric' (or 'auto')"
+                f"method={method!r} does not solve a mapping {{frame: pose}} (closed forms solve poses "
+                "(4, 4) or (N, 4, 4) of one frame); use method='numeric' or 'auto'"
             )
         goals = checked_goals(robot, target, rows, weights, options)
-        start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=False)
+        start = ik_target.checked_start(robot, q0, "q0", None)
         return solve(robot, goals, frame_seeds(robot, goals, start), generator, several=True)
-    batch = position is None and rotation is None and not isinstance(target, str) and np.ndim(target) == 3
-    problem = checked_problem(robot, frame, rows, weights, options)
-    if problem.rows is not None and (position is not None or rotation is not None):
+    problem = ik_target.checked_problem(robot, frame, rows, weights, options)
+    parameters = position is not None or rotation is not None
+    if problem.rows is not None and parameters:
         raise OptionError(
             "`rows=` and `weights=` apply to pose targets (4, 4) or (N, 4, 4); for parameters χ "
             "name only the parameterizations you need"
         )
-    start = None if q0 is None else robot.engine.coordinates.check(q0, name="q0", allow_batch=batch)
+
+    def numeric(T: npt.ArrayLike, q0: object) -> IKResult | IKBatchResult:
+        """The numeric solver on the checked problem: a batch (N, 4, 4) vectorized, else one target."""
+        batch = None if parameters else ik_target.batch_targets(T)  # (N, 3), (N, 3, 3)
+        start = ik_target.checked_start(robot, q0, "q0", None if batch is None else len(batch[0]))
+        if batch is None:
+            goals = [ik_target.FrameGoal(problem, *ik_target.single_target(T, position, rotation))]
+            return solve(robot, goals, frame_seeds(robot, goals, start), generator)
+        from .ik_batch import solve_batch
+
+        return solve_batch(robot, problem, *batch, start, generator)
+
     if method != "numeric":
         from .ik_dispatch import closed_form_or_none
 
-        def numeric(T: npt.ArrayLike, start: object) -> IKResult | IKBatchResult:
-            return inverse_kinematics(
-                robot, T, frame, start, tol_position=tol_position, tol_rotation=tol_rotation,
-                max_iterations=max_iterations, restarts=restarts, rng=rng, min_damping=min_damping,
-                method="numeric",
-            )  # fmt: skip
-
-        plain = position is None and rotation is None and rows is None and weights is None
-        plain = plain and nullspace_target is None
+        plain = not parameters and problem.rows is None and nullspace_target is None
         solved = closed_form_or_none(robot, target, frame, q0, method, plain, numeric)
         if solved is not None:
             return solved
-    if batch:
-        from .ik_batch import solve_batch
-
-        P_d, Cs_d = batch_targets(target)  # (N, 3), (N, 3, 3)
-        if start is not None and start.ndim == 2 and len(start) != len(P_d):
-            raise OptionError(
-                f"`q0` must be (dof,) or one row per target ({len(P_d)}), got {len(start)} rows"
-            )
-        return solve_batch(robot, problem, P_d, Cs_d, start, generator)
-    goals = [FrameGoal(problem, *single_target(target, position, rotation))]
-    return solve(robot, goals, frame_seeds(robot, goals, start), generator)
+    return numeric(target, q0)
 
 
 __all__ = ["NEAREST_SEEDS", "SEED_TABLES", "SEED_TABLE_BYTES", "IKResult", "inverse_kinematics"]

@@ -6,11 +6,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, NoReturn
+from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import OptionError, ParameterizationError
+from ..kinematics.options import checked_seed, number_option
 from ..parameterizations import get_position, get_rotation
 
 if TYPE_CHECKING:  # named for the checker only
@@ -18,9 +20,14 @@ if TYPE_CHECKING:  # named for the checker only
 
 MAX_TARGET_DISTANCE = 1e9
 """[m] a target position farther than this from the root is refused (its squared error would overflow)."""
+ROTATION_TOLERANCE = 1e-6
+"""max |CᵀC − I| of a target's rotation block accepted (float32 poses, rounded print-outs)."""
+ROTATION_EXACT = 1e-12
+"""max |CᵀC − I| above which an accepted rotation block is replaced by its nearest rotation."""
 ROW_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 _SIX_ROWS_POSITION = np.arange(6) < 3  # Problem.position_rows of a full target (shared, read-only)
 _SIX_ROWS_POSITION.flags.writeable = False
+_BOTTOM = [0.0, 0.0, 0.0, 1.0]
 
 
 @dataclass(frozen=True)
@@ -44,8 +51,7 @@ class Problem:
 
 @dataclass(frozen=True)
 class Options:
-    """inverse_kinematics' options as given, checked by :func:`checked_problem` (once per frame of a
-    mapping target)."""
+    """inverse_kinematics' options as given, checked by :func:`checked_problem` (once per frame)."""
 
     tol_position: object
     tol_rotation: object
@@ -59,8 +65,7 @@ class Options:
 
 @dataclass(frozen=True)
 class FrameGoal:
-    """One frame's validated options (its :class:`Problem`: fid, rows, weights) and target p_d (3,) [m],
-    C_d (3, 3) in I (either None where the target leaves that part free)."""
+    """One frame's :class:`Problem` and target p_d (3,) [m], C_d (3, 3) in I (None: that part is free)."""
 
     problem: Problem
     p_d: np.ndarray | None
@@ -73,15 +78,6 @@ class FrameGoal:
         return len(rows) if rows is not None else 3 * ((self.p_d is not None) + (self.C_d is not None))
 
 
-def _number(name: str, value: object, low: float, high: float = math.inf) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise OptionError(f"`{name}` must be a number, got {value!r}")
-    value = float(value)
-    if not (math.isfinite(value) and low <= value <= high):
-        raise OptionError(f"`{name}` must be a finite number in [{low:g}, {high:g}], got {value!r}")
-    return value
-
-
 def _count(name: str, value: object, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= high:
         raise OptionError(f"`{name}` must be a whole number from 0 to {high:,}, got {value!r}")
@@ -89,25 +85,18 @@ def _count(name: str, value: object, high: int) -> int:
 
 
 def checked_problem(
-    robot: RobotLike,
-    frame: str | None,
-    rows: object,
-    weights: object,
-    options: Options,
+    robot: RobotLike, frame: str | None, rows: object, weights: object, options: Options
 ) -> Problem:
     """The options of :func:`kinengine.control.ik.inverse_kinematics`, each checked (OptionError)."""
     frame = robot.end_effector if frame is None else frame
     fid, o = robot.frame_id(frame), options
-    tol_p, tol_r = _number("tol_position", o.tol_position, 0.0), _number("tol_rotation", o.tol_rotation, 0.0)
+    tol_p = number_option("`tol_position`", o.tol_position)
+    tol_r = number_option("`tol_rotation`", o.tol_rotation)
     max_iterations = _count("max_iterations", o.max_iterations, 1_000_000)
     restarts = _count("restarts", o.restarts, 10_000)
-    gain = _number("nullspace_gain", o.nullspace_gain, 0.0, 1.0)
-    damping = _number("min_damping", o.min_damping, 0.0, 1e6)
-    q_ns = (
-        None
-        if o.nullspace_target is None
-        else robot.engine.coordinates.check(o.nullspace_target, name="nullspace_target", allow_batch=False)
-    )
+    gain = number_option("`nullspace_gain`", o.nullspace_gain, 0.0, 1.0)
+    damping = number_option("`min_damping`", o.min_damping, 0.0, 1e6)
+    q_ns = checked_start(robot, o.nullspace_target, "nullspace_target", None)
     kept, sqrt_w = None, None
     if rows is not None or weights is not None:
         kept = np.arange(6) if rows is None else _rows(rows)
@@ -117,7 +106,7 @@ def checked_problem(
                 raise OptionError(
                     f"`weights` must hold one number per kept row ({len(kept)}), got shape {w.shape}"
                 )
-            sqrt_w = np.sqrt([_number("weights[i]", v, 0.0, 1e12) for v in w])
+            sqrt_w = np.sqrt([number_option("`weights[i]`", v, 0.0, 1e12) for v in w])
     position_rows = _SIX_ROWS_POSITION if kept is None else kept < 3
     limits = (tol_p, tol_r, max_iterations, restarts, damping**2)
     return Problem(fid, frame, kept, sqrt_w, position_rows, *limits, q_ns, gain, o.has_q0)
@@ -144,33 +133,32 @@ class RandomSource:
     costs more than a converged solve)."""
 
     def __init__(self, rng: object) -> None:
-        ok = (
-            rng is None
-            or isinstance(rng, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence))
-            or (not isinstance(rng, bool) and isinstance(rng, (int, np.integer)) and rng >= 0)
-        )
-        if not ok:
-            raise OptionError(f"`rng` must be None, a seed >= 0 or a numpy Generator, got {rng!r}")
-        self.rng = rng
-        self.generator: np.random.Generator | None = None
+        self.rng = checked_seed(rng)
+
+    @cached_property
+    def generator(self) -> np.random.Generator:
+        return np.random.default_rng(self.rng)  # type: ignore[arg-type]  # checked in __init__
 
     def configurations(self, robot: RobotLike, size: int | None = None) -> np.ndarray:
-        if self.generator is None:
-            self.generator = np.random.default_rng(self.rng)  # type: ignore[arg-type]  # checked in __init__
         return robot.random_configuration(self.generator, size=size)
 
 
-ROTATION_TOLERANCE = 1e-6
-"""max |CᵀC − I| of a target's rotation block accepted (float32 poses, rounded print-outs)."""
-ROTATION_EXACT = 1e-12
-"""max |CᵀC − I| above which an accepted rotation block is replaced by its nearest rotation."""
+def checked_start(robot: RobotLike, q0: object, name: str, count: int | None) -> np.ndarray | None:
+    """``q0`` None, (dof,) or, for ``count`` targets (None: one), one row per target (count, dof), checked
+    (ConfigurationError, OptionError naming ``name``)."""
+    if q0 is None:
+        return None
+    q = robot.engine.coordinates.check(q0, name=name, allow_batch=count is not None)
+    if q.ndim == 2 and len(q) != count:
+        raise OptionError(f"`{name}` must be (dof,) or one row per target ({count}), got {len(q)} rows")
+    return q
 
 
 def rotation_deviation(
     a: float, b: float, c: float, d: float, e: float, f: float, g: float, h: float, i: float
 ) -> float:
-    """max |CᵀC − I| of C = [[a, b, c], [d, e, f], [g, h, i]] (row by row); inf when det C <= 0 or NaN, in
-    plain floats (cheaper than numpy for one 3x3)."""
+    """max |CᵀC − I| of C = [[a, b, c], [d, e, f], [g, h, i]] (row by row); inf when det C <= 0 or an entry
+    is not finite, in plain floats (cheaper than numpy for one 3x3)."""
     if not a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) > 0:
         return math.inf
     return max(
@@ -183,60 +171,53 @@ def rotation_deviation(
     )
 
 
-def nearest_rotations(C: np.ndarray) -> np.ndarray:
-    """The rotation matrices nearest (Frobenius) to C (N, 3, 3) with det C > 0: U·Vᵀ of C's SVD."""
-    U, _, Vt = np.linalg.svd(C)
-    return U @ Vt
-
-
 def exact_pose(T: np.ndarray, deviation: float | np.ndarray) -> np.ndarray:
-    """A checked pose T (4, 4) or (N, 4, 4), float64, with ``deviation`` (max |CᵀC − I| of each rotation
-    block, from :func:`checked_pose` / :func:`checked_poses`): T itself when every block is a rotation to
-    ``ROTATION_EXACT``, else a copy with the others replaced by their nearest rotations (a float32 or
-    rounded target is solved for the rotation it stands for; answers then reproduce that to 1e-9)."""
-    fix = np.asarray(deviation) > ROTATION_EXACT
-    if not fix.any():
-        return T
+    """Checked T (4, 4) or (N, 4, 4) and ``deviation`` (:func:`checked_pose`, :func:`checked_poses`) -> T
+    C-contiguous, rotation blocks off by more than ``ROTATION_EXACT`` (a float32 or rounded target) replaced
+    in a copy by their nearest rotations U·Vᵀ (C = U S Vᵀ), which answers then reproduce to 1e-9."""
+    fix = deviation > ROTATION_EXACT
+    if not (fix.any() if isinstance(fix, np.ndarray) else fix):
+        return T if T.flags.c_contiguous else np.ascontiguousarray(T)
     out = np.array(T, dtype=np.float64)
-    out[..., :3, :3][fix] = nearest_rotations(out[..., :3, :3][fix])
+    U, _, Vt = np.linalg.svd(out[..., :3, :3][fix])
+    out[..., :3, :3][fix] = U @ Vt
     return out
 
 
-_BOTTOM = np.array([0.0, 0.0, 0.0, 1.0])
+def is_batch(target: object) -> bool:
+    """Whether ``target`` is a batch (three-dimensional); False for a ragged nesting (refused later)."""
+    try:
+        return np.ndim(target) == 3  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return False
 
 
 def _real(target: object, expected: str) -> np.ndarray:
     """``target`` as a float array; complex numbers are refused (a cast would drop their imaginary parts)."""
     try:
         raw = np.asarray(target)
-        complex_ = np.iscomplexobj(raw)
-        value = None if complex_ else np.asarray(raw, dtype=float)
+        if not np.iscomplexobj(raw):
+            return np.asarray(raw, dtype=float)
     except (TypeError, ValueError):
         raise ParameterizationError(f"Expected `target` to be {expected}, got {target!r:.80}") from None
-    if value is None:
-        raise ParameterizationError(
-            f"`target` holds complex numbers; expected {expected} of real numbers (the imaginary parts "
-            "would be dropped)"
-        )
-    return value
-
-
-def _position_ok(p: np.ndarray) -> None:
-    if not float(np.max(np.abs(p), initial=0.0)) <= MAX_TARGET_DISTANCE:
-        _too_far()
-
-
-def _too_far() -> NoReturn:
     raise ParameterizationError(
-        f"`target`'s position is farther than {MAX_TARGET_DISTANCE:g} m from the "
-        "root: no robot reaches it; give a target in metres within reach"
+        f"`target` holds complex numbers; expected {expected} of real numbers (the imaginary parts would be "
+        "dropped)"
     )
 
 
+def _within_reach(distance: float) -> None:
+    """``distance``: the largest |coordinate| [m] of a target position in I."""
+    if not distance <= MAX_TARGET_DISTANCE:
+        raise ParameterizationError(
+            f"`target`'s position is farther than {MAX_TARGET_DISTANCE:g} m from the root: no robot reaches "
+            "it; give a target in metres within reach"
+        )
+
+
 def checked_pose(target: object) -> tuple[np.ndarray, float]:
-    """(T (4, 4) float64, max |CᵀC − I| of its rotation block): a pose target checked (finite, rotation
-    block a rotation to ``ROTATION_TOLERANCE``, bottom row (0, 0, 0, 1), position within reach);
-    ParameterizationError naming what is wrong."""
+    """(T (4, 4) float64, max |CᵀC − I| of its rotation block): a pose target checked as :func:`checked_poses`
+    checks each of a batch, accepted in plain floats (cheaper than numpy for one pose)."""
     value = _real(target, "a (4, 4) pose or parameters χ")
     if value.shape != (4, 4):
         raise ParameterizationError(
@@ -244,103 +225,94 @@ def checked_pose(target: object) -> tuple[np.ndarray, float]:
             f"{value.shape}; for parameters χ name their position= and/or rotation= parameterization"
         )
     flat = value.ravel().tolist()
-    if not all(map(math.isfinite, flat)):
-        raise ParameterizationError("`target` holds NaN or inf: a pose T_IF (4, 4) has finite entries")
     a, b, c, x, d, e, f, y, g, h, i, z = flat[:12]
-    deviation = rotation_deviation(a, b, c, d, e, f, g, h, i)
-    if not deviation <= ROTATION_TOLERANCE:
-        raise ParameterizationError(
-            "`target`'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
-        )
-    if not all(abs(v - w) <= 1e-9 for v, w in zip(flat[12:], _BOTTOM.tolist(), strict=True)):
-        raise ParameterizationError(
-            f"`target`'s bottom row is {flat[12:]}, expected [0, 0, 0, 1]: a pose T_IF (4, 4) is a "
-            "homogeneous transform"
-        )
-    if not max(abs(x), abs(y), abs(z)) <= MAX_TARGET_DISTANCE:
-        _too_far()
-    return value, deviation
+    if (
+        all(map(math.isfinite, flat))
+        and (deviation := rotation_deviation(a, b, c, d, e, f, g, h, i)) <= ROTATION_TOLERANCE
+        and all(abs(v - w) <= 1e-9 for v, w in zip(flat[12:], _BOTTOM, strict=True))
+        and max(abs(x), abs(y), abs(z)) <= MAX_TARGET_DISTANCE
+    ):
+        return value, deviation
+    return value, float(checked_poses(value[None], single=True)[1][0])  # raises, naming what is wrong
 
 
 def single_target(
     target: object, position: str | None, rotation: str | None
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """(p_d (3,) or None, C_d (3, 3) or None) from a pose (4, 4) or parameters χ; a pose's rotation block
-    off orthonormal by more than ``ROTATION_EXACT`` is replaced by its nearest rotation."""
+    """(p_d (3,) or None, C_d (3, 3) or None) from a pose (4, 4) (made exact: :func:`exact_pose`) or
+    parameters χ."""
     if position is None and rotation is None:
-        value, deviation = checked_pose(target)
-        C = value[:3, :3].copy()
-        return value[:3, 3].copy(), nearest_rotations(C[None])[0] if deviation > ROTATION_EXACT else C
+        T = exact_pose(*checked_pose(target))
+        return T[:3, 3].copy(), T[:3, :3].copy()
     value = _real(target, "a (4, 4) pose or parameters χ")
     P = get_position(position) if position is not None else None
     R = get_rotation(rotation) if rotation is not None else None
-    m = (P.size if P else 0) + (R.size if R else 0)
+    p_size = P.size if P else 0
+    m = p_size + (R.size if R else 0)
+    names = " + ".join(n for n in (position, rotation) if n)
     if value.shape != (m,) or not np.isfinite(value).all():
-        names = " + ".join(n for n in (position, rotation) if n)
         raise ParameterizationError(
             f"Expected `target` to be finite parameters of shape ({m},) for {names}, got {value.shape}"
         )
     try:
         with np.errstate(all="ignore"):
-            p_d = P.to_position(value[: P.size]) if P else None
-            C_d = R.to_rotation(value[m - R.size :]) if R else None
+            p_d = P.to_position(value[:p_size]) if P else None
+            C_d = R.to_rotation(value[p_size:]) if R else None
     except (ArithmeticError, ValueError):  # e.g. a zero quaternion
         raise ParameterizationError(
-            f"`target` {value.tolist()} describes no pose for "
-            f"{' + '.join(n for n in (position, rotation) if n)}; give valid parameters"
+            f"`target` {value.tolist()} describes no pose for {names}; give valid parameters"
         ) from None
     if p_d is not None:
         if not np.isfinite(p_d).all():
             raise ParameterizationError(f"`target` {value.tolist()} gives no finite position for {position}")
-        _position_ok(p_d)
-    if (
-        R is not None
-        and C_d is not None
-        and not (np.isfinite(C_d).all() and rotation_deviation(*C_d.ravel().tolist()) <= ROTATION_TOLERANCE)
-    ):
+        _within_reach(float(np.abs(p_d).max()))
+    if C_d is not None and not rotation_deviation(*C_d.ravel().tolist()) <= ROTATION_TOLERANCE:
         raise ParameterizationError(
-            f"`target`'s {rotation} parameters {value[m - R.size :].tolist()} describe no "
+            f"`target`'s {rotation} parameters {value[p_size:].tolist()} describe no "
             "rotation (e.g. a zero quaternion or matrix); give a valid one"
         )
     return p_d, C_d
 
 
-def checked_poses(target: object) -> tuple[np.ndarray, np.ndarray]:
-    """(T (N, 4, 4) float64, deviation (N,) = max |CᵀC − I| per rotation block): a batch of pose targets,
-    every one checked as :func:`checked_pose` checks one; ParameterizationError naming the first bad pose."""
+def checked_poses(target: object, single: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """(T (N, 4, 4) float64, deviation (N,) = max |CᵀC − I| per rotation block): a batch of pose targets
+    checked (finite, rotation blocks rotations to ``ROTATION_TOLERANCE``, bottom rows (0, 0, 0, 1), positions
+    within reach); ParameterizationError naming the first bad pose (``single``: the one pose, (1, 4, 4))."""
     value = _real(target, "a batch of poses (N, 4, 4)")
     if value.ndim != 3 or value.shape[1:] != (4, 4) or not len(value):
         raise ParameterizationError(
             f"Expected `target` to be a finite batch of poses (N >= 1, 4, 4), got {value.shape}"
         )
+    name = "`target`" if single else "`target`[{}]"  # the first bad pose
     not_finite = np.flatnonzero(~np.isfinite(value).all(axis=(1, 2)))
     if len(not_finite):
+        count = "" if single else f" ({len(not_finite)} of {len(value)} poses)"
         raise ParameterizationError(
-            f"`target`[{not_finite[0]}] holds NaN or inf ({len(not_finite)} of {len(value)} poses): a pose "
-            "T_IF (4, 4) has finite entries"
+            f"{name.format(not_finite[0])} holds NaN or inf{count}: a pose T_IF (4, 4) has finite entries"
         )
     C = value[:, :3, :3]
     deviation = np.abs(np.einsum("nki,nkj->nij", C, C) - np.eye(3)).max(axis=(1, 2))
     bad = np.flatnonzero((deviation > ROTATION_TOLERANCE) | (np.linalg.det(C) <= 0))
     if len(bad):
         raise ParameterizationError(
-            f"`target`[{bad[0]}]'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
+            f"{name.format(bad[0])}'s rotation block is not a rotation matrix (CᵀC ≠ I or det <= 0)"
         )
     bottom = np.flatnonzero(np.abs(value[:, 3, :] - _BOTTOM).max(axis=1) > 1e-9)
     if len(bottom):
         raise ParameterizationError(
-            f"`target`[{bottom[0]}]'s bottom row is {value[bottom[0], 3].tolist()}, expected [0, 0, 0, 1]: "
-            "a pose T_IF (4, 4) is a homogeneous transform"
+            f"{name.format(bottom[0])}'s bottom row is {value[bottom[0], 3].tolist()}, expected "
+            "[0, 0, 0, 1]: a pose T_IF (4, 4) is a homogeneous transform"
         )
-    _position_ok(value[:, :3, 3])
+    _within_reach(float(np.abs(value[:, :3, 3]).max()))
     return value, deviation
 
 
-def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray]:
-    """(p_d (N, 3), C_d (N, 3, 3)) from a batch of poses (N, 4, 4), every one checked; rotation blocks off
-    orthonormal by more than ``ROTATION_EXACT`` replaced by their nearest rotations."""
-    value, deviation = checked_poses(target)
-    T = exact_pose(value, deviation)
+def batch_targets(target: object) -> tuple[np.ndarray, np.ndarray] | None:
+    """(p_d (N, 3), C_d (N, 3, 3)) from a batch of poses (N, 4, 4), checked and made exact
+    (:func:`exact_pose`); None for a target that is not three-dimensional."""
+    if not is_batch(target):
+        return None
+    T = exact_pose(*checked_poses(target))
     return np.ascontiguousarray(T[:, :3, 3]), np.array(T[:, :3, :3])
 
 
@@ -357,8 +329,9 @@ __all__ = [
     "checked_pose",
     "checked_poses",
     "checked_problem",
+    "checked_start",
     "exact_pose",
-    "nearest_rotations",
+    "is_batch",
     "rotation_deviation",
     "single_target",
 ]

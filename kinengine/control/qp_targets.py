@@ -15,29 +15,13 @@ import numpy.typing as npt
 import pinocchio as pin
 
 from ..errors import KinematicsError, OptionError
+from ..kinematics.options import number_option
 from ..kinematics.relative import relative_terms
+from .ik_target import ROW_NAMES as ROWS
 from .ik_target import single_target
 from .robot_like import RobotLike
 
-ROWS = ("x", "y", "z", "rx", "ry", "rz")
 _LWA = pin.LOCAL_WORLD_ALIGNED
-
-
-def number_option(
-    what: str, value: object, low: float = 0.0, high: float = math.inf, open_low: bool = False
-) -> float:
-    """A finite real number in [low, high] ((low, high] with open_low), else OptionError naming ``what``."""
-    if type(value) is float:  # the common case, checked cheaply
-        x = value
-        if (x > low if open_low else x >= low) and x <= high and x - x == 0.0:  # in range and finite
-            return x
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise OptionError(f"{what} must be a number, got {value!r:.60}")
-    x = float(value)
-    if not (math.isfinite(x) and (x > low if open_low else x >= low) and x <= high):
-        bound = f"({low:g}, {high:g}]" if open_low else f"[{low:g}, {high:g}]"
-        raise OptionError(f"{what} must be a finite number in {bound}, got {value!r:.60}")
-    return x
 
 
 @dataclass(eq=False)

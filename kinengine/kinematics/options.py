@@ -15,17 +15,30 @@ from ..errors import OptionError, ParameterizationError
 
 def checked_nonnegative(value: object, name: str) -> float:
     """``value`` as a float if it is a finite real number >= 0; OptionError otherwise."""
-    if type(value) is float and 0.0 <= value < math.inf:
-        return value
+    return number_option(name, value)
+
+
+def number_option(
+    what: str, value: object, low: float = 0.0, high: float = math.inf, open_low: bool = False
+) -> float:
+    """A finite real number in [low, high] ((low, high] with open_low), else OptionError naming ``what``."""
+    if type(value) is float:  # the common case, checked cheaply
+        x = value
+        if (x > low if open_low else x >= low) and x <= high and x - x == 0.0:  # in range and finite
+            return x
+    if high == math.inf and not open_low:
+        bound = f">= {low:g}"
+    else:
+        bound = f"in ({low:g}, {high:g}]" if open_low else f"in [{low:g}, {high:g}]"
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise OptionError(f"{name} must be a real number >= 0, got {type(value).__name__} {_short(value)}")
+        raise OptionError(f"{what} must be a real number {bound}, got {type(value).__name__} {_short(value)}")
     try:
-        number = float(value)
-    except (OverflowError, TypeError, ValueError):
-        raise OptionError(f"{name} must be a finite real number >= 0, got {_short(value)}") from None
-    if not 0.0 <= number < math.inf:
-        raise OptionError(f"{name} must be a finite real number >= 0, got {number!r}")
-    return number
+        x = float(value)
+    except (OverflowError, TypeError, ValueError):  # e.g. an int beyond float range
+        x = math.nan
+    if not (math.isfinite(x) and (x > low if open_low else x >= low) and x <= high):
+        raise OptionError(f"{what} must be a finite real number {bound}, got {_short(value)}")
+    return x
 
 
 def checked_threshold(value: object) -> float:
@@ -60,16 +73,22 @@ def checked_frames(frames: object, kinds: tuple[type, ...]) -> None:
             )
 
 
-def checked_rng(rng: object) -> np.random.Generator:
-    """A numpy Generator from ``rng`` (None: fresh entropy; an int >= 0: a seed; a Generator: itself)."""
-    if rng is None or isinstance(rng, np.random.Generator):
-        return np.random.default_rng(rng)
+def checked_seed(rng: object) -> object:
+    """``rng`` as numpy's ``default_rng`` takes it: None (fresh entropy), a seed (a whole number >= 0), a
+    Generator, BitGenerator or SeedSequence; OptionError otherwise."""
+    if rng is None or isinstance(rng, (np.random.Generator, np.random.BitGenerator, np.random.SeedSequence)):
+        return rng
     if isinstance(rng, (bool, np.bool_)) or not isinstance(rng, numbers.Integral) or rng < 0:
         raise OptionError(
             f"rng must be None, a seed (a whole number >= 0) or a numpy.random.Generator, got "
             f"{type(rng).__name__} {_short(rng)}"
         )
-    return np.random.default_rng(int(rng))
+    return int(rng)
+
+
+def checked_rng(rng: object) -> np.random.Generator:
+    """A numpy Generator from ``rng`` (:func:`checked_seed`; a Generator: itself)."""
+    return np.random.default_rng(checked_seed(rng))  # type: ignore[arg-type]
 
 
 def checked_parameterization(position: object, rotation: object, rows: object) -> tuple:
@@ -111,6 +130,8 @@ __all__ = [
     "checked_nonnegative",
     "checked_parameterization",
     "checked_rng",
+    "checked_seed",
     "checked_threshold",
     "checked_tolerance",
+    "number_option",
 ]
