@@ -105,8 +105,11 @@ def solve_batch(
     attempts = seeds.count + problem.restarts
     rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
     tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
-    lower, upper = joints.lower[:, None], joints.upper[:, None]
-    limits = step.limit_weights(robot.engine)
+    run = step.moving(kin, (problem.fid,))  # the coordinates [c0, c1) that move the frame: stepped
+    cs, lower, upper, limits = run.coords, run.lower[:, None], run.upper[:, None], run.limits
+    q_ns, free = problem.q_ns, run.free  # the other coordinates: at the nullspace target if there is one
+    if q_ns is not None:
+        q_ns, pulled = q_ns[cs], np.clip(q_ns[free], joints.lower[free], joints.upper[free])[:, None]
     # a full pose's rotation rows are weighted by ρ: |S e|² in the damping, λ² S⁻² on A's diagonal (ik_step)
     row_damping = step.POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
     row_weight_sq = 1.0 / row_damping  # S²
@@ -132,6 +135,8 @@ def solve_batch(
             block[:dof, seeded] = seeds.starts(new[seeded], new_meta[1][seeded]).T
             if (~seeded).any():
                 block[:dof, ~seeded] = rng.configurations(robot, int((~seeded).sum())).T
+            if q_ns is not None:
+                block[free] = pulled
             block[dof:H], block[B], block[B + 1] = -1.0, np.inf, 0.0
             block[P : P + 3], block[P + 3 : S] = p_d[new].T, C_d[new].reshape(-1, 9).T
             meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
@@ -176,12 +181,13 @@ def solve_batch(
                 J = np.einsum("kin,hkjn->hijn", Cd, J.reshape(2, 3, dof, r)).reshape(6, dof, r)
                 J = J[rows] if sqrt_w is None else J[rows] * sqrt_w[:, None, None]
             w = None
+            x, J, gradient = q[cs], J[:, cs], state[dof + cs.start : dof + cs.stop]
             if limits.any:
-                w, state[dof:H] = limits.inverse_weights(q, state[dof:H])
+                w, gradient[:] = limits.inverse_weights(x, gradient)
             squared = row_weight_sq @ (err * err)  # |S e|²
             diagonal = row_damping[:, None] * step.damping(squared, problem.damping_sq)
-            nullspace = (problem.q_ns, problem.gain, score)
-            np.clip(step.take_steps(q, J, err, w, diagonal, nullspace, space.buffers), lower, upper, out=q)
+            nullspace = (q_ns, problem.gain, score)
+            np.clip(step.take_steps(x, J, err, w, diagonal, nullspace, space.buffers), lower, upper, out=x)
             meta[2] += 1
         # next attempts: one per target that needs one; when few columns run, several at once per target
         # (_resolve takes the outcomes in attempt order, as if the attempts had run one after another)
@@ -195,7 +201,7 @@ def solve_batch(
         extra = np.minimum(share - running, attempts - launched[candidates])
         extra[winner[candidates] < attempts] = 0
         new = np.repeat(candidates, np.maximum(extra, 0))
-    return _resolve(log, winner, limits, (tol_p, tol_r))
+    return _resolve(log, winner, step.limit_weights(kin), (tol_p, tol_r))
 
 
 def _resolve(

@@ -17,6 +17,7 @@ Attempts: :func:`gives_way` tells when one makes way for the next seed (still fa
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -103,6 +104,41 @@ def limit_weights(kin: Kinematics) -> LimitWeights:
     """The robot's LimitWeights (its coordinates' limits and continuous joints), made once per robot."""
     c = kin.coordinates
     return kin.memoized("ik limit weights", lambda: LimitWeights(c.lower, c.upper, c.continuous))
+
+
+@dataclass(frozen=True)
+class Moving:
+    """The coordinates [c0, c1) spanning every one that moves a set of frames (the others' Jacobian columns
+    are zero: left out of the step, set to the nullspace target if there is one), as ``coords`` (a slice),
+    ``pin`` (the slice of Pinocchio's q and v they are one for one, or None: the map is applied), their
+    ``limits`` (LimitWeights), ``lower``/``upper`` and ``free`` (the indices of the others)."""
+
+    coords: slice
+    pin: slice | None
+    limits: LimitWeights
+    lower: np.ndarray
+    upper: np.ndarray
+    free: np.ndarray
+
+
+def moving(kin: Kinematics, fids: tuple[int, ...]) -> Moving:
+    """The :class:`Moving` coordinates of frames ``fids`` (Pinocchio frame ids), made once per set."""
+
+    def make() -> Moving:
+        model, c = kin.model, kin.coordinates
+        joints = {j for fid in fids for j in model.supports[model.frames[fid].parentJoint] if j}
+        rows = [model.joints[j].idx_v + k for j in joints for k in range(model.joints[j].nv)]
+        used = np.flatnonzero(c.matrix[rows].any(axis=0))
+        c0, c1 = (int(used[0]), int(used[-1]) + 1) if len(used) else (0, c.dof)
+        entries = np.flatnonzero((c.leader >= c0) & (c.leader < c1))  # Pinocchio's q from [c0, c1)
+        plain = 0 < len(entries) == c1 - c0 and (entries == entries[0] + np.arange(c1 - c0)).all()
+        plain = plain and (c.leader[entries] == np.arange(c0, c1)).all() and (c.multiplier[entries] == 1).all()
+        pin = slice(int(entries[0]), int(entries[-1]) + 1) if plain and not c.offset[entries].any() else None
+        lower, upper = c.lower[c0:c1], c.upper[c0:c1]
+        free = np.r_[0:c0, c1 : c.dof].astype(np.intp)
+        return Moving(slice(c0, c1), pin, LimitWeights(lower, upper), lower, upper, free)
+
+    return kin.memoized(("ik moving", fids), make)
 
 
 def gives_way(
@@ -200,7 +236,7 @@ def take_steps(
     them all (:func:`_solve_stacked`: LU, least squares where A is singular). ``buffers``: (J W⁻¹
     (≥m, dof, ≥r), A (≥ m·m·r, flat)), reused between iterations."""
     m, r = len(J), J.shape[2]
-    JW = J if w is None else np.multiply(J, w, out=buffers[0][:m, :, :r])
+    JW = J if w is None else np.multiply(J, w, out=buffers[0][:m, : J.shape[1], :r])
     q_ns, gain, score = nullspace
     z = None if q_ns is None else nullspace_pull(gain, score, q_ns, q)
     if z is not None:
@@ -280,9 +316,11 @@ __all__ = [
     "STUCK_RATIO",
     "STUCK_SPAN",
     "LimitWeights",
+    "Moving",
     "damping",
     "gives_way",
     "limit_weights",
+    "moving",
     "nullspace_pull",
     "take_step",
     "take_steps",
