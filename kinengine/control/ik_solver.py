@@ -97,21 +97,16 @@ def solve(
 ) -> IKResult:
     """Attempts from each seed (S, dof), then ``restarts`` random ones; the first that brings every frame
     within the tolerances (or the best by Σ_F |e_p| + 0.2 m/rad·|e_R|) wins. ``several``: a
-    :class:`MultiIKResult` (maxima over the frames and each frame's errors).
-
-    Per iteration a dozen numpy calls on arrays of 6 to 42 numbers, so their count sets the speed: the
-    normal matrix is written into one buffer whose diagonal view takes λ², and solved by Cholesky
-    (LAPACK ``dposv``: J W⁻¹Jᵀ + λ² S⁻² is symmetric positive definite for λ > 0; least squares if not)."""
+    :class:`MultiIKResult` (maxima over the frames and each frame's errors). Per iteration a dozen numpy
+    calls on arrays of 6 to 42 numbers: their count sets the speed."""
     kin = robot.engine
-    joints = kin.coordinates
-    model, data = kin.model, kin.data()
+    joints, model, data = kin.coordinates, kin.model, kin.data()
     shared = goals[0].problem
     tol_p, tol_r, max_iterations = shared.tol_position, shared.tol_rotation, shared.max_iterations
     damping_sq, q_ns, gain = shared.damping_sq, shared.q_ns, shared.gain
     attempts = len(seeds) + shared.restarts
     pinocchio_q, fold = kin.pinocchio_q, joints.fold
-    # the coordinates that move no frame are left out (zero columns), the others stepped in place in a
-    # run of Pinocchio's q where they are one for one with it (else mapped each iteration)
+    # coordinates that move no frame left out; the others stepped in place in Pinocchio's q if one for one
     run = step.moving(kin, tuple(g.problem.fid for g in goals))
     cs, ps, free = run.coords, run.pin, run.free
     place, log3, get_jacobian = pin.updateFramePlacement, pin.log3, pin.getFrameJacobian
@@ -126,7 +121,7 @@ def solve(
     # (J W⁻¹Jᵀ + λ² S⁻²)(S x) = e with Δq = W⁻¹Jᵀ (S x), so the weights only scale the damping's diagonal
     errors, jacobians, row_damping = _layout(goals, err)
     rotation_sq = step.ROTATION_ROW_WEIGHT**2
-    weigh, bounds = run.limits.inverse_weights_one if run.limits.any else None, (run.lower, run.upper)
+    weigh, bounds = run.limits.inverse_weights_one if run.limits.any else None, run.limits.bounds
     pull = None if q_ns is None else (q_ns[cs], np.clip(q_ns[free], joints.lower[free], joints.upper[free]))
     best, total = None, 0
     for attempt in range(attempts):
@@ -196,7 +191,7 @@ def solve(
             break
     assert best is not None  # attempts >= 1: the seeds hold at least one start
     q, per_frame, _, attempt, done = best
-    step.limit_weights(kin).wrap(q)
+    run.limits.wrap(q[cs])  # the stepped coordinates' continuous joints into [-π, π)
     ep, er = max(pe[0] for pe in per_frame), max(pe[1] for pe in per_frame)
     if not several:
         return IKResult(q, bool(done), total, ep, er, attempt)
