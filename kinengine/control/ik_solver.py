@@ -174,7 +174,7 @@ def solve(
             history.append(score)
             iteration += 1
             for fid, reference, S_w, start, stop in jacobians:
-                J_F = get_jacobian(model, data, fid, reference)
+                J_F = get_jacobian(model, data, fid, reference).reshape(6, -1)  # (6,) if nv = 1
                 J_F = J_F[:, ps] if ps is not None else fold(J_F)[:, cs]
                 if S_w is None:
                     J[start:stop] = J_F
