@@ -347,6 +347,58 @@ def test_stalled_attempts_give_way_after_stall_from_iterations(abb):
     assert ep == pytest.approx(result.position_error, rel=1e-9) and ep > 4.0
 
 
+def test_a_crawling_attempt_gives_way_unless_it_is_the_last():
+    """An attempt whose score falls 8 % an iteration (not stalled: 0.92³ < STALL_RATIO) gives way after CRAWL
+    iterations unless it is the last; the rule reads the same for one attempt and for columns."""
+    from kinengine.control.ik_step import CRAWL, STALL_RATIO, gives_way
+
+    history = [1e-3 * 0.92**k for k in range(CRAWL)]
+    score = history[-1] * 0.92
+    assert score < STALL_RATIO * history[-3]
+    assert gives_way(CRAWL, score, history, False, 0) and not gives_way(CRAWL - 1, score, history, False, 0)
+    assert not gives_way(CRAWL, score, history, True, 0)
+    columns = gives_way(
+        np.array([CRAWL, CRAWL, CRAWL - 1]),
+        np.full(3, score),
+        np.array(history[-3:])[:, None].repeat(3, axis=1),
+        np.array([False, True, False]),
+        np.zeros(3),
+    )
+    assert columns.tolist() == [True, False, False]
+
+
+def test_coordinates_that_move_no_frame_are_left_out_and_pulled_to_the_nullspace_target():
+    """The Panda's finger does not move panda_hand (its Jacobian column is zero): it is left out of the step
+    (the seven arm joints, one for one with Pinocchio's q), and set to the nullspace target; a finger frame
+    (moved through the mimic finger) keeps every coordinate; solutions checked by forward kinematics."""
+    from kinengine.control.ik_step import moving
+
+    robot = kinengine.load("panda")
+    rng = np.random.default_rng(41)
+    hand = moving(robot.engine, (robot.frame_id("panda_hand"),))
+    finger = moving(robot.engine, (robot.frame_id("panda_leftfinger"),))
+    assert (hand.coords, hand.pin, hand.free.tolist()) == (slice(0, 7), slice(0, 7), [7])
+    assert (finger.coords, finger.pin, finger.free.tolist()) == (slice(0, 8), None, [])
+    for q in robot.random_configuration(rng, size=5):
+        J = robot.jacobian(q, "panda_hand")
+        assert np.all(J[:, 7] == 0.0) and np.all(np.abs(J[:, :7]).max(axis=0) > 1e-3)
+        assert np.abs(robot.jacobian(q, "panda_leftfinger")[:, 7]).max() > 0.5
+    preferred = np.clip(robot.random_configuration(rng), robot.lower_limits, robot.upper_limits)
+    solutions = robot.random_configuration(rng, size=6)
+    for frame, pull in (("panda_hand", preferred), ("panda_leftfinger", None)):
+        targets = robot.frame_pose(solutions, frame)
+        batch = robot.inverse_kinematics(targets, frame, rng=0, nullspace_target=pull)
+        singles = [robot.inverse_kinematics(T, frame, rng=0, nullspace_target=pull) for T in targets]
+        # one finger target (solved as on main) ends 3 cm off, in a local minimum, by both solvers
+        assert batch.success.sum() >= 5 and batch.success.tolist() == [r.success for r in singles]
+        for q, T, ok in zip(
+            [*batch.q, *(r.q for r in singles)], [*targets] * 2, [*batch.success] * 2, strict=True
+        ):
+            assert _within_limits(robot, q) and (max(_pose_errors(robot, q, frame, T)) <= 1e-6) == ok
+        if frame == "panda_hand":  # the finger, free, at its nullspace target
+            assert np.all(batch.q[:, 7] == preferred[7]) and all(r.q[7] == preferred[7] for r in singles)
+
+
 def test_a_singular_damped_matrix_falls_back_to_least_squares(abb):
     """Zero tolerances and zero damping at a wrist singularity (q5 = 0): once the error is at rounding level
     J W⁻¹Jᵀ + λ² I is singular to working precision and Cholesky fails; the step is then the least-squares

@@ -1,23 +1,15 @@
-"""Inverse kinematics for a batch of targets (N, 4, 4), vectorized over every running attempt at once.
-
-The algorithm of :mod:`kinengine.control.ik` (same error, damping, limit weights, seeds, attempts,
-give-up rules and tolerances), each iteration done for every attempt still running, held column-wise
-(q (dof, r), J (6, dof, r), ...: every numpy call runs over r contiguous entries): poses and
-Jacobians J_e0 from the batch chain (:mod:`kinengine.kinematics.batch`, written straight into reused
-column buffers), the rotation errors log(C_d Cᵀ) from the rotation-vector parameterization, and the step
-of :func:`kinengine.control.ik_step.take_steps` (a column-wise Cholesky factorization of the (m, m)
-systems from CHOLESKY_FROM running attempts on, numpy's stacked solve below). Attempts
-that end (converged, given up, out of iterations) are compacted away, and the target's next attempt starts
-(its seed looked up only then: :class:`~kinengine.control.ik_seeds.BatchSeeds`). When few attempts are
-left running (SPECULATE), each target runs several of its next attempts at the same time; every target's
-outcome is then taken from its attempts in order (:func:`_resolve`): the same q, success, iteration
-count and restarts as if the attempts had run one after another. Floating point differs from the
-one-target loop's (:func:`.ik_solver.solve`: the batch chain's Jacobian in I, another factorization), so
-the two agree in convergence and tolerance, not bit for bit; random restarts draw from ``rng`` in a
-different order.
-
-The result is an :class:`IKBatchResult`: arrays over the batch (``q`` (N, dof), ``success`` (N,), ...),
-and a sequence of N :class:`~kinengine.control.ik.IKResult` (``result[i]``, ``list(result)``).
+"""Inverse kinematics for a batch of targets (N, 4, 4): the algorithm of :mod:`kinengine.control.ik` (same
+error, damping, limit weights, seeds, attempts, give-way rules, tolerances) run for every running attempt
+at once, held column-wise (q (dof, r), J (6, dof, r): each numpy call runs over r contiguous entries).
+Poses and Jacobians J_e0 come from the batch chain (:mod:`kinengine.kinematics.batch`, into reused
+buffers), log(C_d Cᵀ) from the rotation-vector parameterization, the step from :func:`.ik_step.take_steps`.
+Ended attempts are compacted away and the target's next one starts (its seed looked up only then,
+:class:`.ik_seeds.BatchSeeds`); with few left running (SPECULATE) a target runs several next attempts at
+once, and :func:`_resolve` takes the outcomes in attempt order: the same q, success, iterations and
+restarts as one after another. Floating point differs from :func:`.ik_solver.solve`'s (the Jacobian in I,
+another factorization): the two agree in convergence and tolerance, not bit for bit; random restarts draw
+from ``rng`` in another order. The result, an :class:`IKBatchResult`, holds arrays over the batch and is a
+sequence of N :class:`~kinengine.control.ik.IKResult`.
 """
 
 from __future__ import annotations
@@ -34,7 +26,6 @@ from ..parameterizations import ROTATION_PARAMETERIZATIONS
 from . import ik_step as step
 from .ik_seeds import SEED_ROTATION_WEIGHT, BatchSeeds
 from .ik_solver import IKResult
-from .ik_step import LimitWeights
 from .ik_target import Problem, RandomSource
 
 if TYPE_CHECKING:  # named for the checker only
@@ -105,8 +96,12 @@ def solve_batch(
     attempts = seeds.count + problem.restarts
     rows, sqrt_w, position_rows = problem.rows, problem.sqrt_weights, problem.position_rows
     tol_p, tol_r, max_iterations = problem.tol_position, problem.tol_rotation, problem.max_iterations
-    lower, upper = joints.lower[:, None], joints.upper[:, None]
-    limits = step.limit_weights(robot.engine)
+    run = step.moving(kin, (problem.fid,))  # the coordinates [c0, c1) that move the frame: stepped
+    cs, limits = run.coords, run.limits
+    lower, upper = (bound[:, None] for bound in limits.bounds)
+    q_ns, free = problem.q_ns, run.free  # the other coordinates: at the nullspace target if there is one
+    if q_ns is not None:
+        q_ns, pulled = q_ns[cs], np.clip(q_ns[free], joints.lower[free], joints.upper[free])[:, None]
     # a full pose's rotation rows are weighted by ρ: |S e|² in the damping, λ² S⁻² on A's diagonal (ik_step)
     row_damping = step.POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
     row_weight_sq = 1.0 / row_damping  # S²
@@ -132,6 +127,8 @@ def solve_batch(
             block[:dof, seeded] = seeds.starts(new[seeded], new_meta[1][seeded]).T
             if (~seeded).any():
                 block[:dof, ~seeded] = rng.configurations(robot, int((~seeded).sum())).T
+            if q_ns is not None:
+                block[free] = pulled
             block[dof:H], block[B], block[B + 1] = -1.0, np.inf, 0.0
             block[P : P + 3], block[P + 3 : S] = p_d[new].T, C_d[new].reshape(-1, 9).T
             meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
@@ -176,12 +173,13 @@ def solve_batch(
                 J = np.einsum("kin,hkjn->hijn", Cd, J.reshape(2, 3, dof, r)).reshape(6, dof, r)
                 J = J[rows] if sqrt_w is None else J[rows] * sqrt_w[:, None, None]
             w = None
+            x, J, gradient = q[cs], J[:, cs], state[dof + cs.start : dof + cs.stop]
             if limits.any:
-                w, state[dof:H] = limits.inverse_weights(q, state[dof:H])
+                w, gradient[:] = limits.inverse_weights(x, gradient)
             squared = row_weight_sq @ (err * err)  # |S e|²
             diagonal = row_damping[:, None] * step.damping(squared, problem.damping_sq)
-            nullspace = (problem.q_ns, problem.gain, score)
-            np.clip(step.take_steps(q, J, err, w, diagonal, nullspace, space.buffers), lower, upper, out=q)
+            nullspace = (q_ns, problem.gain, score)
+            np.clip(step.take_steps(x, J, err, w, diagonal, nullspace, space.buffers), lower, upper, out=x)
             meta[2] += 1
         # next attempts: one per target that needs one; when few columns run, several at once per target
         # (_resolve takes the outcomes in attempt order, as if the attempts had run one after another)
@@ -195,12 +193,12 @@ def solve_batch(
         extra = np.minimum(share - running, attempts - launched[candidates])
         extra[winner[candidates] < attempts] = 0
         new = np.repeat(candidates, np.maximum(extra, 0))
-    return _resolve(log, winner, limits, (tol_p, tol_r))
+    result = _resolve(log, winner, (tol_p, tol_r))
+    limits.wrap(result.q[:, cs])  # the stepped coordinates' continuous joints into [-π, π)
+    return result
 
 
-def _resolve(
-    log: list[tuple[np.ndarray, ...]], winner: np.ndarray, limits: LimitWeights, tol: tuple
-) -> IKBatchResult:
+def _resolve(log: list[tuple[np.ndarray, ...]], winner: np.ndarray, tol: tuple) -> IKBatchResult:
     """Each target's outcome from its finished attempts, as the single solver takes them one after
     another: the attempts up to the first converged one count (iterations summed), and the best score
     among them wins (the earliest on a tie)."""
@@ -210,10 +208,8 @@ def _resolve(
     total = np.bincount(tid, weights=it, minlength=len(winner)).astype(np.intp)
     order = np.lexsort((att, score, tid))
     first = order[np.r_[True, tid[order][1:] != tid[order][:-1]]]  # best per target, targets ascending
-    best_q = q[first]
-    limits.wrap(best_q)
     success = (ep[first] <= tol[0]) & (er[first] <= tol[1])
-    return IKBatchResult(best_q, success, total, ep[first], er[first], att[first])
+    return IKBatchResult(q[first], success, total, ep[first], er[first], att[first])
 
 
 class _Workspace:

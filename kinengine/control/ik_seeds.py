@@ -29,14 +29,13 @@ bound, 60 frames of a 30-dof chain held 550 MiB)."""
 SEED_TABLE_RNG = 0x5EED_7AB1E
 SEED_MARGIN = 0.05
 """Table configurations are drawn from the inner 1 − 2·this of each bounded joint's range: an attempt from a
-seed on a limit often stalls against it (on random targets 15-25 % fewer iterations; a target whose only
-solutions lie near a limit is reached about as often, ~0.1 % of them are missed either way)."""
+seed on a limit often stalls against it."""
 SEED_EPS = 2.0
-"""Approximate nearest entries: within (1 + this) of the nearest distance (cKDTree's eps; exact ones cost a
-batch ~4x the search for as many reached targets)."""
+"""Approximate nearest entries: within (1 + this) of the nearest distance (cKDTree's eps; exact ones cost
+more search and reach no more targets)."""
 FIRST_SEED_EPS = 3.0
-"""... for every batch target's first entry at once (4 % farther on average than the nearest); the further
-entries, wanted by the few targets whose first attempt fails, with SEED_EPS."""
+"""... for every batch target's first entry at once; the further entries, wanted by the few targets whose
+first attempt fails, with SEED_EPS."""
 SEED_ROTATION_WEIGHT = 0.2
 """[m/rad]: pose distance |Δp| + 0.2·angle used to rank attempts and pick the stored seeds nearest a
 target."""

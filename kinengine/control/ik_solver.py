@@ -97,41 +97,44 @@ def solve(
 ) -> IKResult:
     """Attempts from each seed (S, dof), then ``restarts`` random ones; the first that brings every frame
     within the tolerances (or the best by Σ_F |e_p| + 0.2 m/rad·|e_R|) wins. ``several``: a
-    :class:`MultiIKResult` (maxima over the frames and each frame's errors).
-
-    Per iteration a dozen numpy calls on arrays of 6 to 42 numbers, so their count sets the speed: the
-    normal matrix is written into one buffer whose diagonal view takes λ², and solved by Cholesky
-    (LAPACK ``dposv``: J W⁻¹Jᵀ + λ² S⁻² is symmetric positive definite for λ > 0; least squares if not)."""
+    :class:`MultiIKResult` (maxima over the frames and each frame's errors). Per iteration a dozen numpy
+    calls on arrays of 6 to 42 numbers: their count sets the speed."""
     kin = robot.engine
-    joints = kin.coordinates
-    model, data = kin.model, kin.data()
+    joints, model, data = kin.coordinates, kin.model, kin.data()
     shared = goals[0].problem
     tol_p, tol_r, max_iterations = shared.tol_position, shared.tol_rotation, shared.max_iterations
     damping_sq, q_ns, gain = shared.damping_sq, shared.q_ns, shared.gain
     attempts = len(seeds) + shared.restarts
-    pinocchio_q, fold, identity = kin.pinocchio_q, joints.fold, joints.identity
+    pinocchio_q, fold = kin.pinocchio_q, joints.fold
+    # coordinates that move no frame left out; the others stepped in place in Pinocchio's q if one for one
+    run = step.moving(kin, tuple(g.problem.fid for g in goals))
+    cs, ps, free = run.coords, run.pin, run.free
     place, log3, get_jacobian = pin.updateFramePlacement, pin.log3, pin.getFrameJacobian
     # Pinocchio 4.1 crashes on a Jacobian with nv = 0: a robot without joints only has its pose computed
     movable = kin.dof > 0
     kinematics = pin.computeJointJacobians if movable else pin.forwardKinematics
     subtract, hypot, sqrt = np.subtract, math.hypot, math.sqrt
     m = sum(g.row_count for g in goals)
-    err, J, A = np.empty(m), np.empty((m, robot.dof)), np.empty(m * m)
+    err, J, A = np.empty(m), np.empty((m, cs.stop - cs.start)), np.empty(m * m)
     normal = (A.reshape(m, m), A[:: m + 1])  # A and its diagonal
     # a full pose's rows are weighted by S = diag(1, 1, 1, ρ, ρ, ρ): (S J W⁻¹Jᵀ S + λ² I) x = S e is
     # (J W⁻¹Jᵀ + λ² S⁻²)(S x) = e with Δq = W⁻¹Jᵀ (S x), so the weights only scale the damping's diagonal
     errors, jacobians, row_damping = _layout(goals, err)
     rotation_sq = step.ROTATION_ROW_WEIGHT**2
-    limits = step.limit_weights(kin)
-    weigh, bounds = limits.inverse_weights_one if limits.any else None, (joints.lower, joints.upper)
+    weigh, bounds = run.limits.inverse_weights_one if run.limits.any else None, run.limits.bounds
+    pull = None if q_ns is None else (q_ns[cs], np.clip(q_ns[free], joints.lower[free], joints.upper[free]))
     best, total = None, 0
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()
+        if pull is not None:
+            q[free] = pull[1]
+        q_pin = pinocchio_q(q) if ps is not None else q  # q itself if Pinocchio's is q
+        x = q_pin[ps] if ps is not None else q[cs]  # the stepped coordinates, a view
         last = attempt == attempts - 1 or (attempt == 0 and shared.patient_first)
         iteration, previous, lowest, since = 0, None, math.inf, 0
         history: list[float] = []  # the score at each iteration
         while True:
-            kinematics(model, data, q if identity else pinocchio_q(q))
+            kinematics(model, data, q_pin if ps is not None else pinocchio_q(q))
             per_frame = []
             score, squared, done = 0.0, 0.0, True
             for fid, target, p_d, C_d, e, e_p, e_r, S, sqrt_w, position_rows, start, stop in errors:
@@ -171,17 +174,16 @@ def solve(
             history.append(score)
             iteration += 1
             for fid, reference, S_w, start, stop in jacobians:
-                J_F = get_jacobian(model, data, fid, reference).reshape(6, -1)
-                if not identity:
-                    J_F = fold(J_F)
+                J_F = get_jacobian(model, data, fid, reference).reshape(6, -1)  # (6,) if nv = 1
+                J_F = J_F[:, ps] if ps is not None else fold(J_F)[:, cs]
                 if S_w is None:
                     J[start:stop] = J_F
                 else:
                     np.dot(S_w, J_F, out=J[start:stop])
             diagonal = step.damping(squared, damping_sq) * row_damping
-            previous = step.take_step(
-                q, J, err, normal, diagonal, weigh, previous, bounds, (q_ns, gain, score), dposv
-            )
+            nullspace = (None if pull is None else pull[0], gain, score)
+            previous = step.take_step(x, J, err, normal, diagonal, weigh, previous, bounds, nullspace, dposv)
+        q[cs] = x
         total += iteration
         if best is None or score < best[2]:
             best = (q, per_frame, score, attempt, done)
@@ -189,7 +191,7 @@ def solve(
             break
     assert best is not None  # attempts >= 1: the seeds hold at least one start
     q, per_frame, _, attempt, done = best
-    limits.wrap(q)
+    run.limits.wrap(q[cs])  # the stepped coordinates' continuous joints into [-π, π)
     ep, er = max(pe[0] for pe in per_frame), max(pe[1] for pe in per_frame)
     if not several:
         return IKResult(q, bool(done), total, ep, er, attempt)

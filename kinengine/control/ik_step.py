@@ -7,16 +7,15 @@ error e [m, rad] and its Jacobian J (m, dof),
 λ² = DAMPING_SCALE·|S e|² + λ_min², S = diag(1, 1, 1, ρ, ρ, ρ) on a full pose's rows (ρ =
 ROTATION_ROW_WEIGHT [m/rad]; S = I for rows=/weights= targets), W Chan & Dubey's limit weights
 (:class:`LimitWeights`), z = gain·min(1, score / NULLSPACE_FADE)·(q_ns − q) the pull towards the nullspace
-target. :func:`take_step` takes one step for one configuration (LAPACK ``dposv``: the matrix is symmetric
-positive definite for λ > 0; least squares where it is not), :func:`take_steps` for columns of
-configurations (a Cholesky factorization over all columns at once; numpy's solve where it refuses).
-
-Attempts: :func:`gives_way` tells when one makes way for the next seed (still far, stalled) or ends (stuck).
+target: :func:`take_step` for one configuration, :func:`take_steps` for columns of them. Coordinates that
+move no target frame are left out (:func:`moving`). :func:`gives_way`: when an attempt makes way for the
+next seed (still far, stalled, crawling) or ends (stuck).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -31,8 +30,11 @@ GIVE_UP = 1e-2
 """[m] score |e_p| + 0.2 m/rad·|e_R| above which an attempt gives way after PROBE_ITERATIONS iterations."""
 STALL_FROM, STALL_SPAN, STALL_RATIO = 4, 3, 0.8
 """From iteration STALL_FROM on, an attempt whose score is above STALL_RATIO × its score STALL_SPAN iterations
-earlier gives way (stuck on a joint limit or in a local minimum: such attempts crawl for max_iterations,
-and on 1,000 random targets they cost the ABB IRB 120 more iterations than the converging ones)."""
+earlier gives way (stuck on a joint limit or in a local minimum)."""
+CRAWL = 30
+"""An attempt that is not the last gives way after this many iterations unconverged: it crawls (a joint on a
+limit, whose clipped step leaves the others' short, shrinks the error only linearly) where the next seed
+converges in a few (crawling attempts held a batch of Panda targets for max_iterations)."""
 STUCK_SPAN, STUCK_RATIO = 10, 0.9
 """An attempt, the last one too, ends after STUCK_SPAN iterations without a score below STUCK_RATIO × its best
 (in a local minimum or against a limit: it would crawl to max_iterations unchanged)."""
@@ -41,8 +43,7 @@ DAMPING_SCALE = 0.1
 below): weaker than ½|e|², so the first steps from a stored seed go further."""
 ROTATION_ROW_WEIGHT = SEED_ROTATION_WEIGHT
 """[m/rad] a full pose's rotation rows (error and Jacobian) are weighted by this in the least squares, which
-then minimizes |e_p|² + (0.2 m/rad·|e_R|)², the squared pose distance that ranks attempts and seeds (with
-the stall rule and DAMPING_SCALE 0.1, about half the iterations of unweighted rows on random targets)."""
+then minimizes |e_p|² + (0.2 m/rad·|e_R|)², the squared pose distance that ranks attempts and seeds."""
 POSE_ROW_DAMPING = np.array([1.0, 1.0, 1.0] + [1.0 / ROTATION_ROW_WEIGHT**2] * 3)
 """S⁻² of a full pose's six rows: λ² S⁻² is the damping on the diagonal of J W⁻¹Jᵀ."""
 NULLSPACE_FADE = 5e-2
@@ -58,7 +59,7 @@ class LimitWeights:
     (None if there are none)."""
 
     def __init__(self, lower: np.ndarray, upper: np.ndarray, continuous: np.ndarray | None = None) -> None:
-        self.bounded = np.isfinite(lower) & np.isfinite(upper)
+        self.bounds, self.bounded = (lower, upper), np.isfinite(lower) & np.isfinite(upper)
         self.any = bool(self.bounded.any())
         self.lower, self.upper = np.where(self.bounded, lower, -1.0), np.where(self.bounded, upper, 1.0)
         self.middle_twice = self.lower + self.upper
@@ -99,10 +100,37 @@ class LimitWeights:
         return np.array(inverse), grad
 
 
-def limit_weights(kin: Kinematics) -> LimitWeights:
-    """The robot's LimitWeights (its coordinates' limits and continuous joints), made once per robot."""
-    c = kin.coordinates
-    return kin.memoized("ik limit weights", lambda: LimitWeights(c.lower, c.upper, c.continuous))
+@dataclass(frozen=True)
+class Moving:
+    """The coordinates ``coords`` = [c0, c1) spanning every one that moves a set of frames (the ``free``
+    others' Jacobian columns are zero: left out of the step, at the nullspace target if there is one), the
+    run ``pin`` of Pinocchio's q and v they are one for one with (None: mapped), and their ``limits``."""
+
+    coords: slice
+    pin: slice | None
+    limits: LimitWeights
+    free: np.ndarray
+
+
+def moving(kin: Kinematics, fids: tuple[int, ...]) -> Moving:
+    """The :class:`Moving` coordinates of frames ``fids`` (Pinocchio frame ids), made once per set."""
+
+    def make() -> Moving:
+        model, c = kin.model, kin.coordinates
+        joints = {j for fid in fids for j in model.supports[model.frames[fid].parentJoint] if j}
+        rows = [model.joints[j].idx_v + k for j in joints for k in range(model.joints[j].nv)]
+        used = np.flatnonzero(c.matrix[rows].any(axis=0))
+        c0, c1 = (int(used[0]), int(used[-1]) + 1) if len(used) else (0, c.dof)
+        entries = np.flatnonzero((c.leader >= c0) & (c.leader < c1))  # Pinocchio's q from [c0, c1)
+        pin = slice(int(entries[0]), int(entries[0]) + c1 - c0) if len(entries) == c1 - c0 > 0 else None
+        one = (
+            pin is not None and (c.leader[pin] == np.arange(c0, c1)).all() and (c.multiplier[pin] == 1).all()
+        )
+        limits = LimitWeights(c.lower[c0:c1], c.upper[c0:c1], c.continuous[c0:c1])
+        free = np.r_[0:c0, c1 : c.dof].astype(np.intp)
+        return Moving(slice(c0, c1), pin if one and not c.offset[pin].any() else None, limits, free)
+
+    return kin.memoized(("ik moving", fids), make)
 
 
 def gives_way(
@@ -113,16 +141,16 @@ def gives_way(
     since: int | np.ndarray,
 ) -> bool | np.ndarray:
     """Whether an attempt ends without converging at this iteration: one that is not ``patient`` (not the
-    last) when its score is still above GIVE_UP after PROBE_ITERATIONS or stalled (from STALL_FROM on,
-    above STALL_RATIO × its score STALL_SPAN iterations earlier); any when stuck (``since`` >= STUCK_SPAN
-    iterations without a score below STUCK_RATIO × its best). ``history``: the earlier scores, oldest
-    first (a list for one attempt; rows (≥ STALL_SPAN, r) for columns of attempts, with the other
-    arguments (r,): an array out)."""
+    last) when its score is still above GIVE_UP after PROBE_ITERATIONS, stalled (from STALL_FROM on,
+    above STALL_RATIO × its score STALL_SPAN iterations earlier) or crawling (CRAWL iterations); any when
+    stuck (``since`` >= STUCK_SPAN iterations without a score below STUCK_RATIO × its best). ``history``:
+    the earlier scores, oldest first (a list for one attempt; rows (≥ STALL_SPAN, r) for columns of
+    attempts, with the other arguments (r,): an array out)."""
     if isinstance(iteration, int):  # one attempt, in plain floats
-        probed = iteration == PROBE_ITERATIONS and score > GIVE_UP
+        probed = (iteration == PROBE_ITERATIONS and score > GIVE_UP) or iteration >= CRAWL
         stalled = iteration >= STALL_FROM and score > STALL_RATIO * history[-STALL_SPAN]
         return since >= STUCK_SPAN or (not patient and (probed or stalled))
-    probed = (iteration == PROBE_ITERATIONS) & (score > GIVE_UP)
+    probed = ((iteration == PROBE_ITERATIONS) & (score > GIVE_UP)) | (iteration >= CRAWL)
     stalled = (iteration >= STALL_FROM) & (score > STALL_RATIO * history[-STALL_SPAN])
     return ((probed | stalled) & ~patient) | (since >= STUCK_SPAN)
 
@@ -164,24 +192,19 @@ def take_step(
     np.dot(JW, J.T, out=A)
     A_diagonal += diagonal
     q_ns, gain, score = nullspace
-    if q_ns is None:
-        _, x, info = dposv(A, err)
-        q += np.dot(JW.T, x if info == 0 else np.linalg.lstsq(A, err, rcond=None)[0])
-    else:
-        z = nullspace_pull(gain, score, q_ns, q)
-        b = np.column_stack((err, J @ z))
-        _, x, info = dposv(A, b)
-        if info:
-            x = np.linalg.lstsq(A, b, rcond=None)[0]
-        q += JW.T @ (x[:, 0] - x[:, 1]) + z
+    z = None if q_ns is None else nullspace_pull(gain, score, q_ns, q)
+    b = err if z is None else err - J @ z
+    _, x, info = dposv(A, b)
+    q += np.dot(JW.T, x if info == 0 else np.linalg.lstsq(A, b, rcond=None)[0])
+    if z is not None:
+        q += z
     np.minimum(np.maximum(q, bounds[0], out=q), bounds[1], out=q)
     return previous
 
 
 CHOLESKY_FROM = 256
 """From this many columns on, :func:`take_steps` factorizes A column-wise (one numpy pass per entry over all
-columns: ~8x faster than numpy's stacked solve at 10,000 columns, ``benchmarks/ik_batch_step.py``); below
-it numpy's stacked solve (fewer calls)."""
+columns, ``benchmarks/ik_batch_step.py``); below it numpy's stacked solve (fewer calls)."""
 
 
 def take_steps(
@@ -200,7 +223,7 @@ def take_steps(
     them all (:func:`_solve_stacked`: LU, least squares where A is singular). ``buffers``: (J W⁻¹
     (≥m, dof, ≥r), A (≥ m·m·r, flat)), reused between iterations."""
     m, r = len(J), J.shape[2]
-    JW = J if w is None else np.multiply(J, w, out=buffers[0][:m, :, :r])
+    JW = J if w is None else np.multiply(J, w, out=buffers[0][:m, : J.shape[1], :r])
     q_ns, gain, score = nullspace
     z = None if q_ns is None else nullspace_pull(gain, score, q_ns, q)
     if z is not None:
@@ -266,24 +289,4 @@ def _cholesky_solve(A: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return x, refused
 
 
-__all__ = [
-    "CHOLESKY_FROM",
-    "DAMPING_SCALE",
-    "GIVE_UP",
-    "NULLSPACE_FADE",
-    "POSE_ROW_DAMPING",
-    "PROBE_ITERATIONS",
-    "ROTATION_ROW_WEIGHT",
-    "STALL_FROM",
-    "STALL_RATIO",
-    "STALL_SPAN",
-    "STUCK_RATIO",
-    "STUCK_SPAN",
-    "LimitWeights",
-    "damping",
-    "gives_way",
-    "limit_weights",
-    "nullspace_pull",
-    "take_step",
-    "take_steps",
-]
+__all__ = ["LimitWeights", "Moving", "damping", "gives_way", "moving", "take_step", "take_steps"]
