@@ -19,6 +19,7 @@ from .closed_form import METHODS, ClosedFormChain, available, chain_of, ik_solut
 from .ik_candidates import residuals
 from .ik_ranges import wrap_pi
 from .ik_seeds import middle_of_ranges
+from .ik_target import checked_start
 
 if TYPE_CHECKING:  # the facade is a higher layer: named for the checker only
     from .ik_batch import IKBatchResult
@@ -83,15 +84,9 @@ def nearest_result(
     from .ik_batch import IKBatchResult
     from .ik_solver import IKResult
 
-    coords = robot.engine.coordinates
     single = np.ndim(target) == 2
-    if q0 is None:
-        reference: np.ndarray = middle_of_ranges(robot)
-    else:
-        reference = coords.check(q0, name="q0", allow_batch=not single)
-        n = np.shape(target)[0]
-        if reference.ndim == 2 and len(reference) != n:
-            raise OptionError(f"`q0` must be (dof,) or one row per target ({n}), got {len(reference)} rows")
+    start = checked_start(robot, q0, "q0", None if single else np.shape(target)[0])
+    reference = middle_of_ranges(robot) if start is None else start
     found = ik_solutions(robot, target, frame, q_near=reference)
     poses = np.asarray(target, dtype=np.float64)
     if single and found.count:  # the common case, without the batch's arrays
