@@ -60,7 +60,8 @@ def inverse_kinematics(
     row. Success: position error <= ``tol_position`` [m] and rotation error <= ``tol_rotation`` [rad].
     ``max_iterations``: per attempt; ``restarts``: random attempts after the seeded ones (``rng``).
     ``nullspace_target`` (dof,): preferred q, pursued with ``nullspace_gain`` [1/iteration] where the
-    task leaves freedom. ``min_damping``: λ_min [1]. Every option is validated (OptionError).
+    task leaves freedom; coordinates that move no target frame are set to it (clipped into the limits).
+    ``min_damping``: λ_min [1]. Every option is validated (OptionError).
 
     Several frames at once: ``target`` a mapping {frame: T_IF (4, 4)} (``frame`` None), ``rows`` and
     ``weights`` one spec for all or a mapping {frame: spec}; see :mod:`kinengine.control.ik_multi`.
@@ -80,6 +81,10 @@ def inverse_kinematics(
                 "a mapping {frame: pose} names its frames and takes poses (4, 4): leave `frame`, "
                 "`position` and `rotation` None (or pass one pose with frame=...)"
             )
+        from .closed_form import METHODS
+
+        if method not in METHODS:
+            raise OptionError(f"unknown method {method!r}; use 'auto', 'closed_form' or 'numeric'")
         if method not in ("auto", "numeric"):
             raise OptionError(
                 f"method={method!r} does not solve a mapping {{frame: pose}} (closed forms solve poses "

@@ -133,7 +133,8 @@ def solve_batch(
             block[P : P + 3], block[P + 3 : S] = p_d[new].T, C_d[new].reshape(-1, 9).T
             meta, state = np.concatenate((meta, new_meta), axis=1), np.concatenate((state, block), axis=1)
         r, (tid, att, it) = meta.shape[1], meta
-        patient = (att == attempts - 1) | ((att == 0) & problem.patient_first)
+        from_q0 = (att == 0) & problem.patient_first
+        patient = (att == attempts - 1) | from_q0
         if not r:
             break
         if r > space.capacity:
@@ -157,7 +158,8 @@ def solve_batch(
         done = (ep <= tol_p) & (er <= tol_r)
         best = score < step.STUCK_RATIO * state[B]  # a new best; the count of iterations since restarts
         state[B], state[B + 1] = np.where(best, score, state[B]), np.where(best, 0.0, state[B + 1] + 1)
-        end = done | (it == max_iterations) | step.gives_way(it, score, history, patient, state[B + 1])
+        stopped = step.gives_way(it, score, history, patient, state[B + 1], from_q0)
+        end = done | (it == max_iterations) | stopped
         history[:-1], history[-1] = history[1:].copy(), score  # oldest first
         ended = np.empty(0, dtype=np.intp)
         if end.any():

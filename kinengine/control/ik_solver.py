@@ -130,7 +130,8 @@ def solve(
             q[free] = pull[1]
         q_pin = pinocchio_q(q) if ps is not None else q  # q itself if Pinocchio's is q
         x = q_pin[ps] if ps is not None else q[cs]  # the stepped coordinates, a view
-        last = attempt == attempts - 1 or (attempt == 0 and shared.patient_first)
+        from_q0 = attempt == 0 and shared.patient_first
+        last = attempt == attempts - 1 or from_q0
         iteration, previous, lowest, since = 0, None, math.inf, 0
         history: list[float] = []  # the score at each iteration
         while True:
@@ -168,7 +169,7 @@ def solve(
                 done
                 or not movable  # no joint moves a frame: the error stays as it is
                 or iteration == max_iterations
-                or step.gives_way(iteration, score, history, last, since)
+                or step.gives_way(iteration, score, history, last, since, from_q0)
             ):
                 break
             history.append(score)

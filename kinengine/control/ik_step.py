@@ -36,8 +36,9 @@ CRAWL = 30
 limit, whose clipped step leaves the others' short, shrinks the error only linearly) where the next seed
 converges in a few (crawling attempts held a batch of Panda targets for max_iterations)."""
 STUCK_SPAN, STUCK_RATIO = 10, 0.9
-"""An attempt, the last one too, ends after STUCK_SPAN iterations without a score below STUCK_RATIO × its best
-(in a local minimum or against a limit: it would crawl to max_iterations unchanged)."""
+"""An attempt, the last one too (but not one from the caller's q0), ends after STUCK_SPAN iterations without a
+score below STUCK_RATIO × its best (in a local minimum or against a limit: it would crawl to max_iterations
+unchanged)."""
 DAMPING_SCALE = 0.1
 """λ² = DAMPING_SCALE·|e|² + λ_min² (Sugihara's rule λ² = ½ eᵀW_E e + λ_min² with W_E = 0.2·I, e weighted as
 below): weaker than ½|e|², so the first steps from a stored seed go further."""
@@ -139,20 +140,22 @@ def gives_way(
     history: Sequence[float] | np.ndarray,
     patient: bool | np.ndarray,
     since: int | np.ndarray,
+    from_q0: bool | np.ndarray,
 ) -> bool | np.ndarray:
     """Whether an attempt ends without converging at this iteration: one that is not ``patient`` (not the
-    last) when its score is still above GIVE_UP after PROBE_ITERATIONS, stalled (from STALL_FROM on,
-    above STALL_RATIO × its score STALL_SPAN iterations earlier) or crawling (CRAWL iterations); any when
-    stuck (``since`` >= STUCK_SPAN iterations without a score below STUCK_RATIO × its best). ``history``:
-    the earlier scores, oldest first (a list for one attempt; rows (≥ STALL_SPAN, r) for columns of
-    attempts, with the other arguments (r,): an array out)."""
+    last, nor from the caller's q0) when its score is still above GIVE_UP after PROBE_ITERATIONS, stalled
+    (from STALL_FROM on, above STALL_RATIO × its score STALL_SPAN iterations earlier) or crawling (CRAWL
+    iterations); any but one ``from_q0`` when stuck (``since`` >= STUCK_SPAN iterations without a score
+    below STUCK_RATIO × its best): the caller's start may crawl to max_iterations, as near a joint limit.
+    ``history``: the earlier scores, oldest first (a list for one attempt; rows (≥ STALL_SPAN, r) for
+    columns of attempts, with the other arguments (r,): an array out)."""
     if isinstance(iteration, int):  # one attempt, in plain floats
         probed = (iteration == PROBE_ITERATIONS and score > GIVE_UP) or iteration >= CRAWL
         stalled = iteration >= STALL_FROM and score > STALL_RATIO * history[-STALL_SPAN]
-        return since >= STUCK_SPAN or (not patient and (probed or stalled))
+        return (since >= STUCK_SPAN and not from_q0) or (not patient and (probed or stalled))
     probed = ((iteration == PROBE_ITERATIONS) & (score > GIVE_UP)) | (iteration >= CRAWL)
     stalled = (iteration >= STALL_FROM) & (score > STALL_RATIO * history[-STALL_SPAN])
-    return ((probed | stalled) & ~patient) | (since >= STUCK_SPAN)
+    return ((probed | stalled) & ~patient) | ((since >= STUCK_SPAN) & ~from_q0)
 
 
 def damping(squared: float | np.ndarray, damping_sq: float) -> float | np.ndarray:

@@ -80,7 +80,8 @@ def checked_seed(rng: object) -> object:
         return rng
     if isinstance(rng, (bool, np.bool_)) or not isinstance(rng, numbers.Integral) or rng < 0:
         raise OptionError(
-            f"rng must be None, a seed (a whole number >= 0) or a numpy.random.Generator, got "
+            f"rng must be None, a seed (a whole number >= 0), a numpy.random.Generator, BitGenerator or "
+            f"SeedSequence, got "
             f"{type(rng).__name__} {_short(rng)}"
         )
     return int(rng)
