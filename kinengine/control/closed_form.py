@@ -221,7 +221,7 @@ def ik_solutions(
 ) -> IKSolutions:
     """Every solution of T_IF (4, 4) or of each pose of (N, 4, 4); see :class:`IKSolutions`."""
     chain = solver_of(robot, frame)
-    poses = exact_pose(*(checked_poses(T) if is_batch(T) else checked_pose(T)))
+    poses = exact_pose(*(checked_poses(T) if is_batch(T) else checked_pose(T, parameters=False)))
     single = poses.ndim == 2
     poses = poses[None] if single else poses
     near = checked_start(robot, q_near, "q_near", None if single else len(poses))

@@ -215,14 +215,16 @@ def _within_reach(distance: float) -> None:
         )
 
 
-def checked_pose(target: object) -> tuple[np.ndarray, float]:
+def checked_pose(target: object, parameters: bool = True) -> tuple[np.ndarray, float]:
     """(T (4, 4) float64, max |CᵀC − I| of its rotation block): a pose target checked as :func:`checked_poses`
-    checks each of a batch, accepted in plain floats (cheaper than numpy for one pose)."""
-    value = _real(target, "a (4, 4) pose or parameters χ")
+    checks each of a batch, accepted in plain floats (cheaper than numpy for one pose). ``parameters``: the
+    caller also takes parameters χ (its errors then say how to give them)."""
+    value = _real(target, "a (4, 4) pose or parameters χ" if parameters else "a (4, 4) pose")
     if value.shape != (4, 4):
+        chi = "; for parameters χ name their position= and/or rotation= parameterization"
         raise ParameterizationError(
             f"Expected `target` to be a finite pose of shape (4, 4) or a batch (N, 4, 4), got "
-            f"{value.shape}; for parameters χ name their position= and/or rotation= parameterization"
+            f"{value.shape}{chi if parameters else ''}"
         )
     flat = value.ravel().tolist()
     a, b, c, x, d, e, f, y, g, h, i, z = flat[:12]
