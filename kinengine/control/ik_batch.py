@@ -86,7 +86,7 @@ def solve_batch(
     rng: RandomSource,
 ) -> IKBatchResult:
     """Solve every target (p_d (N, 3), C_d (N, 3, 3)) vectorized; see the module doc."""
-    kin, joints, dof, n, c = robot.engine, robot.engine.coordinates, robot.dof, len(p_d), CHUNK_TARGETS
+    kin, dof, n, c = robot.engine, robot.dof, len(p_d), CHUNK_TARGETS
     if n > c:  # q0 (N, dof) split with the targets, q0 (dof,) shared
         cut = [slice(a, a + c) for a in range(0, n, c)]
         Q0 = [q0 if q0 is None or q0.ndim == 1 else q0[k] for k in cut]
@@ -101,7 +101,7 @@ def solve_batch(
     lower, upper = (bound[:, None] for bound in limits.bounds)
     q_ns, free = problem.q_ns, run.free  # the other coordinates: at the nullspace target if there is one
     if q_ns is not None:
-        q_ns, pulled = q_ns[cs], np.clip(q_ns[free], joints.lower[free], joints.upper[free])[:, None]
+        q_ns, pulled = q_ns[cs], problem.q_ns_within[free][:, None]  # type: ignore[index]
     # a full pose's rotation rows are weighted by ρ: |S e|² in the damping, λ² S⁻² on A's diagonal (ik_step)
     row_damping = step.POSE_ROW_DAMPING if rows is None else np.ones(len(rows))  # S⁻²
     row_weight_sq = 1.0 / row_damping  # S²

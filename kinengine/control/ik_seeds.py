@@ -109,9 +109,7 @@ def middle_of_ranges(robot: RobotLike) -> np.ndarray:
 def _default_start(robot: RobotLike, problem: Problem) -> np.ndarray:
     """The seeded start that is not from a table: the middle of the joint ranges (0 for an unbounded joint),
     or the nullspace target clipped into the limits."""
-    if problem.q_ns is not None:
-        return np.clip(problem.q_ns, robot.engine.coordinates.lower, robot.engine.coordinates.upper)
-    return middle_of_ranges(robot)
+    return middle_of_ranges(robot) if problem.q_ns_within is None else problem.q_ns_within
 
 
 def _nearest(robot: RobotLike, goal: FrameGoal) -> np.ndarray:

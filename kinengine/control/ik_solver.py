@@ -122,7 +122,7 @@ def solve(
     errors, jacobians, row_damping = _layout(goals, err)
     rotation_sq = step.ROTATION_ROW_WEIGHT**2
     weigh, bounds = run.limits.inverse_weights_one if run.limits.any else None, run.limits.bounds
-    pull = None if q_ns is None else (q_ns[cs], np.clip(q_ns[free], joints.lower[free], joints.upper[free]))
+    pull = None if q_ns is None else (q_ns[cs], shared.q_ns_within[free])  # type: ignore[index]
     best, total = None, 0
     for attempt in range(attempts):
         q = (seeds[attempt] if attempt < len(seeds) else generator.configurations(robot)).copy()

@@ -45,6 +45,7 @@ class Problem:
     restarts: int
     damping_sq: float
     q_ns: np.ndarray | None
+    q_ns_within: np.ndarray | None  # q_ns clipped into the joint limits (where a left-out coordinate sits)
     gain: float
     patient_first: bool  # the first attempt (from the caller's q0) never gives up early
 
@@ -97,6 +98,8 @@ def checked_problem(
     gain = number_option("`nullspace_gain`", o.nullspace_gain, 0.0, 1.0)
     damping = number_option("`min_damping`", o.min_damping, 0.0, 1e6)
     q_ns = checked_start(robot, o.nullspace_target, "nullspace_target", None)
+    joints = robot.engine.coordinates
+    q_ns_within = None if q_ns is None else np.clip(q_ns, joints.lower, joints.upper)
     kept, sqrt_w = None, None
     if rows is not None or weights is not None:
         kept = np.arange(6) if rows is None else _rows(rows)
@@ -109,7 +112,7 @@ def checked_problem(
             sqrt_w = np.sqrt([number_option("`weights[i]`", v, 0.0, 1e12) for v in w])
     position_rows = _SIX_ROWS_POSITION if kept is None else kept < 3
     limits = (tol_p, tol_r, max_iterations, restarts, damping**2)
-    return Problem(fid, frame, kept, sqrt_w, position_rows, *limits, q_ns, gain, o.has_q0)
+    return Problem(fid, frame, kept, sqrt_w, position_rows, *limits, q_ns, q_ns_within, gain, o.has_q0)
 
 
 def _rows(rows: object) -> np.ndarray:
