@@ -26,8 +26,8 @@
  * Declared free-threading safe (Py_mod_gil): a Kernel is immutable after construction and run() writes only
  * the outputs its caller passes.
  *
- * Same algorithm as the numpy chain, one configuration at a time, so nothing but the outputs is written
- * (no scratch rows beyond a few kB per call): for each movable joint i from the root,
+ * Same algorithm as the numpy chain, over blocks of 64 configurations at a time, so nothing but the outputs and
+ * a block's scratch (some tens of kB per call) is written: for each movable joint i from the root,
  *
  *     p_i = p_parent + S_parent t_i,   S_i = S_parent K_i Rz(theta_i)    (+ S_i e_z theta_i if prismatic)
  *
@@ -35,9 +35,11 @@
  * C_IF = S_last R_f and p_f = p_last + S_last t_f. Jacobian column of joint i (LOCAL_WORLD_ALIGNED):
  * revolute [z_i x (p_f - p_i); z_i], prismatic [z_i; 0]; WORLD: p_i x z_i for the revolute linear part;
  * LOCAL: C_IF^T applied to both halves; a mimic joint adds scaling_i x its column to the leader's.
- * sin and cos of a block of 64 configurations' angles are computed first, in a loop without branches that
- * the compiler vectorizes (sin_cos below: within 1.1e-16 of libm); results agree with Pinocchio to
- * rounding (about 1e-15), as the numpy chain's do.
+ * sin and cos of a block's angles are computed first, in a loop without branches that the compiler vectorizes
+ * (sin_cos below: within 1.1e-16 of libm); then each step runs over the block's configurations side by side
+ * (run_block), which the compiler vectorizes too. Outputs of 4 MiB or more per call are written with
+ * non-temporal stores on x86-64 (store_row). Results agree with Pinocchio to rounding (about 1e-15), as the
+ * numpy chain's do.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -173,136 +175,6 @@ get_array(PyObject *obj, Py_buffer *view, int ndim, int writable, const char *wh
 #define AT3(v, i, r, k) \
     (*(double *)((char *)(v).buf + (i) * (v).strides[0] + (r) * (v).strides[1] + (k) * (v).strides[2]))
 
-/* out = a x b */
-static inline void
-cross(const double *a, const double *b, double *out)
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* out = C^T v for a row-major 3x3 C */
-static inline void
-rotate_back(const double *C, const double *v, double *out)
-{
-    for (int k = 0; k < 3; k++) {
-        out[k] = C[k] * v[0] + C[3 + k] * v[1] + C[6 + k] * v[2];
-    }
-}
-
-/* S (row-major) = S A, A row-major 3x3 */
-static inline void
-multiply(double *S, const double *A)
-{
-    double r[9];
-    for (int i = 0; i < 3; i++) {
-        for (int k = 0; k < 3; k++) {
-            r[3 * i + k] = S[3 * i] * A[k] + S[3 * i + 1] * A[3 + k] + S[3 * i + 2] * A[6 + k];
-        }
-    }
-    memcpy(S, r, sizeof r);
-}
-
-/* p += S t */
-static inline void
-translate(double *p, const double *S, const double *t)
-{
-    for (int i = 0; i < 3; i++) {
-        p[i] += S[3 * i] * t[0] + S[3 * i + 1] * t[1] + S[3 * i + 2] * t[2];
-    }
-}
-
-/* T[i] and J[i] from the joint angles theta (m), their sines and cosines; zp: 6 m doubles of scratch. */
-static void
-run_row(const Kernel *k, Py_ssize_t i, const double *theta, const double *sines, const double *cosines,
-        const Py_buffer *T, const Py_buffer *J, int reference, double *zp)
-{
-    double S[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, p[3] = {0, 0, 0};
-    for (Py_ssize_t j = 0; j < k->m; j++) {
-        const Step *s = &k->steps[j];
-        translate(p, S, s->t);
-        multiply(S, s->K);
-        if (s->prismatic) {
-            p[0] += S[2] * theta[j];
-            p[1] += S[5] * theta[j];
-            p[2] += S[8] * theta[j];
-        }
-        else {
-            double c = cosines[j], sn = sines[j];
-            for (int r = 0; r < 3; r++) { /* (a, b) -> (a c + b s, b c - a s) */
-                double a = S[3 * r], b = S[3 * r + 1];
-                S[3 * r] = a * c + b * sn;
-                S[3 * r + 1] = b * c - a * sn;
-            }
-        }
-        double *z = zp + 6 * j;
-        z[0] = S[2], z[1] = S[5], z[2] = S[8];
-        z[3] = p[0], z[4] = p[1], z[5] = p[2];
-    }
-    double C[9], pf[3] = {p[0], p[1], p[2]};
-    memcpy(C, S, sizeof C);
-    translate(pf, S, k->t);
-    multiply(C, k->R);
-    if (T->buf != NULL) {
-        for (int r = 0; r < 3; r++) {
-            AT3(*T, i, r, 0) = C[3 * r];
-            AT3(*T, i, r, 1) = C[3 * r + 1];
-            AT3(*T, i, r, 2) = C[3 * r + 2];
-            AT3(*T, i, r, 3) = pf[r];
-        }
-        AT3(*T, i, 3, 0) = 0.0, AT3(*T, i, 3, 1) = 0.0, AT3(*T, i, 3, 2) = 0.0, AT3(*T, i, 3, 3) = 1.0;
-    }
-    if (J->buf == NULL) {
-        return;
-    }
-    for (Py_ssize_t c = 0; c < k->dof; c++) {
-        if (!k->used[c]) {
-            for (int r = 0; r < 6; r++) {
-                AT3(*J, i, r, c) = 0.0;
-            }
-        }
-    }
-    for (Py_ssize_t j = 0; j < k->m; j++) {
-        const Step *s = &k->steps[j];
-        const double *z = zp + 6 * j, *pj = zp + 6 * j + 3;
-        double col[6];
-        if (s->prismatic) {
-            col[0] = z[0], col[1] = z[1], col[2] = z[2], col[3] = col[4] = col[5] = 0.0;
-        }
-        else {
-            if (reference == 1) {
-                cross(pj, z, col);
-            }
-            else {
-                double d[3] = {pf[0] - pj[0], pf[1] - pj[1], pf[2] - pj[2]};
-                cross(z, d, col);
-            }
-            col[3] = z[0], col[4] = z[1], col[5] = z[2];
-        }
-        if (reference == 2) {
-            double v[3], w[3];
-            rotate_back(C, col, v);
-            rotate_back(C, col + 3, w);
-            memcpy(col, v, sizeof v);
-            memcpy(col + 3, w, sizeof w);
-        }
-        if (s->scaling != 1.0) {
-            for (int r = 0; r < 6; r++) {
-                col[r] *= s->scaling;
-            }
-        }
-        for (int r = 0; r < 6; r++) {
-            if (s->accumulate) {
-                AT3(*J, i, r, s->coordinate) += col[r];
-            }
-            else {
-                AT3(*J, i, r, s->coordinate) = col[r];
-            }
-        }
-    }
-}
-
 /* sin and cos of angles in [-LIMIT, LIMIT] without a branch, so that the compiler runs several at once
  * (SIMD): FreeBSD msun's (fdlibm's) reduction x = n pi/2 + (y0 + y1), good to 85 bits for |n| < 2^20, and
  * its kernels on [-pi/4, pi/4] (error below 1 ulp); libm's sincos takes any other angle. */
@@ -355,28 +227,242 @@ sin_cos(const double *KE_RESTRICT x, double *KE_RESTRICT sin_out, double *KE_RES
     }
 }
 
-#define BLOCK 64 /* configurations whose angles are turned to sin and cos together */
+#define BLOCK 64 /* configurations evaluated together: their angles' sin and cos, then each step */
+#define SCRATCH(m) ((37 + 9 * (m)) * BLOCK) /* doubles of scratch for run_rows and candidates_rows, then J's row */
+#define STREAM_FROM (4 << 20) /* bytes of output of one call from which it is stored past the caches */
+
+#if defined(__x86_64__) || defined(_M_X64) /* SSE2 is part of x86-64 */
+#include <emmintrin.h>
+#define HAVE_STREAM 1
+#else
+#define HAVE_STREAM 0
+#endif
+
+/* Row i of an (N, rows, cols) output from the rows x cols doubles of src (row-major). With stream, and where the
+ * row is contiguous and 16-byte aligned (x86-64), by non-temporal stores: an output larger than the caches is
+ * written without first reading each of its cache lines, as a plain store does; the caller fences after. */
+static inline void
+store_row(const Py_buffer *v, Py_ssize_t i, const double *src, Py_ssize_t cols, int stream)
+{
+    const Py_ssize_t rows = v->shape[1], count = rows * cols;
+    char *dst = (char *)v->buf + i * v->strides[0];
+    if (v->strides[2] == (Py_ssize_t)sizeof(double) && v->strides[1] == cols * (Py_ssize_t)sizeof(double)) {
+#if HAVE_STREAM
+        if (stream && (uintptr_t)dst % 16 == 0 && count % 2 == 0) {
+            for (Py_ssize_t k = 0; k < count; k += 2) {
+                _mm_stream_pd((double *)dst + k, _mm_loadu_pd(src + k));
+            }
+            return;
+        }
+#endif
+        memcpy(dst, src, count * sizeof(double));
+        return;
+    }
+    for (Py_ssize_t r = 0; r < rows; r++) {
+        for (Py_ssize_t c = 0; c < cols; c++) {
+            *(double *)(dst + r * v->strides[1] + c * v->strides[2]) = src[r * cols + c];
+        }
+    }
+}
+
+/* T[start + b] and J[start + b] for the b < rows configurations of a block, from their joint angles theta, sines
+ * and cosines ([step][row], BLOCK apart); work: SCRATCH(m) + 6 dof doubles, its first (21 + 6 m) BLOCK used here
+ * (and J's row at the end); stream: store T and J past the caches (store_row). Structure of arrays (an entry of every
+ * configuration, then the next entry) so that the compiler runs several configurations at once (SIMD); each
+ * configuration's arithmetic is the one written in the header, in that order. */
+CLONES static void
+run_block(const Kernel *k, Py_ssize_t start, Py_ssize_t rows, const double *theta, const double *sines,
+          const double *cosines, const Py_buffer *T, const Py_buffer *J, int reference, int stream, double *work)
+{
+    const Py_ssize_t m = k->m;
+    double *KE_RESTRICT S = work;              /* S[e][b]: entry e of S (3x3 row-major) */
+    double *KE_RESTRICT p = S + 9 * BLOCK;     /* p[r][b] */
+    double *KE_RESTRICT col = p + 3 * BLOCK;   /* C_IF [e][b]; then col[r][b], a Jacobian column */
+    double *KE_RESTRICT zp = col + 9 * BLOCK;  /* per step j: z_j [3][b], p_j [3][b]; then column j [6][b] */
+    double *KE_RESTRICT jrow = work + SCRATCH(m);  /* one configuration's J (6, dof) */
+    for (Py_ssize_t b = 0; b < rows; b++) {
+        for (int e = 0; e < 9; e++) {
+            S[e * BLOCK + b] = e % 4 == 0 ? 1.0 : 0.0;
+        }
+        p[b] = p[BLOCK + b] = p[2 * BLOCK + b] = 0.0;
+    }
+    for (Py_ssize_t j = 0; j < m; j++) {
+        const Step *s = &k->steps[j];
+        const double *K = s->K, *t = s->t, *th = theta + j * BLOCK, *sn = sines + j * BLOCK;
+        const double *cs = cosines + j * BLOCK;
+        for (int r = 0; r < 3; r++) { /* row r of S and p: p += S t, S = S K, then S = S Rz(theta) or p += S e_z theta */
+            double *KE_RESTRICT S0 = S + 3 * r * BLOCK, *KE_RESTRICT S1 = S0 + BLOCK, *KE_RESTRICT S2 = S1 + BLOCK;
+            double *KE_RESTRICT pr = p + r * BLOCK;
+            const double t0 = t[0], t1 = t[1], t2 = t[2], k0 = K[0], k1 = K[1], k2 = K[2], k3 = K[3], k4 = K[4];
+            const double k5 = K[5], k6 = K[6], k7 = K[7], k8 = K[8];
+            for (Py_ssize_t b = 0; b < rows; b++) {
+                double a0 = S0[b], a1 = S1[b], a2 = S2[b];
+                pr[b] += a0 * t0 + a1 * t1 + a2 * t2;
+                S0[b] = a0 * k0 + a1 * k3 + a2 * k6;
+                S1[b] = a0 * k1 + a1 * k4 + a2 * k7;
+                S2[b] = a0 * k2 + a1 * k5 + a2 * k8;
+            }
+            if (s->prismatic) {
+                for (Py_ssize_t b = 0; b < rows; b++) {
+                    pr[b] += S2[b] * th[b];
+                }
+            }
+            else {
+                for (Py_ssize_t b = 0; b < rows; b++) { /* (a, b) -> (a c + b s, b c - a s) */
+                    double x = S0[b], y = S1[b];
+                    S0[b] = x * cs[b] + y * sn[b];
+                    S1[b] = y * cs[b] - x * sn[b];
+                }
+            }
+        }
+        double *z = zp + 6 * j * BLOCK;
+        memcpy(z, S + 2 * BLOCK, rows * sizeof(double));
+        memcpy(z + BLOCK, S + 5 * BLOCK, rows * sizeof(double));
+        memcpy(z + 2 * BLOCK, S + 8 * BLOCK, rows * sizeof(double));
+        memcpy(z + 3 * BLOCK, p, rows * sizeof(double));
+        memcpy(z + 4 * BLOCK, p + BLOCK, rows * sizeof(double));
+        memcpy(z + 5 * BLOCK, p + 2 * BLOCK, rows * sizeof(double));
+    }
+    double *KE_RESTRICT C = col; /* the frame: C_IF = S R_f into col (free until the Jacobian), p_f = p + S t_f */
+    const double *R = k->R, *t = k->t;
+    for (int r = 0; r < 3; r++) {
+        const double *S0 = S + 3 * r * BLOCK, *S1 = S0 + BLOCK, *S2 = S1 + BLOCK;
+        double *pr = p + r * BLOCK;
+        double *KE_RESTRICT C0 = C + 3 * r * BLOCK, *KE_RESTRICT C1 = C0 + BLOCK, *KE_RESTRICT C2 = C1 + BLOCK;
+        const double t0 = t[0], t1 = t[1], t2 = t[2], r0 = R[0], r1 = R[1], r2 = R[2], r3 = R[3], r4 = R[4];
+        const double r5 = R[5], r6 = R[6], r7 = R[7], r8 = R[8];
+        for (Py_ssize_t b = 0; b < rows; b++) {
+            double a0 = S0[b], a1 = S1[b], a2 = S2[b];
+            pr[b] += a0 * t0 + a1 * t1 + a2 * t2;
+            C0[b] = a0 * r0 + a1 * r3 + a2 * r6;
+            C1[b] = a0 * r1 + a1 * r4 + a2 * r7;
+            C2[b] = a0 * r2 + a1 * r5 + a2 * r8;
+        }
+    }
+    if (T->buf != NULL) {
+        double row[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1.0};
+        for (Py_ssize_t b = 0; b < rows; b++) {
+            for (int r = 0; r < 3; r++) {
+                row[4 * r] = C[3 * r * BLOCK + b];
+                row[4 * r + 1] = C[(3 * r + 1) * BLOCK + b];
+                row[4 * r + 2] = C[(3 * r + 2) * BLOCK + b];
+                row[4 * r + 3] = p[r * BLOCK + b];
+            }
+            store_row(T, start + b, row, 4, stream);
+        }
+    }
+    if (J->buf == NULL) {
+        return;
+    }
+    const double *frame = S; /* LOCAL: the columns are turned by C_IF^T, copied into S (its last use is above) */
+    if (reference == 2) {
+        memcpy(S, C, 9 * BLOCK * sizeof(double));
+    }
+    for (Py_ssize_t j = 0; j < m; j++) { /* column j over the block, into zp[j] (z_j and p_j are not read again) */
+        const Step *s = &k->steps[j];
+        const double *z0 = zp + 6 * j * BLOCK, *z1 = z0 + BLOCK, *z2 = z1 + BLOCK;
+        const double *p0 = z2 + BLOCK, *p1 = p0 + BLOCK, *p2 = p1 + BLOCK;
+        double *KE_RESTRICT c0 = col, *KE_RESTRICT c1 = c0 + BLOCK, *KE_RESTRICT c2 = c1 + BLOCK;
+        double *KE_RESTRICT c3 = c2 + BLOCK, *KE_RESTRICT c4 = c3 + BLOCK, *KE_RESTRICT c5 = c4 + BLOCK;
+        if (s->prismatic) { /* [z; 0] */
+            memcpy(c0, z0, rows * sizeof(double));
+            memcpy(c1, z1, rows * sizeof(double));
+            memcpy(c2, z2, rows * sizeof(double));
+            memset(c3, 0, 3 * BLOCK * sizeof(double));
+        }
+        else if (reference == 1) { /* WORLD: [p_j x z; z] */
+            for (Py_ssize_t b = 0; b < rows; b++) {
+                c0[b] = p1[b] * z2[b] - p2[b] * z1[b];
+                c1[b] = p2[b] * z0[b] - p0[b] * z2[b];
+                c2[b] = p0[b] * z1[b] - p1[b] * z0[b];
+            }
+        }
+        else { /* [z x (p_f - p_j); z] */
+            for (Py_ssize_t b = 0; b < rows; b++) {
+                double d0 = p[b] - p0[b], d1 = p[BLOCK + b] - p1[b], d2 = p[2 * BLOCK + b] - p2[b];
+                c0[b] = z1[b] * d2 - z2[b] * d1;
+                c1[b] = z2[b] * d0 - z0[b] * d2;
+                c2[b] = z0[b] * d1 - z1[b] * d0;
+            }
+        }
+        if (!s->prismatic) {
+            memcpy(c3, z0, rows * sizeof(double));
+            memcpy(c4, z1, rows * sizeof(double));
+            memcpy(c5, z2, rows * sizeof(double));
+        }
+        if (reference == 2) { /* C_IF^T applied to both halves */
+            for (int h = 0; h < 6; h += 3) {
+                double *KE_RESTRICT v0 = col + h * BLOCK, *KE_RESTRICT v1 = v0 + BLOCK, *KE_RESTRICT v2 = v1 + BLOCK;
+                for (Py_ssize_t b = 0; b < rows; b++) {
+                    double x = v0[b], y = v1[b], w = v2[b];
+                    v0[b] = frame[b] * x + frame[3 * BLOCK + b] * y + frame[6 * BLOCK + b] * w;
+                    v1[b] = frame[BLOCK + b] * x + frame[4 * BLOCK + b] * y + frame[7 * BLOCK + b] * w;
+                    v2[b] = frame[2 * BLOCK + b] * x + frame[5 * BLOCK + b] * y + frame[8 * BLOCK + b] * w;
+                }
+            }
+        }
+        if (s->scaling != 1.0) {
+            for (int r = 0; r < 6; r++) {
+                for (Py_ssize_t b = 0; b < rows; b++) {
+                    col[r * BLOCK + b] *= s->scaling;
+                }
+            }
+        }
+        memcpy(zp + 6 * j * BLOCK, col, 6 * BLOCK * sizeof(double));
+    }
+    const Py_ssize_t dof = k->dof;
+    for (Py_ssize_t b = 0; b < rows; b++) { /* each configuration's J (6, dof) in jrow, then stored */
+        for (Py_ssize_t c = 0; c < dof; c++) {
+            if (!k->used[c]) {
+                for (int r = 0; r < 6; r++) {
+                    jrow[r * dof + c] = 0.0;
+                }
+            }
+        }
+        for (Py_ssize_t j = 0; j < m; j++) {
+            const Step *s = &k->steps[j];
+            const double *cj = zp + 6 * j * BLOCK + b;
+            double *target = jrow + s->coordinate;
+            for (int r = 0; r < 6; r++) {
+                if (s->accumulate) {
+                    target[r * dof] += cj[r * BLOCK];
+                }
+                else {
+                    target[r * dof] = cj[r * BLOCK];
+                }
+            }
+        }
+        store_row(J, start + b, jrow, dof, stream);
+    }
+}
 
 static void
 run_rows(const Kernel *k, Py_ssize_t n, const Py_buffer *Q, const Py_buffer *T, const Py_buffer *J, int reference,
          double *work)
 {
     const Py_ssize_t m = k->m;
-    double *zp = work, *theta = work + 6 * m, *sines = theta + BLOCK * m, *cosines = sines + BLOCK * m;
+    double *theta = work + (21 + 6 * m) * BLOCK, *sines = theta + BLOCK * m, *cosines = sines + BLOCK * m;
+    double bytes = (double)n * sizeof(double) * ((T->buf != NULL ? 16 : 0) + (J->buf != NULL ? 6 * k->dof : 0));
+    const int stream = HAVE_STREAM && bytes >= STREAM_FROM;
     for (Py_ssize_t start = 0; start < n; start += BLOCK) {
         Py_ssize_t rows = n - start < BLOCK ? n - start : BLOCK;
-        for (Py_ssize_t b = 0; b < rows; b++) {
-            for (Py_ssize_t j = 0; j < m; j++) {
-                const Step *s = &k->steps[j];
+        for (Py_ssize_t j = 0; j < m; j++) {
+            const Step *s = &k->steps[j];
+            for (Py_ssize_t b = 0; b < rows; b++) {
                 double q = AT2(*Q, start + b, s->coordinate);
-                theta[b * m + j] = s->plain ? q : q * s->scaling + s->offset;
+                theta[j * BLOCK + b] = s->plain ? q : q * s->scaling + s->offset;
             }
         }
-        sin_cos(theta, sines, cosines, rows * m);
-        for (Py_ssize_t b = 0; b < rows; b++) {
-            run_row(k, start + b, theta + b * m, sines + b * m, cosines + b * m, T, J, reference, zp);
+        for (Py_ssize_t j = 0; j < m; j++) {
+            sin_cos(theta + j * BLOCK, sines + j * BLOCK, cosines + j * BLOCK, rows);
         }
+        run_block(k, start, rows, theta, sines, cosines, T, J, reference, stream, work);
     }
+#if HAVE_STREAM
+    if (stream) { /* the non-temporal stores reach memory before the caller reads the outputs */
+        _mm_sfence();
+    }
+#endif
 }
 
 static PyObject *
@@ -420,7 +506,7 @@ kernel_run(Kernel *self, PyObject *args)
             goto done;
         }
     }
-    zp = PyMem_RawMalloc(sizeof(double) * (6 + 3 * BLOCK) * (self->m ? self->m : 1));
+    zp = PyMem_RawMalloc(sizeof(double) * (SCRATCH(self->m) + 6 * self->dof));
     if (zp == NULL) {
         PyErr_NoMemory();
         goto done;
@@ -527,8 +613,8 @@ typedef struct {
     Py_buffer Q, row, T, base, table, out, shifts;
 } CandidateViews;
 
-/* The work of Kernel.candidates without the GIL, in blocks of BLOCK candidates as run_rows (their sines and
- * cosines together); scratch: (6 + 3 BLOCK) m doubles. */
+/* The work of Kernel.candidates without the GIL, in blocks of BLOCK candidates as run_rows; scratch: SCRATCH(m)
+ * doubles. */
 static void
 candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int within, int skip, double accept,
                 double same, double turn_tol, double *scratch)
@@ -536,11 +622,12 @@ candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int withi
     const Py_ssize_t M = v->Q.shape[0], n = v->Q.shape[1], dof = k->dof, m = k->m;
     const Py_ssize_t B = v->base.shape[0];
     const double *table = (const double *)v->table.buf;
-    double *zp = scratch, *theta = scratch + 6 * m, *sines = theta + BLOCK * m, *cosines = sines + BLOCK * m;
-    double q[64], pose[16];
-    Py_ssize_t strides[3] = {16 * sizeof(double), 4 * sizeof(double), sizeof(double)};
+    double *theta = scratch + (21 + 6 * m) * BLOCK, *sines = theta + BLOCK * m, *cosines = sines + BLOCK * m;
+    double *poses = cosines + BLOCK * m, q[64];
+    Py_ssize_t shape[3] = {BLOCK, 4, 4}, strides[3] = {16 * sizeof(double), 4 * sizeof(double), sizeof(double)};
     Py_buffer Tout = {0}, none = {0};
-    Tout.buf = pose;
+    Tout.buf = poses;
+    Tout.shape = shape;
     Tout.strides = strides;
 #define ROW(i) (v->row.buf == NULL ? 0 : *(const int64_t *)((const char *)v->row.buf + (i) * v->row.strides[0]))
     Py_ssize_t first = 0; /* the first candidate of the current pose */
@@ -561,10 +648,13 @@ candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int withi
             for (Py_ssize_t j = 0; j < m; j++) {
                 const Step *s = &k->steps[j];
                 double a = full[s->coordinate];
-                theta[b * m + j] = s->plain ? a : a * s->scaling + s->offset;
+                theta[j * BLOCK + b] = s->plain ? a : a * s->scaling + s->offset;
             }
         }
-        sin_cos(theta, sines, cosines, rows * m);
+        for (Py_ssize_t j = 0; j < m; j++) {
+            sin_cos(theta + j * BLOCK, sines + j * BLOCK, cosines + j * BLOCK, rows);
+        }
+        run_block(k, 0, rows, theta, sines, cosines, &Tout, &none, 0, 0, scratch); /* every pose, some unused */
         for (Py_ssize_t b = 0; b < rows; b++) { /* the pose at each against its target; duplicates */
             Py_ssize_t i = start + b, p = ROW(i);
             if (i > 0 && p != ROW(i - 1)) {
@@ -575,7 +665,7 @@ candidates_rows(const Kernel *k, const CandidateViews *v, int has_ref, int withi
                 result[0] = 0.0, result[2] = INFINITY, result[3] = INFINITY;
                 continue;
             }
-            run_row(k, 0, theta + b * m, sines + b * m, cosines + b * m, &Tout, &none, 0, zp);
+            const double *pose = poses + 16 * b;
             double dp = 0, dr = 0;
             for (int r = 0; r < 3; r++) {
                 for (int c = 0; c < 3; c++) {
@@ -646,7 +736,7 @@ kernel_candidates(Kernel *self, PyObject *args)
                         "shifts None or (M, n, 3) rows contiguous");
         goto done;
     }
-    scratch = PyMem_RawMalloc(sizeof(double) * (6 + 3 * BLOCK) * (self->m ? self->m : 1));
+    scratch = PyMem_RawMalloc(sizeof(double) * (SCRATCH(self->m) + 6 * self->dof));
     if (scratch == NULL) {
         PyErr_NoMemory();
         goto done;
@@ -746,7 +836,7 @@ static PyModuleDef_Slot chainkernel_slots[] = {
 static struct PyModuleDef chainkernel_module = {
     PyModuleDef_HEAD_INIT,
     .m_name = "kinengine.kinematics.chainkernel",
-    .m_doc = "The batch chain in C: poses and Jacobians one configuration at a time, without scratch rows.",
+    .m_doc = "The batch chain in C: poses and Jacobians of blocks of configurations, side by side.",
     .m_size = 0,
     .m_methods = module_methods,
     .m_slots = chainkernel_slots,
