@@ -177,6 +177,29 @@ def test_strided_inputs_and_outputs_equal_contiguous_bit_for_bit(axes, code):
     kernel.run(Q, None, None, code)
 
 
+@pytest.mark.parametrize("code", [0, 1, 2])
+def test_outputs_stored_past_the_caches_equal_small_calls_bit_for_bit(code):
+    """One call with 4 MiB of outputs or more stores them past the caches (non-temporal stores on x86-64):
+    the same values, bit for bit, as calls small enough to store plainly; also with rows 8 bytes off the
+    16-byte alignment those stores need (stored plainly then)."""
+    robot = kinengine.load("ur5")
+    Q, kernel = robot.random_configuration(11, size=12_000), _chain(robot, robot.end_effector).kernel
+    assert len(Q) * (16 + 6 * robot.dof) * 8 >= 4 << 20
+    T, J = _run(kernel, Q, robot.dof, code)
+    T_small, J_small = np.full_like(T, np.nan), np.full_like(J, np.nan)
+    for a in range(0, len(Q), 500):
+        kernel.run(Q[a : a + 500], T_small[a : a + 500], J_small[a : a + 500], code)
+    assert _same((T, J), (T_small, J_small))
+    for offset in (1, 2):  # 8 bytes off 16-byte alignment, and aligned
+        flat_T, flat_J = np.full(T.size + offset, np.nan), np.full(J.size + offset, np.nan)
+        T_off, J_off = flat_T[offset:].reshape(T.shape), flat_J[offset:].reshape(J.shape)
+        kernel.run(Q, T_off, J_off, code)
+        assert _same((T_off, J_off), (T, J))
+    label = {0: "local_world_aligned", 1: "world", 2: "local"}[code]
+    J_pin = np.array([robot.jacobian(q, robot.end_effector, label) for q in Q[::997]])
+    np.testing.assert_allclose(J[::997], J_pin, rtol=0, atol=1e-14)
+
+
 def test_frame_fixed_to_the_root_and_zero_dof(axes):
     robot, Q = axes
     chain = _chain(robot, "plate")
