@@ -11,6 +11,7 @@ import importlib.metadata
 import json
 import math
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -295,6 +296,27 @@ def test_measure_counts_calls_until_min_time():
     timing = bench_run.measure(lambda: calls.append(1), bench_run.Settings((1,), repeat=3, min_time=1e-3))
     assert timing["calls"] >= 1 and timing["min_us"] <= timing["median_us"]
     assert len(calls) >= 1 + 3 * timing["calls"]
+
+
+def test_a_slow_side_is_repeated_less_and_spread_among_the_fast_sides_repeats(monkeypatch):
+    """A side slower than SLOW_CALL per call takes SLOW_REPEAT repeats; the other keeps every repeat, and the
+    slow side's repeats are spread over the run, not bunched at its start."""
+    monkeypatch.setattr(bench_run, "SLOW_CALL", 0.002)
+    order: list[str] = []
+
+    def slow() -> None:
+        order.append("slow")
+        time.sleep(0.003)
+
+    timings = bench_run.measure_interleaved(
+        [lambda: order.append("fast"), slow], bench_run.Settings((1,), repeat=21, min_time=1e-4)
+    )
+    assert timings[1]["calls"] == 1
+    timed = order[order.index("slow") + 1 :]  # after the slow side's warm-up
+    fast_calls = timings[0]["calls"]
+    assert timed.count("slow") == bench_run.SLOW_REPEAT
+    assert timed.count("fast") == 21 * fast_calls
+    assert timed[-1] == "slow" and timed[0] == "fast"  # the slow side's repeats reach the end of the run
 
 
 def test_a_planar_arm_is_benched_without_the_parameterizations_singular_everywhere(tmp_path, capsys):

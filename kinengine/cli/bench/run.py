@@ -47,9 +47,10 @@ class Settings:
 FULL = Settings((1, 100, 10_000, 100_000, 1_000_000), repeat=21, min_time=0.01)
 QUICK = Settings((1, 100, 1_000), repeat=3, min_time=0.002, ik=(10, 100))
 SLOW_CALL = 0.1
+"""[s] a call slower than this is repeated only SLOW_REPEAT times."""
+SLOW_REPEAT = 5
 ROUNDING = 1e-9
 """[rad] slack on the 1e-6 rad of a reached IK target, for a solver measuring its angle another way."""
-"""[s] a call slower than this is repeated only 5 times."""
 
 
 def measure(fn: Callable[[], object], settings: Settings) -> dict[str, float]:
@@ -60,19 +61,22 @@ def measure(fn: Callable[[], object], settings: Settings) -> dict[str, float]:
 def measure_interleaved(fns: list[Callable[[], object]], settings: Settings) -> list[dict[str, float]]:
     """For each fn: min and median [µs] per call. Each fn's calls per repeat grow until a repeat lasts
     ``min_time``; then the repeats alternate between the fns (kinengine, its floor, kinengine, ...), so
-    that a noisy neighbour on a shared machine slows both sides alike, and the min is taken."""
-    timers, numbers, slow = [timeit.Timer(fn) for fn in fns], [], False
+    that a noisy neighbour on a shared machine slows both sides alike, and the min is taken. A fn whose
+    call takes over SLOW_CALL is repeated only SLOW_REPEAT times, spread evenly among the others'."""
+    timers, numbers, repeats = [timeit.Timer(fn) for fn in fns], [], []
     for timer in timers:
         number, elapsed = 1, timer.timeit(1)  # the warm-up call
-        slow |= elapsed > SLOW_CALL
+        repeats.append(min(settings.repeat, SLOW_REPEAT) if elapsed > SLOW_CALL else settings.repeat)
         while elapsed < settings.min_time and number < 10**6:
             number *= 10 if elapsed < settings.min_time / 10 else 2
             elapsed = timer.timeit(number)
         numbers.append(number)
     times: list[list[float]] = [[] for _ in fns]
-    for _ in range(min(settings.repeat, 5) if slow else settings.repeat):
+    rounds = max(repeats, default=0)
+    for r in range(rounds):
         for k, timer in enumerate(timers):
-            times[k].append(timer.timeit(numbers[k]) / numbers[k])
+            if (r + 1) * repeats[k] // rounds > r * repeats[k] // rounds:  # repeats[k] of the rounds, spread
+                times[k].append(timer.timeit(numbers[k]) / numbers[k])
     return [
         {"min_us": min(t) * 1e6, "median_us": statistics.median(t) * 1e6, "calls": number}
         for t, number in zip(times, numbers, strict=True)
