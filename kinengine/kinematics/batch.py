@@ -8,7 +8,8 @@ Same conventions as :mod:`kinengine.kinematics.engine`: T_IF in the root link fr
 How: the chain from the root to the frame is compiled once (:func:`compiled_chain`) and evaluated by
 the C chain or :mod:`kinengine.kinematics.chain` over chunks of configurations (:func:`chunk_rows`) on a
 persistent pool of one thread per core this process may use (WORKERS; ``workers=`` caps it; a forked
-child makes its own pool). Small batches loop over Pinocchio instead, which is faster there.
+child makes its own pool). Small batches loop over Pinocchio instead, which is faster there. Outputs not
+given by ``out=`` come from :func:`kinengine.kinematics.outputs.empty` (large ones reuse dropped memory).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import OptionError
-from . import compiler
+from . import compiler, outputs
 from .chain import CHUNK, Chain, Outputs, evaluate_chain, scratch_rows
 from .compiler import REFERENCE_CODES, compiled_chain
 from .engine import Kinematics
@@ -196,8 +197,10 @@ def evaluate(
     T, J = out if out is not None else (None, None)
     if out is not None and any(a is not None and np.may_share_memory(Q, a) for a in out):
         Q = Q.copy()  # the outputs are written while Q is still read: read a copy
-    T = (np.empty((n, 4, 4)) if T is None else T) if pose else None
-    J = (np.empty((n, 6, kin.dof)) if J is None else J) if jacobian else None
+    missing = (((n, 4, 4), pose and T is None), ((n, 6, kin.dof), jacobian and J is None))
+    new = iter(outputs.empty(*(shape for shape, needed in missing if needed)))  # one block for both
+    T = (next(new) if T is None else T) if pose else None
+    J = (next(new) if J is None else J) if jacobian else None
     chain = numpy_chain(kin, fid, n, True)  # one choice for poses, Jacobians or both: equal bit for bit
     if chain is None:
         _pinocchio_loop(kin, Q, fid, T, J, reference)
