@@ -265,6 +265,24 @@ store_row(const Py_buffer *v, Py_ssize_t i, const double *src, Py_ssize_t cols, 
     }
 }
 
+/* Row r of S over a block (its entries S0, S1, S2: one value per configuration): p_r += S_r t, and X_r = S_r K
+ * (row-major K) into X0, X1, X2, which may be S0, S1, S2 themselves (each configuration's entries are read
+ * before they are written). */
+static inline void
+times_constant(const double *S0, const double *S1, const double *S2, const double *K, const double *t, double *pr,
+               double *X0, double *X1, double *X2, Py_ssize_t rows)
+{
+    const double t0 = t[0], t1 = t[1], t2 = t[2], k0 = K[0], k1 = K[1], k2 = K[2], k3 = K[3], k4 = K[4];
+    const double k5 = K[5], k6 = K[6], k7 = K[7], k8 = K[8];
+    for (Py_ssize_t b = 0; b < rows; b++) {
+        double a0 = S0[b], a1 = S1[b], a2 = S2[b];
+        pr[b] += a0 * t0 + a1 * t1 + a2 * t2;
+        X0[b] = a0 * k0 + a1 * k3 + a2 * k6;
+        X1[b] = a0 * k1 + a1 * k4 + a2 * k7;
+        X2[b] = a0 * k2 + a1 * k5 + a2 * k8;
+    }
+}
+
 /* T[start + b] and J[start + b] for the b < rows configurations of a block, from their joint angles theta, sines
  * and cosines ([step][row], BLOCK apart); work: SCRATCH(m) + 6 dof doubles, its first (21 + 6 m) BLOCK used here
  * (and J's row at the end); stream: store T and J past the caches (store_row). Structure of arrays (an entry of every
@@ -291,17 +309,8 @@ run_block(const Kernel *k, Py_ssize_t start, Py_ssize_t rows, const double *thet
         const double *K = s->K, *t = s->t, *th = theta + j * BLOCK, *sn = sines + j * BLOCK;
         const double *cs = cosines + j * BLOCK;
         for (int r = 0; r < 3; r++) { /* row r of S and p: p += S t, S = S K, then S = S Rz(theta) or p += S e_z theta */
-            double *KE_RESTRICT S0 = S + 3 * r * BLOCK, *KE_RESTRICT S1 = S0 + BLOCK, *KE_RESTRICT S2 = S1 + BLOCK;
-            double *KE_RESTRICT pr = p + r * BLOCK;
-            const double t0 = t[0], t1 = t[1], t2 = t[2], k0 = K[0], k1 = K[1], k2 = K[2], k3 = K[3], k4 = K[4];
-            const double k5 = K[5], k6 = K[6], k7 = K[7], k8 = K[8];
-            for (Py_ssize_t b = 0; b < rows; b++) {
-                double a0 = S0[b], a1 = S1[b], a2 = S2[b];
-                pr[b] += a0 * t0 + a1 * t1 + a2 * t2;
-                S0[b] = a0 * k0 + a1 * k3 + a2 * k6;
-                S1[b] = a0 * k1 + a1 * k4 + a2 * k7;
-                S2[b] = a0 * k2 + a1 * k5 + a2 * k8;
-            }
+            double *S0 = S + 3 * r * BLOCK, *S1 = S0 + BLOCK, *S2 = S1 + BLOCK, *pr = p + r * BLOCK;
+            times_constant(S0, S1, S2, K, t, pr, S0, S1, S2, rows);
             if (s->prismatic) {
                 for (Py_ssize_t b = 0; b < rows; b++) {
                     pr[b] += S2[b] * th[b];
@@ -326,18 +335,9 @@ run_block(const Kernel *k, Py_ssize_t start, Py_ssize_t rows, const double *thet
     double *KE_RESTRICT C = col; /* the frame: C_IF = S R_f into col (free until the Jacobian), p_f = p + S t_f */
     const double *R = k->R, *t = k->t;
     for (int r = 0; r < 3; r++) {
-        const double *S0 = S + 3 * r * BLOCK, *S1 = S0 + BLOCK, *S2 = S1 + BLOCK;
-        double *pr = p + r * BLOCK;
-        double *KE_RESTRICT C0 = C + 3 * r * BLOCK, *KE_RESTRICT C1 = C0 + BLOCK, *KE_RESTRICT C2 = C1 + BLOCK;
-        const double t0 = t[0], t1 = t[1], t2 = t[2], r0 = R[0], r1 = R[1], r2 = R[2], r3 = R[3], r4 = R[4];
-        const double r5 = R[5], r6 = R[6], r7 = R[7], r8 = R[8];
-        for (Py_ssize_t b = 0; b < rows; b++) {
-            double a0 = S0[b], a1 = S1[b], a2 = S2[b];
-            pr[b] += a0 * t0 + a1 * t1 + a2 * t2;
-            C0[b] = a0 * r0 + a1 * r3 + a2 * r6;
-            C1[b] = a0 * r1 + a1 * r4 + a2 * r7;
-            C2[b] = a0 * r2 + a1 * r5 + a2 * r8;
-        }
+        const double *S0 = S + 3 * r * BLOCK;
+        double *C0 = C + 3 * r * BLOCK;
+        times_constant(S0, S0 + BLOCK, S0 + 2 * BLOCK, R, t, p + r * BLOCK, C0, C0 + BLOCK, C0 + 2 * BLOCK, rows);
     }
     if (T->buf != NULL) {
         double row[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1.0};
