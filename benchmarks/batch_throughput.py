@@ -6,7 +6,9 @@ raw-Pinocchio loop a user would write, in one process.
 
 Per robot and N = 1k, 10k, 100k, 1M: configs/s (best of a few calls; a busy neighbour on the shared
 machine only slows a call, so the best one is the least disturbed) for ``robot.kinematics(Q, frame)``
-and for the same call with ``out=(T, J)`` preallocated, the minor page faults of one call
+(its outputs from the block of the dropped result of the call before, kinengine/kinematics/outputs.py),
+the same call in new memory ("new": the kept blocks released before each call, as a first call pays) and
+with ``out=(T, J)`` preallocated, the minor page faults of one call
 (``ru_minflt`` delta) and its peak extra memory beyond the outputs (``tracemalloc``: numpy reports its
 allocations to it), fresh and with ``out=``, after a first call; "scratch" is what the threads keep
 between calls (workers x MiB each, allocated by the first call of that size and reused; none when the
@@ -35,6 +37,11 @@ import pinocchio as pin
 
 import kinengine
 from kinengine.kinematics import batch
+
+try:
+    from kinengine.kinematics.outputs import release
+except ImportError:  # an older kinengine: every output is new memory
+    release = None  # type: ignore[assignment]
 
 try:
     from kinengine.kinematics.chain import scratch_rows
@@ -130,7 +137,7 @@ def run(name: str, repeats: int) -> None:
         f"Pinocchio loop floor {floor / 1e6:.3f} M configs/s"
     )
     print(
-        f"{'N':>9} {'M/s':>7} {'x floor':>7} {'M/s out=':>9} {'x floor':>7} "
+        f"{'N':>9} {'M/s':>7} {'x floor':>7} {'M/s new':>8} {'M/s out=':>9} {'x floor':>7} "
         f"{'faults':>7} {'faults out=':>11} {'extra MiB':>9} {'(out=)':>9} {'out MiB':>8} {'scratch':>10}"
     )
     for n in SIZES:
@@ -139,12 +146,14 @@ def run(name: str, repeats: int) -> None:
         robot.kinematics(Q, frame, out=out)  # warm: pool threads, per-thread buffers, the compiled chain
         reps = repeats if n < 1_000_000 else max(2, repeats // 3)
         fresh = n / _best(lambda Q=Q: robot.kinematics(Q, frame), reps)
+        new = n / _best(lambda Q=Q: (release and release(), robot.kinematics(Q, frame)), reps)
         into = n / _best(lambda Q=Q, out=out: robot.kinematics(Q, frame, out=out), reps)
         faults, extra = faults_and_memory(lambda Q=Q: robot.kinematics(Q, frame))
         faults_out, extra_out = faults_and_memory(lambda Q=Q, out=out: robot.kinematics(Q, frame, out=out))
         out_mib = (out[0].nbytes + out[1].nbytes) / 2**20
         print(
-            f"{n:>9} {fresh / 1e6:7.3f} {fresh / floor:7.2f} {into / 1e6:9.3f} {into / floor:7.2f} "
+            f"{n:>9} {fresh / 1e6:7.3f} {fresh / floor:7.2f} {new / 1e6:8.3f} "
+            f"{into / 1e6:9.3f} {into / floor:7.2f} "
             f"{faults:>7} {faults_out:>11} {extra:9.2f} {extra_out:9.2f} {out_mib:8.1f} "
             f"{_scratch(robot, n):>10}"
         )
