@@ -145,6 +145,22 @@ def test_unknown_names_raise_listing_the_valid_ones():
         get_position("polar")
 
 
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ([0.1 + 2j, 0.0, 0.0], r"`chi` to be real numbers, got complex"),  # numpy would drop 2j silently
+        (["a", 0.0, 0.0], r"`chi` to be an array of real numbers"),
+        ([[0.1, 0.2], [0.3]], r"`chi` to be an array of real numbers"),
+    ],
+)
+def test_values_that_are_not_real_numbers_are_refused(value, message):
+    for method in ("E", "to_rotation"):
+        with pytest.raises(ParameterizationError, match=message):
+            getattr(get_rotation("euler_zyx"), method)(value)
+    with pytest.raises(ParameterizationError, match=r"`C` to be real numbers"):
+        get_rotation("rotation_vector").from_rotation(np.eye(3) * (1 + 0j))
+
+
 def test_wrong_shapes_name_the_argument_and_the_shape():
     with pytest.raises(ParameterizationError, match=r"`chi`.*\(3,\).*got \(4,\)"):
         get_rotation("euler_zyx").E(np.zeros(4))

@@ -46,8 +46,18 @@ _KINENGINE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + o
 
 
 def as_float_array(value: npt.ArrayLike, tail: tuple[int, ...], what: str) -> FloatArray:
-    """``value`` as a float64 array of shape tail or (..., *tail); ParameterizationError otherwise."""
-    array = np.asarray(value, dtype=np.float64)
+    """``value`` as a float64 array of shape tail or (..., *tail); ParameterizationError otherwise (complex
+    values too: numpy would drop their imaginary parts)."""
+    try:
+        array = np.asarray(value)
+        real = array.dtype.kind != "c"
+        array = array.astype(np.float64, copy=False) if real else array
+    except (TypeError, ValueError) as exc:
+        raise ParameterizationError(f"Expected `{what}` to be an array of real numbers: {exc}") from None
+    if not real:
+        raise ParameterizationError(
+            f"Expected `{what}` to be real numbers, got complex values ({array.dtype})"
+        )
     if array.shape[max(0, array.ndim - len(tail)) :] != tail:
         batched = ", ".join(map(str, tail))
         raise ParameterizationError(
