@@ -29,7 +29,7 @@ import weakref
 import numpy as np
 
 RECYCLE_FROM = 4 << 20
-"""[bytes] Outputs at least this large (and at most KEEP_UP_TO) come from a kept block; others are new arrays."""
+"""[bytes] Outputs this large (up to KEEP_UP_TO) come from a kept block; others are new arrays."""
 KEEP_UP_TO = 512 << 20
 """[bytes] The largest block kept: at most SLOTS x this stays with the process."""
 SLOTS = 2
