@@ -48,8 +48,8 @@ ACCELERATED: bool = _accelerator.AVAILABLE and _compiler.KERNEL is not None
 compiler is present, off with the environment variable ``KINENGINE_PURE_PYTHON=1``. It runs the input check
 of a single q and a frame handle's plain ``pose`` / ``jacobian`` / ``kinematics`` calls in C, with results
 equal bit for bit to the pure-Python path (about 0.4 µs slower per call), and batches of poses and
-Jacobians (2 configurations or more) on a C chain without scratch memory, equal to the pure-Python numpy
-chain and to Pinocchio to rounding (1e-14)."""
+Jacobians (2 configurations or more) on a C chain, equal to the pure-Python numpy chain and to Pinocchio
+to rounding (1e-14)."""
 
 if TYPE_CHECKING:
     from .collision import Box, Capsule, CollisionAvoidance, Distances, Mesh, Sphere

@@ -735,7 +735,7 @@ class Robot:
         """(T_IF, J) in one pass: (4, 4) and (6, dof) for q (dof,); (N, 4, 4) and (N, 6, dof) for q (N, dof),
         equal bit for bit to :meth:`frame_pose` and :meth:`jacobian` called separately. Batches only:
         ``out=(T, J)`` preallocated C-contiguous float64 arrays of those shapes, filled and returned (q may
-        lie in their memory: it is then read from a copy); without it, outputs of 4 MiB or more view memory
+        lie in their memory: it is then read from a copy); without it, outputs of 4 to 512 MiB view memory
         kept for reuse (:mod:`kinengine.kinematics.outputs`); ``workers``: threads to use (default: the
         cores this process may use)."""
         try:

@@ -300,13 +300,14 @@ def test_measure_counts_calls_until_min_time():
 
 def test_a_slow_side_is_repeated_less_and_spread_among_the_fast_sides_repeats(monkeypatch):
     """A side slower than SLOW_CALL per call takes SLOW_REPEAT repeats; the other keeps every repeat, and the
-    slow side's repeats are spread over the run, not bunched at its start."""
-    monkeypatch.setattr(bench_run, "SLOW_CALL", 0.002)
+    slow side's repeats are spread over the run: with 21 rounds and 5 slow repeats, in rounds 4, 8, 12, 16
+    and 20 (0-based), i.e. after 5, 9, 13, 17 and 21 of the fast side's repeats."""
+    monkeypatch.setattr(bench_run, "SLOW_CALL", 0.02)
     order: list[str] = []
 
     def slow() -> None:
         order.append("slow")
-        time.sleep(0.003)
+        time.sleep(0.03)
 
     timings = bench_run.measure_interleaved(
         [lambda: order.append("fast"), slow], bench_run.Settings((1,), repeat=21, min_time=1e-4)
@@ -316,7 +317,8 @@ def test_a_slow_side_is_repeated_less_and_spread_among_the_fast_sides_repeats(mo
     fast_calls = timings[0]["calls"]
     assert timed.count("slow") == bench_run.SLOW_REPEAT
     assert timed.count("fast") == 21 * fast_calls
-    assert timed[-1] == "slow" and timed[0] == "fast"  # the slow side's repeats reach the end of the run
+    fast_before = [timed[:k].count("fast") // fast_calls for k, call in enumerate(timed) if call == "slow"]
+    assert fast_before == [5, 9, 13, 17, 21]
 
 
 def test_a_planar_arm_is_benched_without_the_parameterizations_singular_everywhere(tmp_path, capsys):

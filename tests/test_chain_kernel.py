@@ -179,9 +179,9 @@ def test_strided_inputs_and_outputs_equal_contiguous_bit_for_bit(axes, code):
 
 @pytest.mark.parametrize("code", [0, 1, 2])
 def test_outputs_stored_past_the_caches_equal_small_calls_bit_for_bit(code):
-    """One call with 4 MiB of outputs or more stores them past the caches (non-temporal stores on x86-64):
-    the same values, bit for bit, as calls small enough to store plainly; also with rows 8 bytes off the
-    16-byte alignment those stores need (stored plainly then)."""
+    """One run() with 4 MiB of outputs or more stores them past the caches (non-temporal stores on x86-64):
+    the same values, bit for bit, as calls small enough to store plainly, for T and J together or alone;
+    also with rows 8 bytes off the 16-byte alignment those stores need (stored plainly then)."""
     robot = kinengine.load("ur5")
     Q, kernel = robot.random_configuration(11, size=12_000), _chain(robot, robot.end_effector).kernel
     assert len(Q) * (16 + 6 * robot.dof) * 8 >= 4 << 20
@@ -195,6 +195,15 @@ def test_outputs_stored_past_the_caches_equal_small_calls_bit_for_bit(code):
         T_off, J_off = flat_T[offset:].reshape(T.shape), flat_J[offset:].reshape(J.shape)
         kernel.run(Q, T_off, J_off, code)
         assert _same((T_off, J_off), (T, J))
+    n = 33_000  # T alone and J alone past 4 MiB in one run() too
+    Q_big = robot.random_configuration(12, size=n)
+    T_only, J_only = np.full((n, 4, 4), np.nan), np.full((n, 6, robot.dof), np.nan)
+    kernel.run(Q_big, T_only, None, code)
+    kernel.run(Q_big, None, J_only, code)
+    T_small, J_small = np.full_like(T_only, np.nan), np.full_like(J_only, np.nan)
+    for a in range(0, n, 1000):
+        kernel.run(Q_big[a : a + 1000], T_small[a : a + 1000], J_small[a : a + 1000], code)
+    assert _same((T_only, J_only), (T_small, J_small))
     label = {0: "local_world_aligned", 1: "world", 2: "local"}[code]
     J_pin = np.array([robot.jacobian(q, robot.end_effector, label) for q in Q[::997]])
     np.testing.assert_allclose(J[::997], J_pin, rtol=0, atol=1e-14)

@@ -151,6 +151,9 @@ def test_unknown_names_raise_listing_the_valid_ones():
         ([0.1 + 2j, 0.0, 0.0], r"`chi` to be real numbers, got complex"),  # numpy would drop 2j silently
         (["a", 0.0, 0.0], r"`chi` to be an array of real numbers"),
         ([[0.1, 0.2], [0.3]], r"`chi` to be an array of real numbers"),
+        ([None, 0.0, 0.0], r"`chi` to be an array of real numbers"),  # numpy would make NaN
+        (np.array([1, 2, 3], dtype="datetime64[s]"), r"`chi` to be real numbers, got datetime64"),
+        ([10**400, 0, 0], r"`chi` to be an array of real numbers"),  # beyond float range
     ],
 )
 def test_values_that_are_not_real_numbers_are_refused(value, message):

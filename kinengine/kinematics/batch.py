@@ -112,10 +112,10 @@ def run_chain(
     chunk = chunk_rows(chain, len(Q), workers, pose is not None, jac is not None, analytic, reference)
     per = len(Q) / (workers * chunk)  # chunks per worker: rounded (2/3 to 3/2 × chunk rows), or up
     pieces = workers * max(1, math.ceil(per) if MIN_CHUNK < chunk < CHUNK else round(per))  # if memory binds
-    outputs = Outputs(pose, jac, reference, analytic)
+    writer = Outputs(pose, jac, reference, analytic)
 
     def evaluate_rows(a: int, b: int) -> None:
-        evaluate_chain(chain, Q[a:b].T, outputs.rows(a, b))  # Q[a:b].T: a strided view, its rows read
+        evaluate_chain(chain, Q[a:b].T, writer.rows(a, b))  # Q[a:b].T: a strided view, its rows read
 
     in_shares(_split(len(Q), pieces), evaluate_rows, workers)
 
@@ -198,7 +198,7 @@ def evaluate(
     if out is not None and any(a is not None and np.may_share_memory(Q, a) for a in out):
         Q = Q.copy()  # the outputs are written while Q is still read: read a copy
     missing = (((n, 4, 4), pose and T is None), ((n, 6, kin.dof), jacobian and J is None))
-    new = iter(outputs.empty(*(shape for shape, needed in missing if needed)))  # one block for both
+    new = iter(outputs.empty(*(shape for shape, needed in missing if needed)))
     T = (next(new) if T is None else T) if pose else None
     J = (next(new) if J is None else J) if jacobian else None
     chain = numpy_chain(kin, fid, n, True)  # one choice for poses, Jacobians or both: equal bit for bit

@@ -37,9 +37,9 @@
  * LOCAL: C_IF^T applied to both halves; a mimic joint adds scaling_i x its column to the leader's.
  * sin and cos of a block's angles are computed first, in a loop without branches that the compiler vectorizes
  * (sin_cos below: within 1.1e-16 of libm); then each step runs over the block's configurations side by side
- * (run_block), which the compiler vectorizes too. Outputs of 4 MiB or more per call are written with
- * non-temporal stores on x86-64 (store_row). Results agree with Pinocchio to rounding (about 1e-15), as the
- * numpy chain's do.
+ * (run_block), which the compiler vectorizes too. A run() whose outputs take 4 MiB or more (a batch is split
+ * into one run() per thread) writes them with non-temporal stores on x86-64 (store_row). Results agree with
+ * Pinocchio to rounding (about 1e-15), as the numpy chain's do.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -229,7 +229,7 @@ sin_cos(const double *KE_RESTRICT x, double *KE_RESTRICT sin_out, double *KE_RES
 
 #define BLOCK 64 /* configurations evaluated together: their angles' sin and cos, then each step */
 #define SCRATCH(m) ((37 + 9 * (m)) * BLOCK) /* doubles of scratch for run_rows and candidates_rows, then J's row */
-#define STREAM_FROM (4 << 20) /* bytes of output of one call from which it is stored past the caches */
+#define STREAM_FROM (4 << 20) /* bytes of output of one run() (a thread's share) stored past the caches */
 
 #if defined(__x86_64__) || defined(_M_X64) /* SSE2 is part of x86-64 */
 #include <emmintrin.h>
@@ -293,11 +293,11 @@ run_block(const Kernel *k, Py_ssize_t start, Py_ssize_t rows, const double *thet
           const double *cosines, const Py_buffer *T, const Py_buffer *J, int reference, int stream, double *work)
 {
     const Py_ssize_t m = k->m;
-    double *KE_RESTRICT S = work;              /* S[e][b]: entry e of S (3x3 row-major) */
-    double *KE_RESTRICT p = S + 9 * BLOCK;     /* p[r][b] */
-    double *KE_RESTRICT col = p + 3 * BLOCK;   /* C_IF [e][b]; then col[r][b], a Jacobian column */
-    double *KE_RESTRICT zp = col + 9 * BLOCK;  /* per step j: z_j [3][b], p_j [3][b]; then column j [6][b] */
-    double *KE_RESTRICT jrow = work + SCRATCH(m);  /* one configuration's J (6, dof) */
+    double *S = work; /* S[e][b]: entry e of S (3x3 row-major) */
+    double *p = S + 9 * BLOCK; /* p[r][b] */
+    double *col = p + 3 * BLOCK; /* C_IF [e][b]; then col[r][b], a Jacobian column */
+    double *zp = col + 9 * BLOCK; /* per step j: z_j [3][b], p_j [3][b]; then column j [6][b] */
+    double *jrow = work + SCRATCH(m); /* one configuration's J (6, dof) */
     for (Py_ssize_t b = 0; b < rows; b++) {
         for (int e = 0; e < 9; e++) {
             S[e * BLOCK + b] = e % 4 == 0 ? 1.0 : 0.0;
@@ -332,7 +332,7 @@ run_block(const Kernel *k, Py_ssize_t start, Py_ssize_t rows, const double *thet
         memcpy(z + 4 * BLOCK, p + BLOCK, rows * sizeof(double));
         memcpy(z + 5 * BLOCK, p + 2 * BLOCK, rows * sizeof(double));
     }
-    double *KE_RESTRICT C = col; /* the frame: C_IF = S R_f into col (free until the Jacobian), p_f = p + S t_f */
+    double *C = col; /* the frame: C_IF = S R_f into col (free until the Jacobian), p_f = p + S t_f */
     const double *R = k->R, *t = k->t;
     for (int r = 0; r < 3; r++) {
         const double *S0 = S + 3 * r * BLOCK;
@@ -362,8 +362,8 @@ run_block(const Kernel *k, Py_ssize_t start, Py_ssize_t rows, const double *thet
         const Step *s = &k->steps[j];
         const double *z0 = zp + 6 * j * BLOCK, *z1 = z0 + BLOCK, *z2 = z1 + BLOCK;
         const double *p0 = z2 + BLOCK, *p1 = p0 + BLOCK, *p2 = p1 + BLOCK;
-        double *KE_RESTRICT c0 = col, *KE_RESTRICT c1 = c0 + BLOCK, *KE_RESTRICT c2 = c1 + BLOCK;
-        double *KE_RESTRICT c3 = c2 + BLOCK, *KE_RESTRICT c4 = c3 + BLOCK, *KE_RESTRICT c5 = c4 + BLOCK;
+        double *c0 = col, *c1 = c0 + BLOCK, *c2 = c1 + BLOCK;
+        double *c3 = c2 + BLOCK, *c4 = c3 + BLOCK, *c5 = c4 + BLOCK;
         if (s->prismatic) { /* [z; 0] */
             memcpy(c0, z0, rows * sizeof(double));
             memcpy(c1, z1, rows * sizeof(double));
@@ -392,7 +392,7 @@ run_block(const Kernel *k, Py_ssize_t start, Py_ssize_t rows, const double *thet
         }
         if (reference == 2) { /* C_IF^T applied to both halves */
             for (int h = 0; h < 6; h += 3) {
-                double *KE_RESTRICT v0 = col + h * BLOCK, *KE_RESTRICT v1 = v0 + BLOCK, *KE_RESTRICT v2 = v1 + BLOCK;
+                double *v0 = col + h * BLOCK, *v1 = v0 + BLOCK, *v2 = v1 + BLOCK;
                 for (Py_ssize_t b = 0; b < rows; b++) {
                     double x = v0[b], y = v1[b], w = v2[b];
                     v0[b] = frame[b] * x + frame[3 * BLOCK + b] * y + frame[6 * BLOCK + b] * w;

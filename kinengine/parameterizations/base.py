@@ -47,17 +47,17 @@ _KINENGINE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + o
 
 def as_float_array(value: npt.ArrayLike, tail: tuple[int, ...], what: str) -> FloatArray:
     """``value`` as a float64 array of shape tail or (..., *tail); ParameterizationError otherwise (complex
-    values too: numpy would drop their imaginary parts)."""
+    values, dates and None too: numpy would drop the imaginary parts, keep the dates' counts, make NaN)."""
     try:
         array = np.asarray(value)
-        real = array.dtype.kind != "c"
-        array = array.astype(np.float64, copy=False) if real else array
-    except (TypeError, ValueError) as exc:
+        if array.dtype.kind == "O":  # float() of each entry: refuses None, complex and other objects
+            array = np.array([float(x) for x in array.ravel()]).reshape(array.shape)
+        if array.dtype.kind in "biufUS":  # numbers, or text numpy reads as numbers
+            array = array.astype(np.float64, copy=False)
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ParameterizationError(f"Expected `{what}` to be an array of real numbers: {exc}") from None
-    if not real:
-        raise ParameterizationError(
-            f"Expected `{what}` to be real numbers, got complex values ({array.dtype})"
-        )
+    if array.dtype != np.float64:  # complex, dates, durations, structured
+        raise ParameterizationError(f"Expected `{what}` to be real numbers, got {array.dtype} values")
     if array.shape[max(0, array.ndim - len(tail)) :] != tail:
         batched = ", ".join(map(str, tail))
         raise ParameterizationError(
