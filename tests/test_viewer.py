@@ -6,6 +6,7 @@ moves there when ``update(q)`` is called on the open page."""
 from __future__ import annotations
 
 import base64
+import contextlib
 import importlib.util
 import io
 import json
@@ -194,6 +195,7 @@ class Browser:
             ],
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
+            start_new_session=True,  # its own process group: close() ends its renderer processes too
         )
         port_file = Path(self.folder) / "DevToolsActivePort"
         deadline = time.monotonic() + 60
@@ -250,13 +252,21 @@ class Browser:
             time.sleep(quiet)
 
     def close(self) -> None:
+        """End chromium and every process it started (a renderer left running takes a core from the next
+        test), then reap it."""
         self.socket.close()
-        self.process.terminate()
+        self._signal_group(signal.SIGTERM)
         try:
             self.process.wait(timeout=20)
         except subprocess.TimeoutExpired:
-            self.process.kill()
+            self._signal_group(signal.SIGKILL)
+            self.process.wait()
+        self._signal_group(signal.SIGKILL)  # what outlived the main process
         shutil.rmtree(self.folder, ignore_errors=True)
+
+    def _signal_group(self, number: int) -> None:
+        with contextlib.suppress(ProcessLookupError, PermissionError):  # the group has ended
+            os.killpg(self.process.pid, number)
 
 
 def _changed(
